@@ -1,0 +1,41 @@
+# Every target sets itself up: the first run creates .venv and installs the project.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed-stamp
+SCENARIO ?= slope50
+OUT    ?= out/$(SCENARIO)
+JOBS   ?= 2
+
+.PHONY: demo test test-fast lint bench clean help
+
+help:
+	@echo "make demo   - run the main job: a full simulated mission on '$(SCENARIO)' (outputs in $(OUT))"
+	@echo "make test   - run the whole test suite (slow closed-loop tests included)"
+	@echo "make test-fast - the suite without tests marked slow"
+	@echo "make bench  - print benchmark numbers"
+	@echo "make lint   - ruff"
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	@touch $(STAMP)
+
+demo: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/tetherland analyze $(SCENARIO)
+
+test: $(STAMP)
+	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS)
+
+test-fast: $(STAMP)
+	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS) -m "not slow"
+
+lint: $(STAMP)
+	$(BIN)/ruff check src tests benchmarks
+
+bench: $(STAMP)
+	@for b in benchmarks/bench_*.py; do echo "== $$b"; MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python $$b || exit 1; done
+
+clean:
+	rm -rf $(VENV) out .pytest_cache .ruff_cache .hypothesis

@@ -1,0 +1,19 @@
+"""Exception types. ``str(error)`` is always a one-line message fit for a user."""
+
+from __future__ import annotations
+
+
+class TetherlandError(Exception):
+    """Base class of every error the command line reports without a traceback."""
+
+
+class ConfigError(TetherlandError, ValueError):
+    """A scenario, an override or a command-line value is malformed or out of range."""
+
+
+class SingularityError(TetherlandError, ArithmeticError):
+    """A formula was evaluated at (or too near) a singular configuration.
+
+    Raised instead of dividing by zero, e.g. for a horizontal surface where a direction
+    is undefined, or a link elevation with ``cos(delta) = 0``.
+    """
