@@ -1,0 +1,51 @@
+"""Scenario configuration: typed, frozen, validated sections loaded from TOML.
+
+>>> from tetherland.config import load_scenario
+>>> s = load_scenario("slope50", ["surface.slope_deg=60"])
+>>> s.surface.slope_deg
+60.0
+"""
+
+from tetherland.config.base import Section, Vec3
+from tetherland.config.control import ControllerConfig
+from tetherland.config.loader import (
+    ScenarioInfo,
+    apply_overrides,
+    builtin_scenarios,
+    format_validation_error,
+    load_scenario,
+    parse_override,
+    scenario_from_dict,
+    scenario_to_toml,
+)
+from tetherland.config.mission import MissionConfig
+from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
+from tetherland.config.planning import PlannerConfig
+from tetherland.config.scenario import Scenario
+from tetherland.config.sensors import ImuConfig, MocapConfig, SensorsConfig
+from tetherland.config.simulation import SimConfig
+
+__all__ = [
+    "AnchorConfig",
+    "ControllerConfig",
+    "ImuConfig",
+    "MissionConfig",
+    "MocapConfig",
+    "PlannerConfig",
+    "Scenario",
+    "ScenarioInfo",
+    "Section",
+    "SensorsConfig",
+    "SimConfig",
+    "SurfaceConfig",
+    "TetherConfig",
+    "Vec3",
+    "VehicleConfig",
+    "apply_overrides",
+    "builtin_scenarios",
+    "format_validation_error",
+    "load_scenario",
+    "parse_override",
+    "scenario_from_dict",
+    "scenario_to_toml",
+]

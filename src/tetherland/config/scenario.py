@@ -1,0 +1,72 @@
+"""A scenario: every parameter of one experiment, validated across sections."""
+
+from __future__ import annotations
+
+
+from pydantic import Field, model_validator
+
+from tetherland.config.base import Section
+from tetherland.config.control import ControllerConfig
+from tetherland.config.mission import MissionConfig
+from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
+from tetherland.config.planning import PlannerConfig
+from tetherland.config.sensors import SensorsConfig
+from tetherland.config.simulation import SimConfig
+
+ON_SURFACE_TOL = 1e-3
+"""Tolerance for a point to count as lying on (or at height h_A above) the surface [m]."""
+
+
+class Scenario(Section):
+    """One experiment: vehicle, tether, surface, anchor, sensors, planner, controller,
+    mission and simulation settings. Load it with :func:`tetherland.config.load_scenario`."""
+
+    name: str = Field("custom", min_length=1, max_length=100)
+    """Short identifier of the scenario."""
+    description: str = ""
+    """One-line description."""
+    vehicle: VehicleConfig = VehicleConfig()
+    tether: TetherConfig = TetherConfig()
+    surface: SurfaceConfig = SurfaceConfig()
+    anchor: AnchorConfig = AnchorConfig()
+    sensors: SensorsConfig = SensorsConfig()
+    planner: PlannerConfig = PlannerConfig()
+    controller: ControllerConfig = ControllerConfig()
+    mission: MissionConfig = MissionConfig()
+    sim: SimConfig = SimConfig()
+
+    @model_validator(mode="after")
+    def _consistent_geometry(self) -> Scenario:
+        # Imported here: geometry depends on nothing in config, config validates with it.
+        from tetherland import geometry as geo
+
+        v, s, a, l = self.vehicle, self.surface, self.anchor, self.tether.length
+        h_R = v.h_R
+        if s.kind == "pipe":
+            if v.lander_half_width >= s.pipe_radius:
+                raise ValueError(
+                    f"surface.pipe_radius = {s.pipe_radius} m must be > "
+                    f"vehicle.lander_half_width = {v.lander_half_width} m (landers must fit)"
+                )
+            h_R -= geo.pipe_sag(s.pipe_radius, v.lander_half_width)
+        if abs(h_R - a.h_A) >= l:
+            raise ValueError(
+                f"tether.length = {l} m must be > |h_R - anchor.h_A| = {abs(h_R - a.h_A):g} m "
+                "(inclined hovering needs |c| < 1, eq. 6.9)"
+            )
+        surface = geo.surface_from_config(self)
+        if a.position is not None:
+            off = surface.height(a.position) - a.h_A
+            if abs(off) > ON_SURFACE_TOL:
+                raise ValueError(
+                    f"anchor.position must lie at height anchor.h_A = {a.h_A} m above the "
+                    f"surface (within {ON_SURFACE_TOL} m); it is {off:+.3g} m off"
+                )
+        if a.landing_point is not None:
+            off = surface.height(a.landing_point)
+            if abs(off) > ON_SURFACE_TOL:
+                raise ValueError(
+                    f"anchor.landing_point must lie on the surface (within {ON_SURFACE_TOL} m); "
+                    f"it is {off:+.3g} m off"
+                )
+        return self
