@@ -1,0 +1,387 @@
+"""Frames and landing geometry (DESIGN.md section 3, chapter sections 6.2 and 6.4.2).
+
+Frames: F_W (world, z_W up), F_S (surface, x_S downhill), F_A (anchor: z_A = z_W,
+y_A = y_S, x_A horizontal and downhill), F_L (link), F_B (body, z_B the thrust axis).
+``R_XY`` maps coordinates in Y to coordinates in X; columns of ``R_WS`` are x_S, y_S, z_S.
+All lengths in metres, angles in radians.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from tetherland.errors import SingularityError
+
+if TYPE_CHECKING:
+    from tetherland.config import Scenario
+
+FloatArray = NDArray[np.float64]
+
+Z_W: FloatArray = np.array([0.0, 0.0, 1.0])
+HORIZONTAL_TOL = 1e-12
+"""Below this ||z_W x z_S|| the surface counts as horizontal and F_S = F_W (section 6.2)."""
+
+
+def unit(v: ArrayLike, what: str = "vector") -> FloatArray:
+    """Return ``v / ||v||``; raise :class:`SingularityError` for a (near) zero vector."""
+    v = np.asarray(v, dtype=float)
+    n = float(np.linalg.norm(v))
+    if n < 1e-15:
+        raise SingularityError(f"{what} has zero length; its direction is undefined")
+    return v / n
+
+
+def normal_from_slope(slope: float, azimuth: float = 0.0) -> FloatArray:
+    """Unit normal n_S of a surface with slope angle ``slope`` whose downhill direction
+    has azimuth ``azimuth`` (from x_W towards y_W) [rad]."""
+    s = math.sin(slope)
+    return np.array([s * math.cos(azimuth), s * math.sin(azimuth), math.cos(slope)])
+
+
+def surface_frame(n_S: ArrayLike) -> FloatArray:
+    """Rotation R_WS = [x_S y_S z_S] of the surface frame (section 6.2).
+
+    z_S = n_S (flipped so that z_S . z_W >= 0); if the surface is horizontal F_S = F_W;
+    otherwise y_S = z_W x z_S / ||.|| and x_S = y_S x z_S, so x_S points downhill.
+    """
+    z_S = unit(n_S, "surface normal")
+    if z_S @ Z_W < 0:
+        z_S = -z_S
+    cross = np.cross(Z_W, z_S)
+    norm = float(np.linalg.norm(cross))
+    if norm < HORIZONTAL_TOL:
+        return np.eye(3)
+    y_S = cross / norm
+    x_S = np.cross(y_S, z_S)
+    x_S /= np.linalg.norm(x_S)
+    return np.column_stack((x_S, y_S, z_S))
+
+
+def anchor_frame(R_WS: FloatArray) -> FloatArray:
+    """Rotation R_WA of the anchor frame: z_A = z_W, y_A = y_S, x_A = y_A x z_A."""
+    y_A = R_WS[:, 1]
+    x_A = np.cross(y_A, Z_W)
+    x_A /= np.linalg.norm(x_A)
+    return np.column_stack((x_A, y_A, Z_W))
+
+
+def slope_angle(R_WS: FloatArray) -> float:
+    """Slope angle beta = acos(z_S . z_W) [rad], in [0, pi/2]."""
+    return math.acos(min(1.0, max(-1.0, float(R_WS[2, 2]))))
+
+
+def link_direction(phi: float, delta: float) -> FloatArray:
+    """d_A(phi, delta) = [cos(delta) cos(phi), -sin(delta), cos(delta) sin(phi)] in F_A."""
+    cp, sp, cd, sd = math.cos(phi), math.sin(phi), math.cos(delta), math.sin(delta)
+    return np.array([cd * cp, -sd, cd * sp])
+
+
+def link_frame(phi: float, delta: float) -> FloatArray:
+    """R_AL = [x_L y_L z_L] in F_A: x_L = d_A, d(d_A)/dphi = cos(delta) z_L,
+    d(d_A)/ddelta = -y_L (DESIGN.md section 3)."""
+    cp, sp, cd, sd = math.cos(phi), math.sin(phi), math.cos(delta), math.sin(delta)
+    return np.array(
+        [
+            [cd * cp, cp * sd, -sp],
+            [-sd, cd, 0.0],
+            [cd * sp, sp * sd, cp],
+        ]
+    )
+
+
+def link_jacobian(phi: float, delta: float, length: float) -> FloatArray:
+    """J_q = d(l d_A)/d(phi, delta), a 3x2 matrix in F_A [m/rad] (section 6.2.2)."""
+    R_AL = link_frame(phi, delta)
+    return length * np.column_stack((math.cos(delta) * R_AL[:, 2], -R_AL[:, 1]))
+
+
+def link_angles(d_A: ArrayLike) -> tuple[float, float]:
+    """Elevation and azimuth (phi, delta) of a link direction given in F_A.
+
+    phi = atan2(z_A.d, x_A.d); delta = atan2(-y_A.d, sqrt((x_A.d)^2 + (z_A.d)^2)).
+    (The chapter's section 6.5.1 prints +y_A.d, inconsistent with its own d_A; the sign
+    here inverts :func:`link_direction`.) For |delta| < pi/2 the inverse is exact.
+    """
+    d = unit(d_A, "link direction")
+    horizontal = math.hypot(d[0], d[2])
+    if horizontal < 1e-12:
+        raise SingularityError("link direction is along y_A (|delta| = 90 deg): phi undefined")
+    return math.atan2(d[2], d[0]), math.atan2(-d[1], horizontal)
+
+
+def theta_A_from_z_B(z_B_A: ArrayLike, phi: float, delta: float) -> float:
+    """Robot tilt theta_A from the thrust axis z_B given in F_A (DESIGN.md section 7).
+
+    alpha is z_B projected on the plane P_L = span(x_L, z_L); theta_A = atan2(x_A.alpha,
+    z_A.alpha): the tilt of the thrust axis from vertical towards x_A (downhill).
+    """
+    z_B = np.asarray(z_B_A, dtype=float)
+    y_L = link_frame(phi, delta)[:, 1]
+    alpha = z_B - (y_L @ z_B) * y_L
+    if math.hypot(alpha[0], alpha[2]) < 1e-12:
+        raise SingularityError("thrust axis is perpendicular to the link plane: theta_A undefined")
+    return math.atan2(alpha[0], alpha[2])
+
+
+def lander_point(p_R: ArrayLike, z_B: ArrayLike, h_R: float) -> FloatArray:
+    """p_RL = p_R - h_R z_B: the projection of the centre of mass on the landers plane [m]."""
+    return np.asarray(p_R, dtype=float) - h_R * np.asarray(z_B, dtype=float)
+
+
+def pipe_sag(pipe_radius: float, lander_half_width: float) -> float:
+    """How far the lander tips sit below the top line of a pipe [m].
+
+    Tips at lateral offset w on a cylinder of radius r touch it at r - sqrt(r^2 - w^2)
+    below the tangent plane P_S, so the effective h_R on a pipe is h_R minus this sag.
+    """
+    if lander_half_width >= pipe_radius:
+        raise SingularityError(
+            f"landers (half-width {lander_half_width} m) do not fit on a pipe of radius "
+            f"{pipe_radius} m"
+        )
+    return pipe_radius - math.sqrt(pipe_radius**2 - lander_half_width**2)
+
+
+def hover_cosine(h_R: float, h_A: float, length: float) -> float:
+    """c = (h_R - h_A)/l = z_S . d~ (6.9); requires |c| < 1 (P_xy^S d != 0, (6.11))."""
+    c = (h_R - h_A) / length
+    if not abs(c) < 1.0:
+        raise SingularityError(
+            f"|h_R - h_A| = {abs(h_R - h_A):g} m must be < l = {length:g} m for inclined hovering"
+        )
+    return c
+
+
+def inclined_hover_direction(R_WS: FloatArray, c: float) -> FloatArray:
+    """d~ = sqrt(1 - c^2) x_S + c z_S in F_W (6.12): the unique link direction of condition (4)."""
+    return math.sqrt(1.0 - c * c) * R_WS[:, 0] + c * R_WS[:, 2]
+
+
+def inclined_landing_point(
+    p_A: ArrayLike, R_WS: FloatArray, c: float, length: float, h_R: float
+) -> FloatArray:
+    """p~_L = p_A + l d~ - h_R z_S (after (6.12)) [m]."""
+    return (
+        np.asarray(p_A, dtype=float)
+        + length * inclined_hover_direction(R_WS, c)
+        - h_R * R_WS[:, 2]
+    )
+
+
+def anchor_for_landing_point(
+    p_L: ArrayLike, R_WS: FloatArray, c: float, length: float, h_R: float
+) -> FloatArray:
+    """p~_A = p*_L + h_R z_S - l d~ (6.13): anchor placement for a desired landing point [m]."""
+    return (
+        np.asarray(p_L, dtype=float)
+        + h_R * R_WS[:, 2]
+        - length * inclined_hover_direction(R_WS, c)
+    )
+
+
+@dataclass(frozen=True)
+class Surface:
+    """The landing surface P_S (a plane, or the tangent plane on top of a pipe).
+
+    Attributes
+    ----------
+    origin : (3,) array
+        A point O_S on P_S in F_W [m].
+    R_WS : (3, 3) array
+        Surface frame; columns x_S (downhill), y_S, z_S = n_S.
+    kind : str
+        ``"plane"`` or ``"pipe"``.
+    pipe_radius : float
+        Pipe radius [m] (pipe only).
+    friction : float
+        mu [-].
+    f_N_min : float
+        Minimum normal force [N] (<= 0).
+    """
+
+    origin: FloatArray
+    R_WS: FloatArray
+    kind: str = "plane"
+    pipe_radius: float = 0.0
+    friction: float = 0.6
+    f_N_min: float = 0.0
+
+    @property
+    def x_S(self) -> FloatArray:
+        return self.R_WS[:, 0]
+
+    @property
+    def y_S(self) -> FloatArray:
+        return self.R_WS[:, 1]
+
+    @property
+    def z_S(self) -> FloatArray:
+        return self.R_WS[:, 2]
+
+    @property
+    def slope(self) -> float:
+        """Slope angle beta [rad]."""
+        return slope_angle(self.R_WS)
+
+    @property
+    def is_horizontal(self) -> bool:
+        return bool(np.allclose(self.R_WS, np.eye(3)))
+
+    def height(self, p: ArrayLike) -> float:
+        """Signed distance of ``p`` above P_S along z_S [m] (h_A for the anchor)."""
+        return float(self.z_S @ (np.asarray(p, dtype=float) - self.origin))
+
+    def project(self, p: ArrayLike) -> FloatArray:
+        """Orthogonal projection of ``p`` on P_S [m]."""
+        return np.asarray(p, dtype=float) - self.height(p) * self.z_S
+
+    def plane_coefficients(self) -> FloatArray:
+        """[a, b, c, d] with a x + b y + c z + d = 0 and [a, b, c] = n_S."""
+        return np.append(self.z_S, -self.z_S @ self.origin)
+
+
+@dataclass(frozen=True)
+class LandingGeometry:
+    """Everything section 6.4.2 derives from the scenario's geometry.
+
+    Attributes
+    ----------
+    surface : Surface
+    R_WA : (3, 3) array
+        Anchor frame rotation.
+    p_A : (3,) array
+        Anchor point in F_W [m].
+    length : float
+        Cable length l [m].
+    h_R : float
+        Effective centre-of-mass height above the surface when landed [m] (on a pipe:
+        the vehicle's h_R minus :func:`pipe_sag`).
+    h_A : float
+        Anchor height above the surface [m].
+    c : float
+        (h_R - h_A)/l (6.9).
+    d_tilde : (3,) array
+        Inclined-hovering link direction d~ in F_W (6.12).
+    p_L : (3,) array
+        Landing point p~_L = p*_L in F_W [m].
+    phi_star, delta_star, theta_A_star : float
+        Final desired output (section 6.5.1) [rad]: phi* = gamma - beta, delta* = 0,
+        theta_A* = beta.
+    """
+
+    surface: Surface
+    R_WA: FloatArray
+    p_A: FloatArray
+    length: float
+    h_R: float
+    h_A: float
+    c: float
+    d_tilde: FloatArray
+    p_L: FloatArray
+    phi_star: float
+    delta_star: float
+    theta_A_star: float
+
+    @property
+    def gamma(self) -> float:
+        """gamma = asin(c): elevation of d~ above the surface [rad]."""
+        return math.asin(self.c)
+
+    @property
+    def p_R_landed(self) -> FloatArray:
+        """Centre of mass when landed, p~_L + h_R z_S [m]."""
+        return self.p_L + self.h_R * self.surface.z_S
+
+    def to_anchor(self, v_W: ArrayLike) -> FloatArray:
+        """Express a world vector in F_A."""
+        return self.R_WA.T @ np.asarray(v_W, dtype=float)
+
+    def robot_position(self, phi: float, delta: float) -> FloatArray:
+        """p_R = p_A + l R_WA d_A(phi, delta) [m]."""
+        return self.p_A + self.length * (self.R_WA @ link_direction(phi, delta))
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> LandingGeometry:
+        """Build the landing geometry of a (validated) scenario."""
+        surface = surface_from_config(scenario)
+        return landing_geometry(
+            surface,
+            length=scenario.tether.length,
+            h_R=effective_h_R(scenario),
+            h_A=scenario.anchor.h_A,
+            anchor=scenario.anchor.position,
+            landing_point=scenario.anchor.landing_point,
+        )
+
+
+def landing_geometry(
+    surface: Surface,
+    *,
+    length: float,
+    h_R: float,
+    h_A: float,
+    anchor: ArrayLike | None = None,
+    landing_point: ArrayLike | None = None,
+) -> LandingGeometry:
+    """Landing geometry from an explicit anchor or a desired landing point (6.8)-(6.13).
+
+    With ``anchor`` given, the landing point is p~_L; otherwise the anchor is p~_A placed
+    for ``landing_point`` (default: the surface origin).
+    """
+    c = hover_cosine(h_R, h_A, length)
+    R_WS = surface.R_WS
+    if anchor is not None:
+        p_A = np.asarray(anchor, dtype=float)
+        p_L = inclined_landing_point(p_A, R_WS, c, length, h_R)
+    else:
+        p_L = np.asarray(surface.origin if landing_point is None else landing_point, dtype=float)
+        p_L = surface.project(p_L)
+        p_A = anchor_for_landing_point(p_L, R_WS, c, length, h_R)
+    R_WA = anchor_frame(R_WS)
+    d_tilde = inclined_hover_direction(R_WS, c)
+    phi_star, delta_star = link_angles(R_WA.T @ d_tilde)
+    theta_A_star = math.atan2(R_WA[:, 0] @ surface.z_S, R_WA[:, 2] @ surface.z_S)
+    return LandingGeometry(
+        surface=surface,
+        R_WA=R_WA,
+        p_A=p_A,
+        length=length,
+        h_R=h_R,
+        h_A=h_A,
+        c=c,
+        d_tilde=d_tilde,
+        p_L=p_L,
+        phi_star=phi_star,
+        delta_star=delta_star,
+        theta_A_star=theta_A_star,
+    )
+
+
+def surface_from_config(scenario: Scenario) -> Surface:
+    """The :class:`Surface` described by a scenario's ``[surface]`` section."""
+    cfg = scenario.surface
+    if cfg.normal is not None:
+        n_S = np.asarray(cfg.normal, dtype=float)
+    else:
+        n_S = normal_from_slope(math.radians(cfg.slope_deg), math.radians(cfg.azimuth_deg))
+    return Surface(
+        origin=np.asarray(cfg.origin, dtype=float),
+        R_WS=surface_frame(n_S),
+        kind=cfg.kind,
+        pipe_radius=cfg.pipe_radius if cfg.kind == "pipe" else 0.0,
+        friction=cfg.friction,
+        f_N_min=cfg.f_N_min,
+    )
+
+
+def effective_h_R(scenario: Scenario) -> float:
+    """h_R of the landed vehicle above P_S: the vehicle's h_R, less the sag on a pipe [m]."""
+    h_R = scenario.vehicle.h_R
+    if scenario.surface.kind == "pipe":
+        h_R -= pipe_sag(scenario.surface.pipe_radius, scenario.vehicle.lander_half_width)
+    return h_R

@@ -1,0 +1,161 @@
+"""Small, allocation-light rotation utilities for the 500 Hz / 1 kHz loops.
+
+Quaternions are scalar-first ``q = (w, x, y, z)`` (MuJoCo's order) and unit-norm;
+``quat_to_rotmat(q_WB)`` returns ``R_WB`` (maps F_B coordinates to F_W). scipy's
+``Rotation`` is scalar-last; convert with :func:`to_scipy_quat` only at boundaries.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland.geometry import FloatArray
+
+_SMALL = 1e-8
+
+
+def hat(v: ArrayLike) -> FloatArray:
+    """Skew-symmetric matrix with ``hat(a) @ b == cross(a, b)``."""
+    x, y, z = np.asarray(v, dtype=float)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def vee(S: ArrayLike) -> FloatArray:
+    """Inverse of :func:`hat` (uses the antisymmetric part of ``S``)."""
+    S = np.asarray(S, dtype=float)
+    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
+
+
+def quat_to_rotmat(q: ArrayLike) -> FloatArray:
+    """Rotation matrix of a unit quaternion (w, x, y, z)."""
+    w, x, y, z = np.asarray(q, dtype=float)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def rotmat_to_quat(R: ArrayLike) -> FloatArray:
+    """Unit quaternion (w, x, y, z) with w >= 0 of a rotation matrix (Shepperd's method)."""
+    R = np.asarray(R, dtype=float)
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    if tr > 0.0:
+        s = 2.0 * math.sqrt(tr + 1.0)
+        q = np.array([0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s])
+    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = np.array([(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s])
+    elif R[1, 1] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = np.array([(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s])
+    else:
+        s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = np.array([(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s])
+    q /= np.linalg.norm(q)
+    return -q if q[0] < 0 else q
+
+
+def quat_multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
+    """Hamilton product p * q (both scalar-first); R(p*q) = R(p) R(q)."""
+    pw, px, py, pz = np.asarray(p, dtype=float)
+    qw, qx, qy, qz = np.asarray(q, dtype=float)
+    return np.array(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ]
+    )
+
+
+def quat_conjugate(q: ArrayLike) -> FloatArray:
+    """Inverse of a unit quaternion."""
+    w, x, y, z = np.asarray(q, dtype=float)
+    return np.array([w, -x, -y, -z])
+
+
+def exp_so3(phi: ArrayLike) -> FloatArray:
+    """Rotation matrix exp(hat(phi)) of a rotation vector (Rodrigues)."""
+    phi = np.asarray(phi, dtype=float)
+    angle = float(np.linalg.norm(phi))
+    K = hat(phi)
+    if angle < _SMALL:
+        return np.eye(3) + K + 0.5 * K @ K
+    return (
+        np.eye(3)
+        + (math.sin(angle) / angle) * K
+        + ((1.0 - math.cos(angle)) / angle**2) * K @ K
+    )
+
+
+def log_so3(R: ArrayLike) -> FloatArray:
+    """Rotation vector phi with exp_so3(phi) = R, |phi| <= pi."""
+    q = rotmat_to_quat(R)
+    return quat_to_rotvec(q)
+
+
+def quat_to_rotvec(q: ArrayLike) -> FloatArray:
+    """Rotation vector of a unit quaternion (shortest rotation)."""
+    q = np.asarray(q, dtype=float)
+    if q[0] < 0:
+        q = -q
+    s = float(np.linalg.norm(q[1:]))
+    if s < _SMALL:
+        return 2.0 * q[1:]
+    angle = 2.0 * math.atan2(s, q[0])
+    return q[1:] * (angle / s)
+
+
+def rotvec_to_quat(phi: ArrayLike) -> FloatArray:
+    """Unit quaternion (w, x, y, z) of a rotation vector."""
+    phi = np.asarray(phi, dtype=float)
+    angle = float(np.linalg.norm(phi))
+    if angle < _SMALL:
+        q = np.array([1.0, 0.5 * phi[0], 0.5 * phi[1], 0.5 * phi[2]])
+        return q / np.linalg.norm(q)
+    axis = phi / angle
+    return np.concatenate(([math.cos(0.5 * angle)], math.sin(0.5 * angle) * axis))
+
+
+def rotation_from_z_and_yaw(z_B: ArrayLike, psi: float) -> FloatArray:
+    """R_WB with third column ``z_B`` whose x_B projects on the heading ``psi``.
+
+    x_C = [cos psi, sin psi, 0]; y_B = z_B x x_C / ||.||; x_B = y_B x z_B (Lee et al. 2010).
+    Singular when z_B is horizontal along x_C; raises :class:`SingularityError` there.
+    """
+    from tetherland.errors import SingularityError
+
+    z = np.asarray(z_B, dtype=float)
+    z = z / np.linalg.norm(z)
+    x_C = np.array([math.cos(psi), math.sin(psi), 0.0])
+    y = np.cross(z, x_C)
+    n = float(np.linalg.norm(y))
+    if n < 1e-9:
+        raise SingularityError("thrust axis is aligned with the desired heading: yaw undefined")
+    y /= n
+    return np.column_stack((np.cross(y, z), y, z))
+
+
+def to_scipy_quat(q: ArrayLike) -> FloatArray:
+    """(w, x, y, z) -> (x, y, z, w) for ``scipy.spatial.transform.Rotation``."""
+    q = np.asarray(q, dtype=float)
+    return np.array([q[1], q[2], q[3], q[0]])
+
+
+def from_scipy_quat(q: ArrayLike) -> FloatArray:
+    """(x, y, z, w) -> (w, x, y, z)."""
+    q = np.asarray(q, dtype=float)
+    return np.array([q[3], q[0], q[1], q[2]])
+
+
+def angle_between(a: ArrayLike, b: ArrayLike) -> float:
+    """Angle between two vectors [rad], robust near 0 and pi."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return math.atan2(float(np.linalg.norm(np.cross(a, b))), float(a @ b))
