@@ -259,12 +259,16 @@ class LandingGeometry:
     length : float
         Cable length l [m].
     h_R : float
-        Effective centre-of-mass height above the surface when landed [m] (on a pipe:
-        the vehicle's h_R minus :func:`pipe_sag`).
+        Centre-of-mass height above the surface when landed [m] (on a pipe: the
+        vehicle's h_R minus :func:`pipe_sag`).
+    h_att : float
+        Height of the cable attachment point above the surface when landed,
+        h_R + z_B.r_att [m]. The link (phi, delta, l) ends at this point; with the
+        attachment at the centre of mass (the chapter's assumption) h_att = h_R.
     h_A : float
         Anchor height above the surface [m].
     c : float
-        (h_R - h_A)/l (6.9).
+        (h_att - h_A)/l (6.9).
     d_tilde : (3,) array
         Inclined-hovering link direction d~ in F_W (6.12).
     p_L : (3,) array
@@ -279,6 +283,7 @@ class LandingGeometry:
     p_A: FloatArray
     length: float
     h_R: float
+    h_att: float
     h_A: float
     c: float
     d_tilde: FloatArray
@@ -297,12 +302,17 @@ class LandingGeometry:
         """Centre of mass when landed, p~_L + h_R z_S [m]."""
         return self.p_L + self.h_R * self.surface.z_S
 
+    @property
+    def p_att_landed(self) -> FloatArray:
+        """Cable attachment point when landed, p~_L + h_att z_S = p_A + l d~ [m]."""
+        return self.p_L + self.h_att * self.surface.z_S
+
     def to_anchor(self, v_W: ArrayLike) -> FloatArray:
         """Express a world vector in F_A."""
         return self.R_WA.T @ np.asarray(v_W, dtype=float)
 
-    def robot_position(self, phi: float, delta: float) -> FloatArray:
-        """p_R = p_A + l R_WA d_A(phi, delta) [m]."""
+    def link_end(self, phi: float, delta: float) -> FloatArray:
+        """End of the taut link, p_A + l R_WA d_A(phi, delta): the attachment point [m]."""
         return self.p_A + self.length * (self.R_WA @ link_direction(phi, delta))
 
     @classmethod
@@ -313,6 +323,7 @@ class LandingGeometry:
             surface,
             length=scenario.tether.length,
             h_R=effective_h_R(scenario),
+            h_att=attachment_height(scenario),
             h_A=scenario.anchor.h_A,
             anchor=scenario.anchor.position,
             landing_point=scenario.anchor.landing_point,
@@ -325,23 +336,27 @@ def landing_geometry(
     length: float,
     h_R: float,
     h_A: float,
+    h_att: float | None = None,
     anchor: ArrayLike | None = None,
     landing_point: ArrayLike | None = None,
 ) -> LandingGeometry:
     """Landing geometry from an explicit anchor or a desired landing point (6.8)-(6.13).
 
     With ``anchor`` given, the landing point is p~_L; otherwise the anchor is p~_A placed
-    for ``landing_point`` (default: the surface origin).
+    for ``landing_point`` (default: the surface origin). ``h_att`` (default ``h_R``) is
+    the height of the cable attachment point when landed; the chapter's formulas use
+    h_R because its cable is attached at the centre of mass.
     """
-    c = hover_cosine(h_R, h_A, length)
+    h_att = h_R if h_att is None else h_att
+    c = hover_cosine(h_att, h_A, length)
     R_WS = surface.R_WS
     if anchor is not None:
         p_A = np.asarray(anchor, dtype=float)
-        p_L = inclined_landing_point(p_A, R_WS, c, length, h_R)
+        p_L = inclined_landing_point(p_A, R_WS, c, length, h_att)
     else:
         p_L = np.asarray(surface.origin if landing_point is None else landing_point, dtype=float)
         p_L = surface.project(p_L)
-        p_A = anchor_for_landing_point(p_L, R_WS, c, length, h_R)
+        p_A = anchor_for_landing_point(p_L, R_WS, c, length, h_att)
     R_WA = anchor_frame(R_WS)
     d_tilde = inclined_hover_direction(R_WS, c)
     phi_star, delta_star = link_angles(R_WA.T @ d_tilde)
@@ -352,6 +367,7 @@ def landing_geometry(
         p_A=p_A,
         length=length,
         h_R=h_R,
+        h_att=h_att,
         h_A=h_A,
         c=c,
         d_tilde=d_tilde,
@@ -385,3 +401,12 @@ def effective_h_R(scenario: Scenario) -> float:
     if scenario.surface.kind == "pipe":
         h_R -= pipe_sag(scenario.surface.pipe_radius, scenario.vehicle.lander_half_width)
     return h_R
+
+
+def attachment_height(scenario: Scenario) -> float:
+    """Height of the cable attachment point above P_S when landed with z_B = z_S [m].
+
+    h_att = effective h_R + r_att,z. Only the offset along z_B moves the landing
+    geometry; an offset across z_B acts through the cable torque of section 6.6.5.
+    """
+    return effective_h_R(scenario) + scenario.vehicle.cable_attachment[2]

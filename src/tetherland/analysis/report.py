@@ -66,7 +66,7 @@ class LandingAnalysis:
                 f"{s.friction * (m_g * s.z_S[2] - s.f_N_min):.2f} N (motors off)",
                 "any (y_S.d~ = 0, so (6.16) always holds)",
             ),
-            TableRow("Anchor position", "-", "any: p_A = p*_L + h_R z_S - l d~ (6.13)"),
+            TableRow("Anchor position", "-", "any: p_A = p*_L + h_att z_S - l d~ (6.13)"),
             TableRow(
                 "Landing position",
                 "any",
@@ -109,6 +109,7 @@ class LandingAnalysis:
                 "landing_point": t.landing_point,
                 "anchor_point": t.anchor_point,
                 "h_R": self.geometry.h_R,
+                "h_att": self.geometry.h_att,
                 "h_A": self.geometry.h_A,
                 "phi_star": t.phi_star,
                 "theta_A_star": t.theta_A_star,

@@ -49,10 +49,16 @@ class Scenario(Section):
                     f"vehicle.lander_half_width = {v.lander_half_width} m (landers must fit)"
                 )
             h_R -= geo.pipe_sag(s.pipe_radius, v.lander_half_width)
-        if abs(h_R - a.h_A) >= l:
+        h_att = h_R + v.cable_attachment[2]
+        if h_att <= 0:
             raise ValueError(
-                f"tether.length = {l} m must be > |h_R - anchor.h_A| = {abs(h_R - a.h_A):g} m "
-                "(inclined hovering needs |c| < 1, eq. 6.9)"
+                f"vehicle.cable_attachment z = {v.cable_attachment[2]} m puts the attachment "
+                f"point below the landers plane (must be > -h_R = {-h_R:g} m)"
+            )
+        if abs(h_att - a.h_A) >= l:
+            raise ValueError(
+                f"tether.length = {l} m must be > |h_att - anchor.h_A| = {abs(h_att - a.h_A):g} m, "
+                "h_att = h_R + cable_attachment z (inclined hovering needs |c| < 1, eq. 6.9)"
             )
         surface = geo.surface_from_config(self)
         if a.position is not None:
