@@ -167,9 +167,7 @@ def inclined_landing_point(
 ) -> FloatArray:
     """p~_L = p_A + l d~ - h_R z_S (after (6.12)) [m]."""
     return (
-        np.asarray(p_A, dtype=float)
-        + length * inclined_hover_direction(R_WS, c)
-        - h_R * R_WS[:, 2]
+        np.asarray(p_A, dtype=float) + length * inclined_hover_direction(R_WS, c) - h_R * R_WS[:, 2]
     )
 
 
@@ -178,9 +176,7 @@ def anchor_for_landing_point(
 ) -> FloatArray:
     """p~_A = p*_L + h_R z_S - l d~ (6.13): anchor placement for a desired landing point [m]."""
     return (
-        np.asarray(p_L, dtype=float)
-        + h_R * R_WS[:, 2]
-        - length * inclined_hover_direction(R_WS, c)
+        np.asarray(p_L, dtype=float) + h_R * R_WS[:, 2] - length * inclined_hover_direction(R_WS, c)
     )
 
 

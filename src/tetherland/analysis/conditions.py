@@ -216,4 +216,3 @@ def touchdown_index(heights: ArrayLike, threshold: float) -> int | None:
     h = np.asarray(heights, dtype=float)
     hits = np.flatnonzero(h <= threshold)
     return int(hits[0]) if hits.size else None
-

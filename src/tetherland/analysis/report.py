@@ -6,7 +6,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-
 from tetherland import GRAVITY
 from tetherland.analysis.feasibility import (
     ContactFreeAnalysis,
@@ -159,5 +158,3 @@ def analyze(scenario: Scenario) -> LandingAnalysis:
         tethered=analyze_tethered(geometry, limits),
         free_flight=analyze_free_flight(geometry.surface, limits),
     )
-
-

@@ -62,9 +62,7 @@ class RotorLayout:
         """Gamma (4x4): rotor thrusts -> [f_R, tau_B] [N, N m]."""
         e3 = np.array([0.0, 0.0, 1.0])
         torque_rows = np.cross(self.positions_B, e3).T  # (3, 4): r_i x e3
-        return np.vstack(
-            (np.ones(4), torque_rows[:2], self.spins * self.drag_coefficient)
-        )
+        return np.vstack((np.ones(4), torque_rows[:2], self.spins * self.drag_coefficient))
 
     def speed_from_thrust(self, f: ArrayLike) -> FloatArray:
         """Rotor speeds w_i = sqrt(f_i / c_f) [rad/s] (thrusts clipped at 0)."""
