@@ -1,0 +1,20 @@
+"""State and cable-tension estimation (DESIGN.md section 8)."""
+
+from tetherland.estimation.tension import (
+    MotorLagThrust,
+    TensionEstimate,
+    TensionEstimator,
+    tension_from_forces,
+)
+from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
+
+__all__ = [
+    "MotorLagThrust",
+    "NavState",
+    "TensionEstimate",
+    "TensionEstimator",
+    "Ukf",
+    "UkfNoise",
+    "initial_covariance",
+    "tension_from_forces",
+]

@@ -1,0 +1,391 @@
+"""Unscented Kalman filter on IMU (process input) and motion capture (DESIGN.md section 8).
+
+State: position p_W, velocity v_W, attitude q_WB (unit quaternion, kept outside the
+filter vector), gyro bias b_g and accelerometer bias b_a. The filter works on the
+15-dimensional error state
+
+    e = [dp (3), dv (3), dtheta (3), db_g (3), db_a (3)],  q_true = q_hat * exp(dtheta)
+
+(the attitude error is a rotation vector in F_B, so attitude never leaves SO(3)).
+
+Process (one IMU sample of specific force f_B and rate omega_B over dt):
+    a_W = R_WB (f_B - b_a) + g_W,   p += v dt + a dt^2/2,   v += a dt,
+    q = q * exp((omega_B - b_g) dt),  biases random walks.
+The accelerometer measures thrust, cable and contact forces, not gravity, so it is never
+used as a tilt sensor; it only drives the velocity through the process model.
+
+Motion capture (position and attitude) arrives late (latency). :meth:`Ukf.update_pose`
+forms the innovation against the estimate stored at the measurement time and applies it
+to the current state and covariance (Larsen et al. 1998, "Incorporation of time delayed
+measurements in a discrete-time Kalman filter"; exact for a constant error over the
+delay, which a few milliseconds of latency make negligible). This costs one update
+instead of re-propagating every IMU sample since the measurement.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland import GRAVITY
+from tetherland.config import SensorsConfig
+from tetherland.geometry import FloatArray
+from tetherland.rotations_batch import (
+    quat_multiply_batch,
+    quat_to_rotvec_batch,
+    rotation_matrices_batch,
+    rotvec_to_quat_batch,
+)
+
+N_ERR = 15
+_G_W = np.array([0.0, 0.0, -GRAVITY])
+_NOISE_FLOOR = 1e-9
+_CONJ = np.array([1.0, -1.0, -1.0, -1.0])
+
+
+@dataclass(frozen=True)
+class UkfNoise:
+    """Noise intensities the filter assumes.
+
+    Attributes
+    ----------
+    gyro_noise : float
+        Gyro white noise per sample [rad/s].
+    accel_noise : float
+        Accelerometer white noise per sample [m/s^2].
+    gyro_bias_walk, accel_bias_walk : float
+        Bias random-walk intensities [rad/s/sqrt(s)], [m/s^2/sqrt(s)].
+    position_noise : float
+        Motion-capture position noise per axis [m].
+    attitude_noise : float
+        Motion-capture attitude noise per axis [rad].
+    """
+
+    gyro_noise: float
+    accel_noise: float
+    gyro_bias_walk: float
+    accel_bias_walk: float
+    position_noise: float
+    attitude_noise: float
+
+    @classmethod
+    def from_config(cls, sensors: SensorsConfig, inflation: float = 1.0) -> UkfNoise:
+        """Noise from the scenario's sensor settings (times ``inflation`` >= 1 for robustness).
+
+        A small floor keeps the filter well conditioned when ``noise_scale = 0``.
+        """
+        k = sensors.noise_scale * inflation
+        imu, mocap = sensors.imu, sensors.mocap
+        return cls(
+            gyro_noise=max(k * imu.gyro_noise, 1e-5),
+            accel_noise=max(k * imu.accel_noise, 1e-4),
+            gyro_bias_walk=max(k * imu.gyro_bias_walk, 1e-7),
+            accel_bias_walk=max(k * imu.accel_bias_walk, 1e-6),
+            position_noise=max(k * mocap.position_noise, 1e-5),
+            attitude_noise=max(k * math.radians(mocap.attitude_noise_deg), 1e-5),
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class NavState:
+    """Navigation state estimate (F_W unless named otherwise).
+
+    Attributes
+    ----------
+    p_W, v_W : (3,) arrays
+        Position [m] and velocity [m/s] of the centre of mass.
+    q_WB : (4,) array
+        Attitude quaternion (w, x, y, z).
+    b_g, b_a : (3,) arrays
+        Gyro [rad/s] and accelerometer [m/s^2] biases, F_B.
+    """
+
+    p_W: FloatArray
+    v_W: FloatArray
+    q_WB: FloatArray
+    b_g: FloatArray
+    b_a: FloatArray
+
+
+class Ukf:
+    """Error-state unscented Kalman filter for IMU + motion capture.
+
+    Parameters
+    ----------
+    noise : UkfNoise
+    x0 : NavState
+        Initial estimate.
+    P0 : (15, 15) array
+        Initial error covariance.
+    t0 : float
+        Time of the initial estimate [s].
+    history : float
+        How far back delayed measurements are accepted [s].
+    imu_rate_hz : float
+        Nominal IMU rate, sizes the history buffer [Hz].
+    alpha, beta, kappa : float
+        Scaled unscented transform parameters. The defaults (1, 2, 0) spread the sigma
+        points by sqrt(15) standard deviations with non-negative mean weights.
+    """
+
+    def __init__(
+        self,
+        noise: UkfNoise,
+        x0: NavState,
+        P0: ArrayLike,
+        t0: float = 0.0,
+        *,
+        history: float = 0.1,
+        imu_rate_hz: float = 1000.0,
+        alpha: float = 1.0,
+        beta: float = 2.0,
+        kappa: float = 0.0,
+    ) -> None:
+        self.noise = noise
+        n = N_ERR
+        lam = alpha * alpha * (n + kappa) - n
+        self._gamma = math.sqrt(n + lam)
+        wm = np.full(2 * n + 1, 0.5 / (n + lam))
+        wc = wm.copy()
+        wm[0] = lam / (n + lam)
+        wc[0] = lam / (n + lam) + (1.0 - alpha * alpha + beta)
+        self._wm, self._wc = wm, wc
+        self._R_pose = np.diag([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
+        self._Q_cache: dict[float, FloatArray] = {}
+        self._D = np.zeros((2 * n + 1, n))
+        q0 = np.asarray(x0.q_WB, dtype=float)
+        self._x = np.concatenate((x0.p_W, x0.v_W, q0 / np.linalg.norm(q0), x0.b_g, x0.b_a)).astype(
+            float
+        )
+        self._P = np.array(P0, dtype=float)
+        if self._P.shape != (n, n):
+            raise ValueError(f"P0 must be {n}x{n}, got {self._P.shape}")
+        self._t = float(t0)
+        # mean-only history for delayed measurements: (t, p_W, q_WB)
+        self._hist: deque[tuple[float, FloatArray, FloatArray]] = deque(
+            maxlen=max(2, int(history * imu_rate_hz) + 2)
+        )
+        self._hist.append((self._t, self._x[0:3].copy(), self._x[6:10].copy()))
+        self.rejected_late = 0
+        """Motion-capture samples older than the history (not fused)."""
+        self._last_omega = np.zeros(3)
+        self._last_f = -_G_W.copy()
+
+    # ---------------------------------------------------------------- accessors
+    @property
+    def t(self) -> float:
+        """Time of the current estimate [s]."""
+        return self._t
+
+    @property
+    def covariance(self) -> FloatArray:
+        """Error covariance (15x15) in the order [p, v, theta_B, b_g, b_a]."""
+        return self._P
+
+    @property
+    def state(self) -> NavState:
+        x = self._x
+        return NavState(
+            x[0:3].copy(), x[3:6].copy(), x[6:10].copy(), x[10:13].copy(), x[13:16].copy()
+        )
+
+    @property
+    def omega_B(self) -> FloatArray:
+        """Bias-corrected angular rate of the last IMU sample [rad/s]."""
+        return self._last_omega - self._x[10:13]
+
+    @property
+    def specific_force_B(self) -> FloatArray:
+        """Bias-corrected specific force of the last IMU sample [m/s^2]."""
+        return self._last_f - self._x[13:16]
+
+    # ---------------------------------------------------------------- core maths
+    def _sigma_points(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Sigma points: errors D (31, 15), vectors X (31, 12) = [p, v, b_g, b_a], quats (31, 4)."""
+        P = self._P
+        try:
+            S = np.linalg.cholesky(P)
+        except np.linalg.LinAlgError:
+            w, V = np.linalg.eigh(0.5 * (P + P.T))
+            S = V * np.sqrt(np.maximum(w, 1e-15))
+        D = self._D
+        S = self._gamma * S.T
+        D[1 : N_ERR + 1] = S
+        D[N_ERR + 1 :] = -S
+        x = self._x
+        X = np.empty((2 * N_ERR + 1, 12))
+        X[:, 0:6] = x[0:6] + D[:, 0:6]
+        X[:, 6:12] = x[10:16] + D[:, 9:15]
+        Q = quat_multiply_batch(x[6:10], rotvec_to_quat_batch(D[:, 6:9]))
+        return D, X, Q
+
+    def _process_noise(self, dt: float) -> FloatArray:
+        dt = round(dt, 12)  # cache key robust to float noise in time differences
+        Q = self._Q_cache.get(dt)
+        if Q is None:
+            nz = self.noise
+            # white noise per sample integrates to sigma*dt per step; bias walks to sigma*sqrt(dt)
+            var_v = (nz.accel_noise * dt) ** 2
+            var_th = (nz.gyro_noise * dt) ** 2
+            q = np.array(
+                [0.25 * var_v * dt * dt] * 3
+                + [var_v] * 3
+                + [var_th] * 3
+                + [nz.gyro_bias_walk**2 * dt] * 3
+                + [nz.accel_bias_walk**2 * dt] * 3
+            )
+            Q = np.diag(np.maximum(q, _NOISE_FLOOR**2))
+            if len(self._Q_cache) < 64:
+                self._Q_cache[dt] = Q
+        return Q
+
+    # ---------------------------------------------------------------- public steps
+    def predict(self, t: float, f_B: ArrayLike, omega_B: ArrayLike) -> None:
+        """Integrate one IMU sample (specific force [m/s^2], rate [rad/s], both F_B) up to ``t``.
+
+        All 31 sigma points are propagated through the sample (unscented transform).
+        """
+        self.predict_many(
+            np.array([t], dtype=float),
+            np.asarray(f_B, dtype=float)[None, :],
+            np.asarray(omega_B, dtype=float)[None, :],
+        )
+
+    def predict_many(self, ts: ArrayLike, f_B: ArrayLike, omega_B: ArrayLike) -> None:
+        """Integrate several IMU samples in one unscented transform.
+
+        Every sigma point is carried through every sample (rows of ``f_B``, ``omega_B``,
+        times ``ts``), then mean and covariance are formed once. Cheaper per sample than
+        :meth:`predict` and identical for one sample.
+        """
+        ts = np.asarray(ts, dtype=float)
+        fs = np.asarray(f_B, dtype=float)
+        ws = np.asarray(omega_B, dtype=float)
+        t_prev = self._t
+        if ts[0] <= t_prev or np.any(np.diff(ts) <= 0.0):
+            raise ValueError(f"IMU times must increase beyond t = {t_prev}: got {ts}")
+        _, X, Q = self._sigma_points()
+        lin = np.empty((2 * N_ERR + 1, 12))
+        lin[:, 6:12] = X[:, 6:12]
+        p, v = X[:, 0:3], X[:, 3:6]
+        f_bias, w_bias = X[:, 9:12], X[:, 6:9]
+        hist = self._hist
+        Q_sum = np.zeros((N_ERR, N_ERR))
+        for k in range(ts.shape[0]):
+            dt = ts[k] - t_prev
+            Q_sum += self._process_noise(dt)  # white noise per sample: variances add up
+            acc = np.einsum("nij,nj->ni", rotation_matrices_batch(Q), fs[k] - f_bias) + _G_W
+            p = p + v * dt + (0.5 * dt * dt) * acc
+            v = v + acc * dt
+            Q = quat_multiply_batch(Q, rotvec_to_quat_batch((ws[k] - w_bias) * dt))
+            t_prev = ts[k]
+            hist.append((t_prev, p[0].copy(), Q[0].copy()))  # centre point: the mean history
+        lin[:, 0:3] = p
+        lin[:, 3:6] = v
+        # mean on the manifold, relative to the propagated centre point
+        q_ref = Q[0]
+        dth = quat_to_rotvec_batch(quat_multiply_batch(q_ref * _CONJ, Q))
+        wm = self._wm
+        dth_mean = wm @ dth
+        lin_mean = wm @ lin
+        dev = np.empty((2 * N_ERR + 1, N_ERR))
+        dev[:, 0:6] = lin[:, 0:6] - lin_mean[0:6]
+        dev[:, 6:9] = dth - dth_mean
+        dev[:, 9:15] = lin[:, 6:12] - lin_mean[6:12]
+        P = (dev.T * self._wc) @ dev + Q_sum
+        q = quat_multiply_batch(q_ref, rotvec_to_quat_batch(dth_mean[None, :]))[0]
+        x = self._x
+        x[0:6] = lin_mean[0:6]
+        x[6:10] = q / math.sqrt(q @ q)
+        x[10:16] = lin_mean[6:12]
+        self._P = 0.5 * (P + P.T)
+        self._t = float(ts[-1])
+        self._last_f, self._last_omega = fs[-1].copy(), ws[-1].copy()
+        hist[-1] = (self._t, x[0:3].copy(), x[6:10].copy())
+
+    def update_pose(self, t_meas: float, p_W: ArrayLike, q_WB: ArrayLike) -> float:
+        """Fuse a motion-capture pose measured at ``t_meas`` (possibly in the past).
+
+        The innovation is formed against the estimate stored at ``t_meas`` and applied now.
+
+        Returns
+        -------
+        float
+            The normalised innovation squared (chi-square with 6 dof when consistent);
+            NaN if the measurement was older than the history and was not fused.
+        """
+        hist = self._hist
+        if t_meas < hist[0][0] - 1e-9:
+            self.rejected_late += 1
+            return math.nan
+        k = len(hist) - 1
+        while k > 0 and hist[k][0] > t_meas + 1e-9:
+            k -= 1
+        _, p_then, q_then = hist[k]
+        r_att = quat_to_rotvec_batch(
+            quat_multiply_batch(q_then * _CONJ, np.asarray(q_WB, dtype=float)[None, :])
+        )[0]
+        innov = np.concatenate((np.asarray(p_W, dtype=float) - p_then, r_att))
+        D, X, _ = self._sigma_points()
+        # h(sigma) = [position, attitude error in the chart at the estimate]
+        Z = np.concatenate((X[:, 0:3], D[:, 6:9]), axis=1)
+        wm, wc = self._wm, self._wc
+        z_mean = wm @ Z
+        dZ = Z - z_mean
+        dD = D - wm @ D
+        S = (dZ.T * wc) @ dZ + self._R_pose
+        Pxz = (dD.T * wc) @ dZ
+        # the sigma points are centred on the estimate: remove their mean offset
+        innov = innov - (z_mean - np.concatenate((self._x[0:3], np.zeros(3))))
+        K = np.linalg.solve(S, Pxz.T).T
+        dx = K @ innov
+        x = self._x
+        x[0:6] += dx[0:6]
+        q = quat_multiply_batch(x[6:10], rotvec_to_quat_batch(dx[None, 6:9]))[0]
+        x[6:10] = q / math.sqrt(q @ q)
+        x[10:16] += dx[9:15]
+        P = self._P - K @ S @ K.T
+        self._P = 0.5 * (P + P.T)
+        return float(innov @ np.linalg.solve(S, innov))
+
+    def error(self, truth: NavState) -> FloatArray:
+        """Error-state vector truth - estimate, in the filter's chart (for NEES)."""
+        x = self._x
+        dth = quat_to_rotvec_batch(
+            quat_multiply_batch(x[6:10] * _CONJ, np.asarray(truth.q_WB, float)[None, :])
+        )[0]
+        return np.concatenate(
+            (
+                truth.p_W - x[0:3],
+                truth.v_W - x[3:6],
+                dth,
+                truth.b_g - x[10:13],
+                truth.b_a - x[13:16],
+            )
+        )
+
+    def nees(self, truth: NavState) -> float:
+        """Normalised estimation error squared, chi-square with 15 dof when consistent."""
+        e = self.error(truth)
+        return float(e @ np.linalg.solve(self._P, e))
+
+
+def initial_covariance(
+    position: float = 0.01,
+    velocity: float = 0.05,
+    attitude: float = math.radians(2.0),
+    gyro_bias: float = 0.01,
+    accel_bias: float = 0.1,
+) -> FloatArray:
+    """Diagonal initial covariance from standard deviations [m, m/s, rad, rad/s, m/s^2]."""
+    return np.diag(
+        [position**2] * 3
+        + [velocity**2] * 3
+        + [attitude**2] * 3
+        + [gyro_bias**2] * 3
+        + [accel_bias**2] * 3
+    )
