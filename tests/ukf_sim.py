@@ -45,7 +45,7 @@ def simulate(
     latency: float = 0.005,
     dropout: tuple[float, float] | None = None,
 ) -> SyntheticRun:
-    n = int(round(duration / dt))
+    n = round(duration / dt)
     t = dt * np.arange(1, n + 1)
     f_true = np.column_stack(
         (0.8 * np.sin(1.3 * t), 0.6 * np.cos(0.7 * t), GRAVITY + 0.5 * np.sin(2.1 * t))
@@ -73,8 +73,8 @@ def simulate(
         w_m[k] = w_true[k] + b_g + rng.normal(0.0, gyro_noise, 3)
         truth.append(NavState(p.copy(), v.copy(), q.copy(), b_g.copy(), b_a.copy()))
     mocap = []
-    period = int(round(1.0 / (mocap_rate * dt)))
-    delay = int(round(latency / dt))
+    period = round(1.0 / (mocap_rate * dt))
+    delay = round(latency / dt)
     for k in range(period - 1, n - delay, period):
         t_meas = t[k]
         if dropout is not None and dropout[0] <= t_meas < dropout[1]:
