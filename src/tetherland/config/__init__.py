@@ -7,7 +7,7 @@
 """
 
 from tetherland.config.base import Section, Vec3
-from tetherland.config.control import ControllerConfig
+from tetherland.config.control import ControllerConfig, FreeFlightGains
 from tetherland.config.loader import (
     ScenarioInfo,
     apply_overrides,
@@ -28,6 +28,7 @@ from tetherland.config.simulation import SimConfig
 __all__ = [
     "AnchorConfig",
     "ControllerConfig",
+    "FreeFlightGains",
     "ImuConfig",
     "MissionConfig",
     "MocapConfig",

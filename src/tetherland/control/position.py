@@ -1,0 +1,124 @@
+"""Geometric position control for free flight (Lee, Leok, McClamroch 2010).
+
+    F_d = m (a_d - k_x e_x - k_v e_v) - m g_W,   f_R = F_d . z_B,
+    z_B,d = F_d/||F_d||,  R_d from (z_B,d, psi_d),  tau from :mod:`attitude`.
+
+The commanded tilt is limited (``max_tilt_deg``) and the vertical thrust kept positive, so
+z_B,d never becomes horizontal or undefined (the singularity of R_d is avoided, not hit).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tetherland import GRAVITY
+from tetherland.config.control import FreeFlightGains
+from tetherland.control.attitude import AttitudeController, AttitudeGains
+from tetherland.geometry import FloatArray
+from tetherland.rotations import rotation_from_z_and_yaw
+from tetherland.state import RigidBodyState
+
+_ZERO3 = np.zeros(3)
+
+
+@dataclass(frozen=True, slots=True)
+class PositionReference:
+    """Desired flat outputs of free flight (F_W).
+
+    Attributes
+    ----------
+    p_W, v_W, a_W : (3,) arrays
+        Desired position [m], velocity [m/s], acceleration [m/s^2] of the centre of mass.
+    yaw : float
+        Desired heading psi [rad].
+    """
+
+    p_W: FloatArray
+    v_W: FloatArray = field(default_factory=lambda: _ZERO3.copy())
+    a_W: FloatArray = field(default_factory=lambda: _ZERO3.copy())
+    yaw: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class WrenchCommand:
+    """Total thrust and body torque requested from the allocation.
+
+    Attributes
+    ----------
+    thrust : float
+        f_R along z_B [N].
+    torque_B : (3,) array
+        tau_B [N m].
+    R_d : (3, 3) array
+        Desired attitude R_WB,d (for logs and plots).
+    limited : bool
+        The tilt or vertical-thrust limit was active.
+    """
+
+    thrust: float
+    torque_B: FloatArray
+    R_d: FloatArray
+    limited: bool = False
+
+
+class PositionController:
+    """Free-flight position and attitude controller producing a wrench.
+
+    Parameters
+    ----------
+    mass : float
+        [kg]
+    inertia : (3,) array
+        Principal inertia [kg m^2].
+    gains : FreeFlightGains
+    min_thrust : float
+        Smallest vertical component of F_d [N] (e.g. n f_min); keeps F_d away from zero.
+    """
+
+    def __init__(
+        self,
+        mass: float,
+        inertia: FloatArray,
+        gains: FreeFlightGains,
+        min_thrust: float = 0.0,
+        g: float = GRAVITY,
+    ):
+        self.mass = mass
+        self.g = g
+        wn, zeta = gains.position_frequency, gains.position_damping
+        self.k_x = wn * wn
+        self.k_v = 2.0 * zeta * wn
+        self.tan_max_tilt = math.tan(math.radians(gains.max_tilt_deg))
+        self.min_vertical = max(min_thrust, 0.05 * mass * g)
+        self.attitude = AttitudeController(inertia, AttitudeGains.from_config(gains))
+
+    def desired_force(
+        self, state: RigidBodyState, ref: PositionReference
+    ) -> tuple[FloatArray, bool]:
+        """F_d in F_W [N] (after the tilt and vertical-thrust limits) and whether a limit acted."""
+        e_x = state.p_W - ref.p_W
+        e_v = state.v_W - ref.v_W
+        F = self.mass * (ref.a_W - self.k_x * e_x - self.k_v * e_v)
+        F[2] += self.mass * self.g
+        limited = False
+        if F[2] < self.min_vertical:
+            F[2] = self.min_vertical
+            limited = True
+        horiz = math.hypot(F[0], F[1])
+        max_horiz = F[2] * self.tan_max_tilt
+        if horiz > max_horiz:
+            F[0:2] *= max_horiz / horiz
+            limited = True
+        return F, limited
+
+    def update(self, state: RigidBodyState, ref: PositionReference) -> WrenchCommand:
+        """Wrench tracking ``ref`` from ``state``."""
+        F, limited = self.desired_force(state, ref)
+        R = state.R_WB
+        R_d = rotation_from_z_and_yaw(F, ref.yaw)
+        thrust = float(F @ R[:, 2])
+        tau = self.attitude.torque(R, state.omega_B, R_d)
+        return WrenchCommand(thrust=thrust, torque_B=tau, R_d=R_d, limited=limited)
