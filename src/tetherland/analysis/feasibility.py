@@ -197,7 +197,7 @@ def _free_flight_margin(surface: Surface, limits: VehicleLimits, g: float) -> fl
     return -math.inf if bound is None else bound - limits.min_controllable_thrust
 
 
-def max_feasible_slope(margin: Callable[[float], float], samples: int = 901) -> float | None:
+def max_feasible_slope(margin: Callable[[float], float], samples: int = 181) -> float | None:
     """Steepest slope in [0, pi/2] with ``margin(slope) >= 0`` [rad], or None.
 
     The margin is sampled on a grid and the last sign change refined with Brent's method.

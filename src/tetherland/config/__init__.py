@@ -19,6 +19,7 @@ from tetherland.config.loader import (
     scenario_to_toml,
 )
 from tetherland.config.mission import MissionConfig
+from tetherland.config.perturbation import PerturbationConfig
 from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
 from tetherland.config.planning import PlannerConfig
 from tetherland.config.scenario import Scenario
@@ -32,6 +33,7 @@ __all__ = [
     "ImuConfig",
     "MissionConfig",
     "MocapConfig",
+    "PerturbationConfig",
     "PlannerConfig",
     "Scenario",
     "ScenarioInfo",

@@ -7,6 +7,7 @@ from pydantic import Field, model_validator
 from tetherland.config.base import Section
 from tetherland.config.control import ControllerConfig
 from tetherland.config.mission import MissionConfig
+from tetherland.config.perturbation import PerturbationConfig
 from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
 from tetherland.config.planning import PlannerConfig
 from tetherland.config.sensors import SensorsConfig
@@ -33,6 +34,7 @@ class Scenario(Section):
     controller: ControllerConfig = ControllerConfig()
     mission: MissionConfig = MissionConfig()
     sim: SimConfig = SimConfig()
+    perturbation: PerturbationConfig = PerturbationConfig()
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:

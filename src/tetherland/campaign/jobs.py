@@ -1,0 +1,86 @@
+"""One campaign run, as a pure function of its job (picklable, engine-independent)."""
+
+from __future__ import annotations
+
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tetherland.analysis import analyze
+from tetherland.campaign.perturb import Perturbation, apply_perturbation, sample_perturbation
+from tetherland.campaign.spec import RunSpec
+from tetherland.config import Scenario, apply_overrides, scenario_from_dict
+from tetherland.errors import TetherlandError
+
+
+@dataclass(frozen=True)
+class Job:
+    """Everything a worker needs: the resolved base scenario and the run to do."""
+
+    scenario: dict[str, Any]
+    run: RunSpec
+    kind: str = "mission"
+    controller: str = "hierarchical"
+
+
+def run_scenario(job: Job) -> Scenario:
+    """The base scenario with the run's sweep value applied."""
+    data = job.scenario
+    if job.run.sweep_key is not None:
+        data = apply_overrides(data, [f"{job.run.sweep_key}={job.run.sweep_value!r}"])
+    return scenario_from_dict(data, str(data.get("name", "custom")))
+
+
+def _analysis_verdict(plant: Scenario, belief: Scenario, method: str) -> dict[str, Any]:
+    """Static feasibility of the method on the true scenario (fast campaign mode)."""
+    result = analyze(plant)
+    part = result.tethered if method == "tethered" else result.free_flight
+    return {"success": bool(part.feasible), "max_slope_rad": part.max_slope_rad}
+
+
+def _mission_verdict(
+    plant: Scenario, belief: Scenario, perturbation: Perturbation, job: Job
+) -> dict[str, Any]:
+    from tetherland.mission.campaign_entry import run_for_campaign  # imported lazily
+
+    return run_for_campaign(
+        plant, belief, perturbation, job.run.method, job.run.seed, job.controller
+    )
+
+
+def execute(job: Job) -> dict[str, Any]:
+    """Run one job and return its record for the results table.
+
+    Bad inputs and failures inside the run are recorded (``status = "error"``), not
+    raised, so one broken run cannot stop a campaign.
+    """
+    start = time.perf_counter()
+    run = job.run
+    record: dict[str, Any] = {
+        "run_id": run.run_id,
+        "method": run.method,
+        "index": run.index,
+        "seed": run.seed,
+        "sweep_key": run.sweep_key,
+        "sweep_value": run.sweep_value,
+    }
+    try:
+        truth = run_scenario(job)
+        perturbation = sample_perturbation(truth, np.random.default_rng(run.seed))
+        record["perturbation"] = perturbation.to_dict()
+        plant, belief = apply_perturbation(truth, perturbation)
+        if job.kind == "analysis":
+            verdict = _analysis_verdict(plant, belief, run.method)
+        else:
+            verdict = _mission_verdict(plant, belief, perturbation, job)
+        record.update(status="ok", error=None, verdict=verdict)
+    except TetherlandError as err:
+        record.update(status="error", error=str(err), verdict={"success": False})
+    except Exception as err:
+        last = traceback.format_exception_only(err)[-1].strip()
+        record.update(status="error", error=f"internal error: {last}", verdict={"success": False})
+    record["wall_time_s"] = time.perf_counter() - start
+    return record

@@ -1,0 +1,164 @@
+"""Seeded perturbations: the plant's truth versus the robot's belief (issue 7, item 2).
+
+The scenario as given is the truth that the plant simulates. Each run draws model and
+pose errors; the *belief* scenario (used by the planner, controllers and estimator) has
+them. Sensor noise, mocap dropouts and wind gusts act on the plant.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from tetherland.config import Scenario, scenario_from_dict
+from tetherland.geometry import LandingGeometry, normal_from_slope, surface_frame
+
+
+@dataclass(frozen=True)
+class Gust:
+    """A horizontal wind gust: raised-cosine force profile in F_W.
+
+    Attributes
+    ----------
+    t_start : float
+        Start time [s].
+    duration : float
+        Length [s].
+    force_W : (float, float)
+        Peak horizontal force (x, y) [N].
+    """
+
+    t_start: float
+    duration: float
+    force_W: tuple[float, float]
+
+    def force(self, t: float) -> tuple[float, float]:
+        """Gust force at time ``t`` [N] (zero outside the gust)."""
+        s = (t - self.t_start) / self.duration
+        if not 0.0 <= s <= 1.0:
+            return (0.0, 0.0)
+        k = 0.5 * (1.0 - math.cos(2.0 * math.pi * s))
+        return (k * self.force_W[0], k * self.force_W[1])
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """One draw of everything that goes wrong (belief = truth x factor, + offsets).
+
+    Attributes
+    ----------
+    mass_factor, inertia_factor, thrust_coefficient_factor, motor_time_constant_factor
+        Believed / true parameter ratios [-].
+    slope_error_deg, azimuth_error_deg
+        Believed minus true surface orientation [deg].
+    anchor_error_S : (float, float)
+        Believed minus true anchor position along x_S, y_S [m].
+    noise_scale : float
+        Plant sensor-noise multiplier [-].
+    mocap_dropout_rate, mocap_dropout_duration
+        Plant mocap dropouts [1/s], [s].
+    gusts : tuple of Gust
+    """
+
+    mass_factor: float = 1.0
+    inertia_factor: float = 1.0
+    thrust_coefficient_factor: float = 1.0
+    motor_time_constant_factor: float = 1.0
+    slope_error_deg: float = 0.0
+    azimuth_error_deg: float = 0.0
+    anchor_error_S: tuple[float, float] = (0.0, 0.0)
+    noise_scale: float = 1.0
+    mocap_dropout_rate: float = 0.0
+    mocap_dropout_duration: float = 0.0
+    gusts: tuple[Gust, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        """Flat JSON-ready record (gusts summarised by count and peak force)."""
+        d = asdict(self)
+        gusts = d.pop("gusts")
+        d["anchor_error_x_S"], d["anchor_error_y_S"] = d.pop("anchor_error_S")
+        d["gust_count"] = len(gusts)
+        d["gust_peak_N"] = max((math.hypot(*g["force_W"]) for g in gusts), default=0.0)
+        return d
+
+
+def sample_perturbation(
+    scenario: Scenario, rng: np.random.Generator, horizon: float = 120.0
+) -> Perturbation:
+    """Draw one perturbation from the scenario's ``[perturbation]`` ranges."""
+    c = scenario.perturbation
+
+    def rel(half: float) -> float:
+        return float(1.0 + rng.uniform(-half, half))
+
+    gusts = []
+    if c.wind_gust_rate > 0 and c.wind_gust_force > 0:
+        t = float(rng.exponential(1.0 / c.wind_gust_rate))
+        while t < horizon:
+            magnitude = float(rng.uniform(0.0, c.wind_gust_force))
+            heading = float(rng.uniform(0.0, 2.0 * math.pi))
+            gusts.append(
+                Gust(
+                    t,
+                    c.wind_gust_duration,
+                    (magnitude * math.cos(heading), magnitude * math.sin(heading)),
+                )
+            )
+            t += c.wind_gust_duration + float(rng.exponential(1.0 / c.wind_gust_rate))
+    return Perturbation(
+        mass_factor=rel(c.mass_rel),
+        inertia_factor=rel(c.inertia_rel),
+        thrust_coefficient_factor=rel(c.thrust_coefficient_rel),
+        motor_time_constant_factor=rel(c.motor_time_constant_rel),
+        slope_error_deg=float(rng.uniform(-c.slope_deg, c.slope_deg)),
+        azimuth_error_deg=float(rng.uniform(-c.azimuth_deg, c.azimuth_deg)),
+        anchor_error_S=(
+            float(rng.uniform(-c.anchor_position, c.anchor_position)),
+            float(rng.uniform(-c.anchor_position, c.anchor_position)),
+        ),
+        noise_scale=float(rng.uniform(c.noise_scale_min, c.noise_scale_max)),
+        mocap_dropout_rate=c.mocap_dropout_rate,
+        mocap_dropout_duration=c.mocap_dropout_duration,
+        gusts=tuple(gusts),
+    )
+
+
+def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scenario]:
+    """Return (plant scenario, belief scenario) for a perturbation.
+
+    The plant scenario is ``truth`` with the plant-side disturbances (noise scale, mocap
+    dropouts); the belief has the model errors and a surface and anchor estimated with
+    errors (the believed anchor lies on the believed surface).
+    """
+    plant = truth.model_dump(mode="python")
+    sensors = plant["sensors"]
+    sensors["noise_scale"] = truth.sensors.noise_scale * p.noise_scale
+    sensors["mocap"]["dropout_rate"] = p.mocap_dropout_rate
+    sensors["mocap"]["dropout_duration"] = p.mocap_dropout_duration
+
+    belief = truth.model_dump(mode="python")
+    v = belief["vehicle"]
+    v["mass"] = truth.vehicle.mass * p.mass_factor
+    v["inertia"] = tuple(j * p.inertia_factor for j in truth.vehicle.inertia)
+    v["thrust_coefficient"] = truth.vehicle.thrust_coefficient * p.thrust_coefficient_factor
+    v["motor_time_constant"] = truth.vehicle.motor_time_constant * p.motor_time_constant_factor
+
+    geo = LandingGeometry.from_scenario(truth)
+    beta = min(max(math.degrees(geo.surface.slope) + p.slope_error_deg, 0.0), 90.0)
+    az = truth.surface.azimuth_deg + p.azimuth_error_deg
+    if truth.surface.normal is not None:
+        n = np.asarray(truth.surface.normal, float)
+        az = math.degrees(math.atan2(n[1], n[0])) + p.azimuth_error_deg
+    s = belief["surface"]
+    s["normal"] = None
+    s["slope_deg"], s["azimuth_deg"] = beta, ((az + 180.0) % 360.0) - 180.0
+    R_WS = surface_frame(normal_from_slope(math.radians(beta), math.radians(s["azimuth_deg"])))
+    origin = np.asarray(truth.surface.origin, float)
+    p_A = geo.p_A + geo.surface.x_S * p.anchor_error_S[0] + geo.surface.y_S * p.anchor_error_S[1]
+    # place the believed anchor on the believed surface at the same height h_A
+    p_A = p_A - (R_WS[:, 2] @ (p_A - origin) - truth.anchor.h_A) * R_WS[:, 2]
+    belief["anchor"] = {"position": tuple(p_A), "landing_point": None, "h_A": truth.anchor.h_A}
+    return scenario_from_dict(plant, truth.name), scenario_from_dict(belief, truth.name)

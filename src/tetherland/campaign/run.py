@@ -1,0 +1,105 @@
+"""Running a campaign: resume, parallel execution, durable results, summary (issue 7)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tetherland.campaign.executors import Executor
+from tetherland.campaign.jobs import Job, execute
+from tetherland.campaign.spec import CampaignSpec
+from tetherland.campaign.stats import RateSummary, summarize
+from tetherland.campaign.store import ResultsStore
+from tetherland.io import atomic_write_json
+
+
+@dataclass(frozen=True)
+class CampaignResult:
+    """What a campaign produced (possibly partially, when interrupted)."""
+
+    directory: Path
+    total: int
+    done: int
+    new: int
+    summary: list[RateSummary]
+    interrupted: bool = False
+
+
+def pending_jobs(spec: CampaignSpec, store: ResultsStore) -> tuple[list[Job], int]:
+    """Jobs not yet in the results table, and the campaign's total size."""
+    runs = spec.expand()
+    done = store.done_ids()
+    todo = [
+        Job(spec.scenario, run, spec.job, spec.controller) for run in runs if run.run_id not in done
+    ]
+    return todo, len(runs)
+
+
+def open_store(
+    spec: CampaignSpec,
+    directory: str | Path,
+    *,
+    resume: bool = False,
+    provenance: dict[str, Any] | None = None,
+) -> ResultsStore:
+    """Create the campaign directory, or check it holds this campaign (``resume``)."""
+    store = ResultsStore(directory)
+    store.open(spec, resume=resume, provenance=provenance or {})
+    return store
+
+
+def run_campaign(
+    spec: CampaignSpec,
+    store: ResultsStore,
+    executor: Executor,
+    *,
+    provenance: dict[str, Any] | None = None,
+    on_result: Callable[[dict[str, Any]], None] | None = None,
+    on_start: Callable[[int, int], None] | None = None,
+) -> CampaignResult:
+    """Run every run of ``spec`` missing from ``store`` (see :func:`open_store`), appending
+    each record as soon as it finishes.
+
+    ``on_start(total, already_done)`` and ``on_result(record)`` drive a progress display.
+    A KeyboardInterrupt stops cleanly: finished runs are kept, the rest can be resumed.
+    The executor is closed on return.
+    """
+    jobs, total = pending_jobs(spec, store)
+    if on_start:
+        on_start(total, total - len(jobs))
+    new = 0
+    interrupted = False
+    try:
+        for record in executor.map_unordered(execute, jobs):
+            store.append(record)
+            new += 1
+            if on_result:
+                on_result(record)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        executor.close()
+    records = store.load()
+    summary = summarize(records)
+    store.export_csv()
+    atomic_write_json(
+        store.dir / "summary.json",
+        {
+            "total_runs": total,
+            "finished_runs": len({r["run_id"] for r in records}),
+            "complete": len({r["run_id"] for r in records}) == total,
+            "rates": [s.to_dict() for s in summary],
+            "spec": spec.to_dict(),
+            "provenance": provenance or {},
+        },
+    )
+    return CampaignResult(
+        directory=store.dir,
+        total=total,
+        done=len({r["run_id"] for r in records}),
+        new=new,
+        summary=summary,
+        interrupted=interrupted,
+    )

@@ -1,0 +1,112 @@
+"""What a campaign runs: methods x sweep values x seeded runs (issue 7)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from tetherland.errors import ConfigError
+
+METHODS = ("tethered", "free-flight")
+JOBS = ("mission", "analysis")
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """One scenario key swept over values, e.g. ``surface.slope_deg=30:80:10``."""
+
+    key: str
+    values: tuple[float, ...]
+
+    @classmethod
+    def parse(cls, text: str) -> Sweep:
+        """Parse ``key=start:stop:step`` (inclusive) or ``key=v1,v2,...``."""
+        key, sep, raw = text.partition("=")
+        key = key.strip()
+        if not sep or not key or "." not in key:
+            raise ConfigError(f"--sweep '{text}': expected section.key=start:stop:step or a,b,c")
+        try:
+            if ":" in raw:
+                start, stop, step = (float(x) for x in raw.split(":"))
+                if step <= 0 or stop < start:
+                    raise ValueError
+                n = int(np.floor((stop - start) / step + 1e-9)) + 1
+                values = tuple(round(start + i * step, 10) for i in range(n))
+            else:
+                values = tuple(float(x) for x in raw.split(","))
+        except ValueError:
+            raise ConfigError(
+                f"--sweep '{text}': values must be start:stop:step with step > 0 and stop >= start,"
+                " or a comma-separated list of numbers"
+            ) from None
+        if not values:
+            raise ConfigError(f"--sweep '{text}': no values")
+        return cls(key, values)
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One mission to run: deterministic from its fields alone.
+
+    ``seed`` is shared by both methods at the same sweep value and index, so methods are
+    compared on the same perturbations (common random numbers).
+    """
+
+    run_id: str
+    method: str
+    index: int
+    seed: int
+    sweep_key: str | None
+    sweep_value: float | None
+
+
+@dataclass(frozen=True)
+class CampaignSpec:
+    """A campaign: base scenario (resolved), methods, runs per point, sweep and base seed."""
+
+    scenario: dict[str, Any]
+    runs: int
+    methods: tuple[str, ...] = METHODS
+    sweep: Sweep | None = None
+    seed: int = 0
+    job: str = "mission"
+    controller: str = "hierarchical"
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.runs < 1:
+            raise ConfigError(f"--runs must be >= 1 (got {self.runs})")
+        bad = [m for m in self.methods if m not in METHODS]
+        if bad or not self.methods:
+            raise ConfigError(
+                f"--methods: unknown method {bad or '[]'} (allowed: {', '.join(METHODS)})"
+            )
+        if self.job not in JOBS:
+            raise ConfigError(f"job must be one of {JOBS}, got {self.job!r}")
+
+    def fingerprint(self) -> str:
+        """Stable hash of everything that decides the results (for --resume checks)."""
+        doc = json.dumps(self.to_dict(), sort_keys=True, default=str)
+        return hashlib.sha256(doc.encode()).hexdigest()[:16]
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["methods"] = list(self.methods)
+        return d
+
+    def expand(self) -> list[RunSpec]:
+        """Every run of the campaign, in a deterministic order."""
+        sweep_values: tuple[float | None, ...] = self.sweep.values if self.sweep else (None,)
+        key = self.sweep.key if self.sweep else None
+        specs = []
+        for j, value in enumerate(sweep_values):
+            for i in range(self.runs):
+                seed = int(np.random.SeedSequence([self.seed, j, i]).generate_state(1)[0])
+                for method in self.methods:
+                    tag = f"{method}-{'base' if value is None else f'{value:g}'}-{i:05d}"
+                    specs.append(RunSpec(tag, method, i, seed, key, value))
+        return specs

@@ -1,0 +1,128 @@
+"""`tetherland campaign`: randomised runs in parallel, durable and resumable (issue 7)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
+from rich.table import Table
+
+from tetherland.campaign import CampaignSpec, Sweep, make_executor, open_store, run_campaign
+from tetherland.campaign.plots import plot_errors, plot_success
+from tetherland.cli.common import ScenarioArg, SetOption, console, resolve_scenario
+from tetherland.errors import ConfigError
+from tetherland.provenance import provenance
+
+
+def campaign(
+    scenario: ScenarioArg,
+    runs: Annotated[int, typer.Option("--runs", help="Runs per method and sweep value.")] = 10,
+    methods: Annotated[
+        str, typer.Option("--methods", help="Comma-separated: tethered, free-flight.")
+    ] = "tethered,free-flight",
+    sweep: Annotated[
+        str | None,
+        typer.Option("--sweep", help="Swept key, e.g. surface.slope_deg=30:80:10 or =30,50,70."),
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option("--workers", help="Parallel workers (default: all cores).")
+    ] = None,
+    engine: Annotated[str, typer.Option("--engine", help="local, dask or ray.")] = "local",
+    address: Annotated[
+        str | None, typer.Option("--address", help="Dask scheduler or Ray cluster address.")
+    ] = None,
+    out: Annotated[Path | None, typer.Option("--out", help="Output directory.")] = None,
+    resume: Annotated[
+        bool, typer.Option("--resume", help="Run only what is missing in --out.")
+    ] = False,
+    seed: Annotated[int, typer.Option("--seed", help="Base seed of the campaign.")] = 0,
+    controller: Annotated[
+        str, typer.Option("--controller", help="Tethered controller: hierarchical or dfl.")
+    ] = "hierarchical",
+    job: Annotated[
+        str,
+        typer.Option(
+            "--job", help="mission (closed-loop simulation) or analysis (static feasibility, fast)."
+        ),
+    ] = "mission",
+    overrides: SetOption = None,
+) -> None:
+    """Run randomised missions for each method (and sweep value) and summarise success rates."""
+    sc = resolve_scenario(scenario, overrides)
+    if seed < 0:
+        raise ConfigError(f"--seed must be >= 0 (got {seed})")
+    if controller not in ("hierarchical", "dfl"):
+        raise ConfigError(f"--controller must be hierarchical or dfl (got {controller!r})")
+    spec = CampaignSpec(
+        scenario=sc.model_dump(mode="json"),
+        runs=runs,
+        methods=tuple(m.strip() for m in methods.split(",") if m.strip()),
+        sweep=Sweep.parse(sweep) if sweep else None,
+        seed=seed,
+        job=job,
+        controller=controller,
+    )
+    if spec.sweep is not None:  # validate every swept value up front: fail fast, one line
+        for value in spec.sweep.values:
+            resolve_scenario(scenario, [*(overrides or []), f"{spec.sweep.key}={value!r}"])
+    directory = out or Path("out") / sc.name / "campaign"
+    record = provenance(sc, seed=seed, extra={"engine": engine, "workers": workers})
+    store = open_store(spec, directory, resume=resume, provenance=record)
+    executor = make_executor(engine, workers or os.cpu_count() or 1, address)
+
+    with Progress(
+        "[progress.description]{task.description}",
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+        console=console,
+        transient=False,
+    ) as progress:
+        task = progress.add_task("runs", total=None)
+
+        def on_start(total: int, done: int) -> None:
+            progress.update(task, total=total, completed=done)
+
+        def on_result(rec: dict) -> None:
+            ok = rec.get("status") == "ok" and rec.get("verdict", {}).get("success")
+            status = "ok" if ok else "fail"
+            progress.update(task, advance=1, description=f"runs (last: {rec['method']} {status})")
+
+        result = run_campaign(
+            spec, store, executor, provenance=record, on_result=on_result, on_start=on_start
+        )
+
+    plot_success(
+        result.summary, directory / "success_rate.png", spec.sweep.key if spec.sweep else None
+    )
+    plot_errors(store.load(), directory / "errors.png")
+    table = Table(title=f"Success rates ({result.done}/{result.total} runs)")
+    for col in (
+        "method",
+        spec.sweep.key if spec.sweep else "point",
+        "n",
+        "success",
+        "rate",
+        "95 % CI",
+    ):
+        table.add_column(col)
+    for s in result.summary:
+        table.add_row(
+            s.method,
+            "-" if s.sweep_value is None else f"{s.sweep_value:g}",
+            str(s.n),
+            str(s.successes),
+            f"{100 * s.rate:.1f} %",
+            f"[{100 * s.ci_low:.1f}, {100 * s.ci_high:.1f}] %",
+        )
+    console.print(table)
+    results, summary = directory / "results.jsonl", directory / "summary.json"
+    console.print(f"results: {results} (table), {summary}, plots in {directory}")
+    if result.interrupted:
+        console.print(
+            f"interrupted: {result.done} runs saved; continue with --resume --out {directory}"
+        )
+        raise typer.Exit(130)

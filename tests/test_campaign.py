@@ -1,0 +1,273 @@
+"""Campaigns: expansion, statistics, durable results, kill-and-resume, engine equivalence."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tetherland.campaign import (
+    CampaignSpec,
+    ResultsStore,
+    Sweep,
+    apply_perturbation,
+    make_executor,
+    open_store,
+    run_campaign,
+    sample_perturbation,
+    summarize,
+    wilson_interval,
+)
+from tetherland.campaign.executors import DaskExecutor, InlineExecutor, LocalPoolExecutor
+from tetherland.config import load_scenario
+from tetherland.errors import ConfigError
+from tetherland.geometry import LandingGeometry
+
+EXE = str(Path(sys.executable).with_name("tetherland"))
+
+
+def analysis_spec(runs: int = 4, sweep: str | None = "surface.slope_deg=20:80:30") -> CampaignSpec:
+    return CampaignSpec(
+        scenario=load_scenario("slope50").model_dump(mode="json"),
+        runs=runs,
+        sweep=Sweep.parse(sweep) if sweep else None,
+        seed=7,
+        job="analysis",
+    )
+
+
+def comparable(records: list[dict]) -> list[dict]:
+    return sorted(
+        ({k: v for k, v in r.items() if k != "wall_time_s"} for r in records),
+        key=lambda r: r["run_id"],
+    )
+
+
+# --- specification and statistics ------------------------------------------------------------
+
+
+def test_sweep_parsing():
+    assert Sweep.parse("surface.slope_deg=30:80:10").values == (30, 40, 50, 60, 70, 80)
+    assert Sweep.parse("surface.slope_deg=30,45").values == (30.0, 45.0)
+    for bad in ("slope=1:2:1", "surface.slope_deg=80:30:10", "surface.slope_deg=1:2:0", "x.y=a"):
+        with pytest.raises(ConfigError, match="--sweep"):
+            Sweep.parse(bad)
+
+
+def test_expansion_is_deterministic_and_paired():
+    spec = analysis_spec(runs=3)
+    runs = spec.expand()
+    assert len(runs) == 3 * 2 * 3 and len({r.run_id for r in runs}) == len(runs)
+    assert [r.seed for r in runs] == [r.seed for r in analysis_spec(runs=3).expand()]
+    by_key = {}
+    for r in runs:
+        by_key.setdefault((r.sweep_value, r.index), set()).add(r.seed)
+    assert all(len(seeds) == 1 for seeds in by_key.values())  # both methods share a seed
+    assert len({r.seed for r in runs}) == 9  # distinct across points and indices
+
+
+def test_unknown_method_and_bad_counts_are_rejected():
+    with pytest.raises(ConfigError, match="unknown method"):
+        CampaignSpec(scenario={}, runs=1, methods=("hover",))
+    with pytest.raises(ConfigError, match="--runs must be >= 1"):
+        CampaignSpec(scenario={}, runs=0)
+    with pytest.raises(ConfigError, match="--workers must be >= 1"):
+        make_executor("local", 0)
+    with pytest.raises(ConfigError, match="unknown engine"):
+        make_executor("mpi", 2)
+
+
+@pytest.mark.parametrize(
+    ("k", "n", "lo", "hi"),
+    [
+        (0, 10, 0.0, 0.2775),
+        (5, 10, 0.2366, 0.7634),
+        (10, 10, 0.7225, 1.0),
+        (81, 100, 0.7222, 0.8749),
+    ],
+)
+def test_wilson_interval_known_values(k, n, lo, hi):
+    a, b = wilson_interval(k, n)
+    assert a == pytest.approx(lo, abs=1e-4) and b == pytest.approx(hi, abs=1e-4)
+
+
+def test_summary_counts_each_run_once_and_errors_as_failures():
+    records = [
+        {
+            "run_id": "a",
+            "method": "tethered",
+            "sweep_value": 1.0,
+            "status": "ok",
+            "verdict": {"success": True},
+        },
+        {
+            "run_id": "a",
+            "method": "tethered",
+            "sweep_value": 1.0,
+            "status": "ok",
+            "verdict": {"success": True},
+        },
+        {
+            "run_id": "b",
+            "method": "tethered",
+            "sweep_value": 1.0,
+            "status": "error",
+            "verdict": {"success": False},
+        },
+        {
+            "run_id": "c",
+            "method": "tethered",
+            "sweep_value": 1.0,
+            "status": "ok",
+            "verdict": {"success": False},
+        },
+    ]
+    (s,) = summarize(records)
+    assert (s.n, s.successes, s.errors) == (3, 1, 1) and s.rate == pytest.approx(1 / 3)
+
+
+# --- perturbations ---------------------------------------------------------------------------
+
+
+def test_perturbations_are_seeded_and_within_ranges(slope50):
+    p1 = sample_perturbation(slope50, np.random.default_rng(3))
+    assert p1 == sample_perturbation(slope50, np.random.default_rng(3))
+    assert p1 != sample_perturbation(slope50, np.random.default_rng(4))
+    c = slope50.perturbation
+    assert abs(p1.mass_factor - 1) <= c.mass_rel and abs(p1.slope_error_deg) <= c.slope_deg
+    assert c.noise_scale_min <= p1.noise_scale <= c.noise_scale_max
+
+
+def test_belief_differs_from_truth_and_stays_consistent(slope50):
+    p = sample_perturbation(slope50, np.random.default_rng(11))
+    plant, belief = apply_perturbation(slope50, p)
+    assert plant.vehicle == slope50.vehicle  # the plant keeps the true model
+    assert belief.vehicle.mass == pytest.approx(slope50.vehicle.mass * p.mass_factor)
+    assert plant.sensors.noise_scale == pytest.approx(p.noise_scale)
+    g_true, g_belief = LandingGeometry.from_scenario(plant), LandingGeometry.from_scenario(belief)
+    assert math.degrees(g_belief.surface.slope - g_true.surface.slope) == pytest.approx(
+        p.slope_error_deg
+    )
+    assert g_belief.surface.height(g_belief.p_A) == pytest.approx(slope50.anchor.h_A, abs=1e-9)
+    assert 0 < np.linalg.norm(g_belief.p_A - g_true.p_A) < 0.1
+
+
+# --- durability, resume, engines -------------------------------------------------------------
+
+
+def test_torn_last_line_is_discarded(tmp_path: Path):
+    spec = analysis_spec(runs=1, sweep=None)
+    store = open_store(spec, tmp_path)
+    store.append({"run_id": "x", "method": "tethered"})
+    with open(store.results_path, "a") as fh:
+        fh.write('{"run_id": "torn", "meth')
+    store = open_store(spec, tmp_path, resume=True)
+    assert [r["run_id"] for r in store.load()] == ["x"]
+    store.append({"run_id": "y", "method": "tethered"})
+    assert [r["run_id"] for r in store.load()] == ["x", "y"]
+
+
+def test_summary_matches_results_table(tmp_path: Path):
+    spec = analysis_spec(runs=3)
+    result = run_campaign(spec, open_store(spec, tmp_path), InlineExecutor())
+    records = ResultsStore(tmp_path).load()
+    assert result.done == result.total == len(records) == 18
+    doc = json.loads((tmp_path / "summary.json").read_text())
+    for rate in doc["rates"]:
+        rows = [
+            r
+            for r in records
+            if r["method"] == rate["method"] and r["sweep_value"] == rate["sweep_value"]
+        ]
+        assert rate["n"] == len(rows)
+        assert rate["successes"] == sum(r["verdict"]["success"] for r in rows)
+    # the physics of the fast job: at 80 deg only the tethered method is feasible
+    at80 = {r["method"]: r["rate"] for r in doc["rates"] if r["sweep_value"] == 80.0}
+    assert at80 == {"tethered": 1.0, "free-flight": 0.0}
+    assert (tmp_path / "results.csv").read_text().count("\n") == 19
+
+
+def _count_lines(path: Path) -> int:
+    try:
+        return path.read_bytes().count(b"\n")
+    except FileNotFoundError:
+        return 0
+
+
+def test_killed_campaign_resumes_with_every_run_exactly_once(tmp_path: Path):
+    out = tmp_path / "camp"
+    cmd = [EXE, "campaign", "slope50", "--job", "analysis", "--runs", "60", "--workers", "2",
+           "--sweep", "surface.slope_deg=30,60", "--out", str(out)]  # fmt: skip
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
+    deadline = time.time() + 120
+    while (
+        _count_lines(out / "results.jsonl") < 15 and time.time() < deadline and proc.poll() is None
+    ):
+        time.sleep(0.01)
+    os.killpg(proc.pid, signal.SIGKILL)  # a crash, not a polite stop
+    proc.wait()
+    partial = ResultsStore(out).load()
+    assert 15 <= len(partial) < 240
+    done = subprocess.run([*cmd, "--resume"], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    ids = [r["run_id"] for r in ResultsStore(out).load()]
+    assert len(ids) == len(set(ids)) == 240
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["complete"] and sum(r["n"] for r in summary["rates"]) == 240
+
+
+def test_interrupt_stops_cleanly_with_exit_130(tmp_path: Path):
+    out = tmp_path / "camp"
+    cmd = [
+        EXE,
+        "campaign",
+        "slope50",
+        "--job",
+        "analysis",
+        "--runs",
+        "200",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+    ]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while _count_lines(out / "results.jsonl") < 5 and time.time() < deadline:
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "--resume" in stdout and "Traceback" not in stderr
+    assert json.loads((out / "summary.json").read_text())["complete"] is False
+
+
+def test_local_pool_and_dask_give_the_same_results(tmp_path: Path):
+    spec = analysis_spec(runs=2)
+    inline = run_campaign(spec, open_store(spec, tmp_path / "a"), InlineExecutor())
+    pool = run_campaign(spec, open_store(spec, tmp_path / "b"), LocalPoolExecutor(2))
+    dask = run_campaign(spec, open_store(spec, tmp_path / "c"), DaskExecutor(2))
+    a, b, c = (comparable(ResultsStore(tmp_path / d).load()) for d in "abc")
+    assert a == b == c and len(a) == inline.total == pool.done == dask.done
+
+
+@pytest.mark.slow
+def test_ray_gives_the_same_results(tmp_path: Path):
+    from tetherland.campaign.executors import RayExecutor
+
+    spec = analysis_spec(runs=1)
+    run_campaign(spec, open_store(spec, tmp_path / "a"), InlineExecutor())
+    run_campaign(spec, open_store(spec, tmp_path / "r"), RayExecutor(2))
+    assert comparable(ResultsStore(tmp_path / "a").load()) == comparable(
+        ResultsStore(tmp_path / "r").load()
+    )
