@@ -1,0 +1,1 @@
+"""MuJoCo simulation of the tethered quadrotor: scene, plant, hook, sensors, runner."""
