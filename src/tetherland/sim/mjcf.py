@@ -174,7 +174,7 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
     _sub(option, "flag", autoreset="disable")
     visual = _sub(root, "visual")
     _sub(visual, "global", offwidth="1920", offheight="1080")
-    _sub(visual, "quality", shadowsize="4096")
+    _sub(visual, "quality", shadowsize="1024")
     _sub(visual, "map", znear="0.01")
 
     asset = _sub(root, "asset")

@@ -39,8 +39,18 @@ _BAD_STATE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQVEL),
     int(mujoco.mjtWarning.mjWARN_BADQACC),
 )
-CABLE_RGBA = (0.95, 0.85, 0.2, 1.0)
-"""Colour of the engaged cable; a disengaged cable is not drawn as a tendon."""
+CABLE_GROUP_VISIBLE, CABLE_GROUP_HIDDEN = 0, 5
+"""Tendon groups of the engaged (drawn) and disengaged (hidden) cable."""
+
+
+def set_cable_visible(model: mujoco.MjModel, visible: bool) -> None:
+    """Draw the cable tendon (engaged) or hide it (disengaged); physics unaffected.
+
+    Hidden means moved to tendon group 5, which MuJoCo's renderers do not draw by default
+    (a transparent tendon would still cast a shadow).
+    """
+    cable = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "cable")
+    model.tendon_group[cable] = CABLE_GROUP_VISIBLE if visible else CABLE_GROUP_HIDDEN
 
 
 def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
@@ -365,7 +375,7 @@ class Plant:
         # The cable is a spatial tendon limited to [0, l]; disengaged, its limit is turned
         # off (no constraint row, zero force) and it is not drawn.
         self.model.tendon_limited[self._cable] = 1 if engaged else 0
-        self.model.tendon_rgba[self._cable] = CABLE_RGBA if engaged else (0.0, 0.0, 0.0, 0.0)
+        set_cable_visible(self.model, engaged)
 
     @property
     def tension(self) -> float:
