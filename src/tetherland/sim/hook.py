@@ -94,7 +94,6 @@ class Hook:
         "_n",
         "_p_A",
         "_prev",
-        "_prev_s",
         "capture_radius",
         "events",
         "miss_radius",
@@ -121,7 +120,6 @@ class Hook:
         self.miss_radius = float(miss_radius)
         self._engaged = False
         self._prev: tuple[float, float, float] | None = None
-        self._prev_s = 0.0
         self.events: list[HookEvent] = []
 
     @property
@@ -145,27 +143,44 @@ class Hook:
         p[2] -= self._drop
         return p
 
+    def side(self, x: float, y: float, z: float) -> float:
+        """Signed distance n.(p_hook - p_A) of the hook point for attachment point (x, y, z):
+        negative before the capture plane (on the approach side) [m]."""
+        nx, ny, nz = self._n
+        ax, ay, az = self._p_A
+        return nx * (x - ax) + ny * (y - ay) + nz * (z - self._drop - az)
+
     def update(self, t: float, x: float, y: float, z: float) -> HookEventKind | None:
         """Advance with the attachment point (x, y, z) in F_W at time ``t`` [s, m].
 
         Returns the event kind if the state changed or a hook was missed, else None.
         """
-        z -= self._drop
-        nx, ny, nz = self._n
-        ax, ay, az = self._p_A
-        s = nx * (x - ax) + ny * (y - ay) + nz * (z - az)
         prev = self._prev
-        prev_s = self._prev_s
         self._prev = (x, y, z)
-        self._prev_s = s
         if prev is None:
             return None
+        return self.cross(t, prev, (x, y, z))
+
+    def cross(
+        self, t: float, prev: tuple[float, float, float], p: tuple[float, float, float]
+    ) -> HookEventKind | None:
+        """Process the move of the attachment point from ``prev`` to ``p`` (at time ``t``).
+
+        Stateless apart from the engaged flag and the events: callers that track the
+        previous point themselves (the plant, at every physics step) call this only when
+        :meth:`side` changed sign.
+        """
+        self._prev = p
+        prev_s, s = self.side(*prev), self.side(*p)
         forward = prev_s < 0.0 <= s
         backward = prev_s >= 0.0 > s
         if not ((forward and not self._engaged) or (backward and self._engaged)):
             return None
         lam = prev_s / (prev_s - s)
-        px, py, pz = prev
+        drop = self._drop
+        px, py, pz = prev[0], prev[1], prev[2] - drop
+        x, y, z = p[0], p[1], p[2] - drop
+        ax, ay, az = self._p_A
         cx, cy, cz = px + lam * (x - px), py + lam * (y - py), pz + lam * (z - pz)
         dist = math.sqrt((cx - ax) ** 2 + (cy - ay) ** 2 + (cz - az) ** 2)
         kind: HookEventKind | None = None

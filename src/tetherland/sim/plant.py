@@ -178,6 +178,12 @@ class Plant:
             scenario.tether.hook_drop,
             miss_radius=scenario.tether.length,
         )
+        n = self.layout.approach_W / np.linalg.norm(self.layout.approach_W)
+        # hook.side(x, y, z) >= 0  <=>  n.(x, y, z) >= c0 (precomputed for the step loop)
+        c0 = float(n @ geo.p_A) + float(n[2]) * scenario.tether.hook_drop
+        self._hook_plane = (float(n[0]), float(n[1]), float(n[2]), c0)
+        self._prev_att = (0.0, 0.0, 0.0)
+        self._hook_side = False
         self._tick = 0
         self.reset()
 
@@ -233,8 +239,7 @@ class Plant:
         self._set_cable(cable_engaged)
         self.hook.reset(cable_engaged)
         self.forward()
-        x, y, z = self._p_att_view.tolist()
-        self.hook.update(0.0, x, y, z)
+        self._track_hook_point()
 
     def set_state(self, state: RigidBodyState) -> None:
         """Overwrite position, attitude and velocities (time and rotors unchanged)."""
@@ -361,15 +366,19 @@ class Plant:
         """Attach the cable to the anchor now (bypassing the hook geometry)."""
         self.hook.reset(True)
         self._set_cable(True)
-        x, y, z = self._p_att_view.tolist()
-        self.hook.update(self.time, x, y, z)
+        self._track_hook_point()
 
     def release_cable(self) -> None:
         """Detach the cable now (bypassing the hook geometry)."""
         self.hook.reset(False)
         self._set_cable(False)
+        self._track_hook_point()
+
+    def _track_hook_point(self) -> None:
+        """Start tracking the hook point from the attachment site's current position."""
         x, y, z = self._p_att_view.tolist()
-        self.hook.update(self.time, x, y, z)
+        self._prev_att = (x, y, z)
+        self._hook_side = self.hook.side(x, y, z) >= 0.0
 
     def _set_cable(self, engaged: bool) -> None:
         # The cable is a spatial tendon limited to [0, l]; disengaged, its limit is turned
@@ -416,6 +425,8 @@ class Plant:
         hook = self.hook
         p_att = self._p_att_view
         warn = self._warnings
+        bad_qacc = _BAD_STATE_WARNINGS[2]
+        nx, ny, nz, n_dot_p0 = self._hook_plane
         for _ in range(n):
             w0, w1, w2, w3 = w
             if self._spinning_up:
@@ -436,18 +447,23 @@ class Plant:
                     w[:] = cmd
                     ctrl[:] = [c_f * c0 * c0, c_f * c1 * c1, c_f * c2 * c2, c_f * c3 * c3]
                     self._spinning_up = False
-            if warn[3] or warn[4] or warn[5]:
-                self._diverged(t_k)
-            # Kinematics in ``data`` refer to t_k after mj_step; a crossing found now takes
-            # effect from the next step.
+            # Kinematics in ``data`` refer to t_k after mj_step; a hook crossing found
+            # now takes effect from the next step.
             x, y, z = p_att.tolist()
-            if hook.update(t_k, x, y, z) is not None:
-                self._set_cable(hook.engaged)
+            if x != x or warn[bad_qacc]:  # NaN state or MuJoCo's bad-acceleration flag
+                self._diverged(t_k)
+            side = nx * x + ny * y + nz * z >= n_dot_p0
+            if side != self._hook_side:
+                self._hook_side = side
+                if hook.cross(t_k, self._prev_att, (x, y, z)) is not None:
+                    self._set_cable(hook.engaged)
+            self._prev_att = (x, y, z)
 
     def _diverged(self, t: float) -> None:
         names = ("qpos", "qvel", "qacc")
         bad = [n for n, i in zip(names, _BAD_STATE_WARNINGS, strict=True) if self._warnings[i]]
+        what = f"MuJoCo flagged a bad {', '.join(bad)}" if bad else "non-finite state"
         raise SimulationError(
-            f"simulation diverged at t = {t:.4f} s (MuJoCo flagged a bad {', '.join(bad)}); "
+            f"simulation diverged at t = {t:.4f} s ({what}); "
             "check the commands and the [sim] time step and constraint time constants"
         )

@@ -21,6 +21,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from fractions import Fraction
 from typing import Any
 
@@ -176,6 +177,7 @@ class Runner:
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
         self._p_A, self._R_WA = geo.p_A, geo.R_WA
         self._cable_force_index = SENSOR_SLICES["cable_force"].start
+        self._provenance: dict[str, Any] | None = None
 
     def _truth_estimate(self) -> StateEstimate:
         """Ground truth at the current tick; the link state only while the cable is engaged."""
@@ -222,6 +224,7 @@ class Runner:
             raise ValueError(f"duration must be a positive number of seconds, got {duration}")
         sc, sched, plant = self.scenario, self.schedule, self.plant
         plant.reset(initial_state, rotor_speeds=rotor_speeds, cable_engaged=cable_engaged)
+        seeded = rng is None
         rng = np.random.default_rng(self.seed) if rng is None else rng
         rng_imu, rng_mocap = rng.spawn(2)
         imu = Imu(sc.sensors.imu, rng_imu, sc.sensors.noise_scale)
@@ -243,7 +246,6 @@ class Runner:
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
         rotor_buf, bias_buf, scalars = np.zeros(8), np.zeros(6), np.zeros(9)
         imu_y = np.full(6, np.nan)
-        sample = None
         mocap_pq = _NAN7.copy()
         mocap_t, mocap_valid = math.nan, math.nan
         queue: deque[tuple[int, MocapSample]] = deque()
@@ -252,6 +254,26 @@ class Runner:
         diag_keys = self.diagnostic_keys
 
         status, message, k = RunStatus.COMPLETED, "", 0
+        # Bound methods and views as locals: this loop runs at the physics rate.
+        step, imu_sample, predict, update = (
+            plant.step,
+            imu.sample,
+            estimator.predict,
+            estimator.update,
+        )
+        estimate, get_reference, control = (
+            estimator.estimate,
+            reference.reference,
+            controller.update,
+        )
+        command, mocap_measure, mocap_tick = plant.command, mocap.measure, sched.mocap_tick
+        write_row, rotor_state_into, bias_into = (
+            self._write_row,
+            plant.rotor_state_into,
+            imu.bias_into,
+        )
+        observers = self.observers
+        row_buffers = (snap, sd[0:3], sd_rest, rotor_buf, imu_y, bias_buf, mocap_pq)
         wall0 = time.perf_counter()
         try:
             for k in range(n_ticks):
@@ -261,56 +283,44 @@ class Runner:
                     snap[0:7] = qpos
                     snap[7:13] = qvel
                     self._t_snap = t_k
-                if control_tick:
-                    plant.rotor_state_into(rotor_buf)
-                plant.step()
+                    if control_tick:
+                        rotor_state_into(rotor_buf)
+                step()
                 if k % imu_every == 0:
-                    sample = imu.sample(t_k, imu_truth)
-                    estimator.predict(sample)
+                    sample = imu_sample(t_k, imu_truth)
+                    predict(sample)
                 if k == next_mocap:
-                    queue.append(
-                        (k + lat, mocap.measure(t_k, snap[0:3], snap[3:7], (k + lat) * dt))
-                    )
+                    t_del = k + lat
+                    queue.append((t_del, mocap_measure(t_k, snap[0:3], snap[3:7], t_del * dt)))
                     j_mocap += 1
-                    next_mocap = sched.mocap_tick(j_mocap)
-                while queue and queue[0][0] <= k:
-                    m = queue.popleft()[1]
-                    estimator.update(m)
+                    next_mocap = mocap_tick(j_mocap)
+                if queue and queue[0][0] <= k:
+                    while queue and queue[0][0] <= k:
+                        m = queue.popleft()[1]
+                        update(m)
                     mocap_t, mocap_valid = m.t_measured, float(m.valid)
                     mocap_pq[0:3] = m.p_W
                     mocap_pq[3:7] = m.q_WB
                 if not control_tick:
                     continue
-                est = estimator.estimate()
-                ref = reference.reference(t_k, est)
-                cmd = controller.update(t_k, est, ref)
-                plant.command(cmd.rotor_speeds)
+                est = estimate()
+                ref = get_reference(t_k, est)
+                cmd = control(t_k, est, ref)
+                command(cmd.rotor_speeds)
                 if command_aware:
                     estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
-                if sample is not None:
-                    imu_y[0:3] = sample.specific_force_B
-                    imu_y[3:6] = sample.omega_B
-                imu.bias_into(bias_buf)
-                self._write_row(
-                    writer,
-                    scalars,
-                    t_k,
-                    est,
-                    ref,
-                    cmd,
-                    plant,
-                    mocap_t,
-                    mocap_valid,
-                    (snap, sd[0:3], sd_rest, rotor_buf, imu_y, bias_buf, mocap_pq),
-                    diag_keys,
-                )
-                for observer in self.observers:
+                imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
+                imu_y[3:6] = sample.omega_B
+                bias_into(bias_buf)
+                write_row(
+                    writer, scalars, t_k, est, ref, cmd, plant, mocap_t, mocap_valid,
+                    row_buffers, diag_keys,
+                )  # fmt: skip
+                for observer in observers:
                     observer(t_k, plant)
                 if ref.terminate:
-                    status, message = (
-                        RunStatus.TERMINATED,
-                        f"reference terminated at t = {t_k:.3f} s",
-                    )
+                    status = RunStatus.TERMINATED
+                    message = f"reference terminated at t = {t_k:.3f} s"
                     break
         except SimulationError as err:
             status, message = RunStatus.DIVERGED, str(err)
@@ -318,7 +328,7 @@ class Runner:
             status, message = RunStatus.FAILED, f"t = {k * dt:.4f} s: {err}"
         wall = time.perf_counter() - wall0
         return writer.finish(
-            self._metadata(status, message, k, wall, reference),
+            self._metadata(status, message, k, wall, reference, seeded),
             p_A=self._p_A,
             R_WA=self._R_WA,
             r_att_B=self._r_att,
@@ -378,15 +388,28 @@ class Runner:
         writer.write(parts)
 
     def _metadata(
-        self, status: RunStatus, message: str, k: int, wall: float, reference: ReferenceSource
+        self,
+        status: RunStatus,
+        message: str,
+        k: int,
+        wall: float,
+        reference: ReferenceSource,
+        seeded: bool,
     ) -> dict[str, Any]:
         events = [dict(e.as_dict(), source="hook") for e in self.plant.hook.events]
         if isinstance(reference, EventSource):
             events += [e.as_dict() for e in reference.events]
         events.sort(key=lambda e: float(e["t"]))  # type: ignore[arg-type]
         sim_time = (k + 1) * self.plant.dt
+        if self._provenance is None:  # git and package metadata: once per runner
+            self._provenance = provenance(self.scenario, seed=self.seed)
+        prov = dict(self._provenance)
+        prov["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
+        prov["seed"] = self.seed if seeded else None
+        if not seeded:
+            prov["rng"] = "generator passed to Runner.run"
         return {
-            "provenance": provenance(self.scenario, seed=self.seed),
+            "provenance": prov,
             "status": status.value,
             "message": message,
             "rates": self.schedule.as_dict(),

@@ -26,10 +26,9 @@ from numpy.typing import ArrayLike
 from tetherland.config import ImuConfig, MocapConfig
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import ImuSample, MocapSample
-from tetherland.rotations import quat_multiply, rotvec_to_quat
 
 NOISE_BLOCK = 1024
-"""IMU samples whose noise is drawn at once (the stream does not depend on it)."""
+"""Samples whose noise is drawn at once (IMU and mocap each)."""
 _NAN3 = np.full(3, np.nan)
 _NAN4 = np.full(4, np.nan)
 
@@ -124,6 +123,8 @@ class Mocap:
         self._drop_duration = config.dropout_duration
         self._drop_until = -math.inf
         self._next_drop = self._draw_gap(0.0)
+        self._z: list[list[float]] = []
+        self._j = NOISE_BLOCK
 
     def _draw_gap(self, t: float) -> float:
         if self._drop_rate <= 0.0 or self._drop_duration <= 0.0:
@@ -148,13 +149,37 @@ class Mocap:
             Delivery time; default ``t_measured + latency`` (the runner passes the
             physics tick at which it delivers).
         """
-        z = self._rng.standard_normal(6)  # drawn even in a dropout: the stream stays aligned
+        if self._j == NOISE_BLOCK:
+            self._z = self._rng.standard_normal((NOISE_BLOCK, 6)).tolist()
+            self._j = 0
+        z = self._z[self._j]  # drawn even in a dropout: the noise stream stays aligned
+        self._j += 1
         if t_delivered is None:
             t_delivered = t_measured + self.latency
         if self.in_dropout(t_measured):
             return MocapSample(t_measured, t_delivered, _NAN3.copy(), _NAN4.copy(), False)
-        p = np.asarray(p_W, dtype=float) + self._sigma_p * z[:3]
-        q = quat_multiply(q_WB, rotvec_to_quat(self._sigma_theta * z[3:]))
-        if q[0] < 0.0:
-            q = -q
-        return MocapSample(t_measured, t_delivered, p, q / np.linalg.norm(q), True)
+        sp, st = self._sigma_p, self._sigma_theta
+        px, py, pz = np.asarray(p_W, dtype=float).tolist()
+        w, x, y, zq = np.asarray(q_WB, dtype=float).tolist()
+        # q (x) exp(dtheta), dtheta = sigma_theta z[3:6] (body-frame perturbation)
+        ax, ay, az = st * z[3], st * z[4], st * z[5]
+        angle = math.sqrt(ax * ax + ay * ay + az * az)
+        if angle > 1e-12:
+            c, k = math.cos(0.5 * angle), math.sin(0.5 * angle) / angle
+        else:
+            c, k = 1.0, 0.5
+        bw, bx, by, bz = c, k * ax, k * ay, k * az
+        qw = w * bw - x * bx - y * by - zq * bz
+        qx = w * bx + x * bw + y * bz - zq * by
+        qy = w * by - x * bz + y * bw + zq * bx
+        qz = w * bz + x * by - y * bx + zq * bw
+        n = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+        if qw < 0.0:
+            n = -n
+        return MocapSample(
+            t_measured,
+            t_delivered,
+            np.array([px + sp * z[0], py + sp * z[1], pz + sp * z[2]]),
+            np.array([qw / n, qx / n, qy / n, qz / n]),
+            True,
+        )
