@@ -97,7 +97,12 @@ def link_position_velocity(
 
 
 def tension_coordinate_free(
-    d: ArrayLike, d_dot: ArrayLike, thrust: ArrayLike, mass: float, length: float, g: float = GRAVITY
+    d: ArrayLike,
+    d_dot: ArrayLike,
+    thrust: ArrayLike,
+    mass: float,
+    length: float,
+    g: float = GRAVITY,
 ) -> float:
     """f_L = d.(f_R z_B - m g z_W) + m l ||d'||^2 (any frame, all three vectors in it)."""
     d = np.asarray(d, dtype=float)
