@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -11,6 +12,7 @@ from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.errors import SimulationError
 from tetherland.models.quadrotor import RotorLayout
+from tetherland.rotations import quat_to_rotmat
 from tetherland.sim.mjcf import SceneLayout, build_mjcf
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
@@ -172,3 +174,19 @@ def test_scene_layout_places_ground_and_start_pad():
     plant.step(500)
     assert np.all(plant.lander_forces > 0.5)
     assert np.linalg.norm(plant.state().v_W) < 1e-3
+
+
+def test_pipe_top_line_runs_through_the_surface_origin_along_x_S():
+    sc = load_scenario("pipe60")
+    plant = Plant(sc)
+    surf = plant.layout.geometry.surface
+    g = plant.model.geom("surface")
+    assert g.type[0] == int(mujoco.mjtGeom.mjGEOM_CYLINDER)
+    R = sc.surface.pipe_radius
+    axis = quat_to_rotmat(g.quat)[:, 2]
+    assert abs(axis @ surf.x_S) == pytest.approx(1.0)
+    # the origin is on the pipe, on its top line (the point with normal z_S)
+    rel = surf.origin - g.pos
+    radial = rel - (rel @ axis) * axis
+    assert np.linalg.norm(radial) == pytest.approx(R)
+    np.testing.assert_allclose(radial / R, surf.z_S, atol=1e-12)

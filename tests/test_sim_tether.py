@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from tetherland import GRAVITY
-from tetherland.analysis.statics import tethered_rest_tension
+from tetherland.analysis.statics import contact_forces, tethered_rest_tension
 from tetherland.config import load_scenario
 from tetherland.models.tethered import (
     link_dynamics,
@@ -99,6 +99,12 @@ def test_rest_tension_on_a_50_degree_slope_equals_the_force_balance():
     assert plant.tension == pytest.approx(expected, rel=1e-3)
     assert np.linalg.norm(plant.state().p_W - land.p_W) < 1e-3
     assert np.all(plant.lander_forces > 0.5)
+    # The contact carries the rest: normal force of (6.5) with this tension, no friction.
+    balance = contact_forces(
+        geo.surface, sc.vehicle.mass, 0.0, geo.surface.z_S, expected, geo.d_tilde
+    )
+    assert balance.holds and np.linalg.norm(balance.f_S) < 1e-9
+    assert plant.lander_forces.sum() == pytest.approx(balance.f_N, rel=2e-3)
 
 
 @pytest.mark.parametrize(
