@@ -117,3 +117,16 @@ def test_hook_settings_are_validated():
         load_scenario("slope50", ["tether.hook_drop=0.95"])
     with pytest.raises(ConfigError, match="approach_direction"):
         load_scenario("slope50", ["tether.approach_direction=[0,0,0]"])
+
+
+def test_teleporting_is_not_a_crossing(plant):
+    """set_state/reset restart the hook tracking: jumping through the disk does not hook."""
+    geo = plant.layout.geometry
+    sc = plant.scenario
+    above = geo.p_A + np.array([0.0, 0.0, sc.tether.hook_drop + 0.2])
+    below = geo.p_A + np.array([0.0, 0.0, sc.tether.hook_drop - 0.05])
+    q = plant.start_state().q_WB
+    plant.reset(RigidBodyState.at_rest(above, q))
+    plant.set_state(RigidBodyState.at_rest(below, q))
+    plant.step(2)
+    assert not plant.cable_engaged and not plant.hook.events

@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -59,8 +61,8 @@ def _sensor_slices() -> dict[str, slice]:
     return out
 
 
-SENSOR_SLICES: dict[str, slice] = _sensor_slices()
-"""Slice of each sensor in ``sensordata`` (read-only by convention)."""
+SENSOR_SLICES: Mapping[str, slice] = MappingProxyType(_sensor_slices())
+"""Slice of each sensor in ``sensordata``."""
 
 
 @dataclass(frozen=True)

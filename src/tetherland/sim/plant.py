@@ -242,13 +242,19 @@ class Plant:
         self._track_hook_point()
 
     def set_state(self, state: RigidBodyState) -> None:
-        """Overwrite position, attitude and velocities (time and rotors unchanged)."""
+        """Overwrite position, attitude and velocities (time and rotors unchanged).
+
+        Kinematics and sensors are recomputed, and the hook starts tracking from the new
+        position (teleporting never counts as crossing the capture disk).
+        """
         d = self.data
         d.qpos[0:3] = state.p_W
         q = np.asarray(state.q_WB, dtype=float)
         d.qpos[3:7] = q / np.linalg.norm(q)
         d.qvel[0:3] = state.v_W
         d.qvel[3:6] = state.omega_B
+        self.forward()
+        self._track_hook_point()
 
     def state(self) -> RigidBodyState:
         """Ground truth at :attr:`time` (copies)."""

@@ -49,10 +49,12 @@ from tetherland.sim.plant import Plant, link_state_of
 from tetherland.sim.sensors import Imu, Mocap
 from tetherland.state import RigidBodyState
 
-_NAN1 = np.full(1, np.nan)
 _NAN3 = np.full(3, np.nan)
+_NAN3.setflags(write=False)
 _NAN4 = np.full(4, np.nan)
+_NAN4.setflags(write=False)
 _NAN7 = np.full(7, np.nan)
+_NAN7.setflags(write=False)
 
 Observer = Callable[[float, Plant], None]
 """Called at every control tick after the command, with (t_k, plant); e.g. a video recorder."""

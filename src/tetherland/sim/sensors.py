@@ -30,7 +30,9 @@ from tetherland.interfaces import ImuSample, MocapSample
 NOISE_BLOCK = 1024
 """Samples whose noise is drawn at once (IMU and mocap each)."""
 _NAN3 = np.full(3, np.nan)
+_NAN3.setflags(write=False)
 _NAN4 = np.full(4, np.nan)
+_NAN4.setflags(write=False)
 
 
 class Imu:
