@@ -5,7 +5,8 @@ of each rotor (the ESC interface). Each speed follows a first-order lag with tim
 tau_m, integrated exactly for a command held over the step,
 w_{k+1} = w_cmd + (w_k - w_cmd) exp(-dt / tau_m), and rotor i pushes f_i = c_f w_i^2 along
 z_B at its position with the drag torque sigma_i c_tau f_i about z_B (MuJoCo site actuators,
-so the force/torque mapping runs in C). The thrust applied during step k is c_f w_k^2.
+so the force/torque mapping runs in C). The thrust applied during step k is c_f wbar_k^2
+with wbar_k the exact mean speed over the step, so a command held from t_k acts from t_k.
 
 Limits: the plant clamps commanded speeds to [0, w_max] with c_f w_max^2 = f_max. It does
 **not** clamp at f_min: f_min > 0 is an operating limit for controllers (propellers kept
@@ -155,12 +156,13 @@ class Plant:
         self.dt = float(m.opt.timestep)
         self.steps_per_second = scenario.sim.steps_per_second
         v = scenario.vehicle
-        self._mass = v.mass
         self._r_att = np.asarray(v.cable_attachment, dtype=float)
         self._c_f = v.thrust_coefficient
         self._w_max = math.sqrt(v.f_max / v.thrust_coefficient)
         tau = v.motor_time_constant
         self._alpha = math.exp(-self.dt / tau) if tau > 0 else 0.0
+        # mean of w over a step: w_cmd + (w_k - w_cmd) tau (1 - alpha) / dt
+        self._mean_factor = tau * (1.0 - self._alpha) / self.dt if tau > 0 else 0.0
         self._w = [0.0, 0.0, 0.0, 0.0]
         self._w_cmd = [0.0, 0.0, 0.0, 0.0]
         self._spinning_up = True  # False once the speeds equal the command (no work to do)
@@ -433,15 +435,19 @@ class Plant:
         warn = self._warnings
         bad_qacc = _BAD_STATE_WARNINGS[2]
         nx, ny, nz, n_dot_p0 = self._hook_plane
+        b = self._mean_factor
         for _ in range(n):
-            w0, w1, w2, w3 = w
             if self._spinning_up:
-                ctrl[:] = [c_f * w0 * w0, c_f * w1 * w1, c_f * w2 * w2, c_f * w3 * w3]
+                w0, w1, w2, w3 = w
+                c0, c1, c2, c3 = cmd
+                # thrust from the exact mean speed over the step, the command held
+                m0, m1, m2 = c0 + (w0 - c0) * b, c1 + (w1 - c1) * b, c2 + (w2 - c2) * b
+                m3 = c3 + (w3 - c3) * b
+                ctrl[:] = [c_f * m0 * m0, c_f * m1 * m1, c_f * m2 * m2, c_f * m3 * m3]
             mujoco.mj_step(m, d)
             t_k = self._tick * self.dt
             self._tick += 1
             if self._spinning_up:
-                c0, c1, c2, c3 = cmd
                 w[0] = c0 + (w0 - c0) * a
                 w[1] = c1 + (w1 - c1) * a
                 w[2] = c2 + (w2 - c2) * a
