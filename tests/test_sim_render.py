@@ -73,3 +73,15 @@ def test_viewer_without_display_fails_clearly(landed_log, monkeypatch):
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(RenderUnavailableError, match="no display"):
         view_log(landed_log)
+
+
+def test_command_line_renders_a_saved_log(landed_log, tmp_path, capsys):
+    from tetherland.sim.plant import Plant
+    from tetherland.sim.render import main
+
+    _require_gl(Plant(load_scenario("slope50")))
+    path = landed_log.save(tmp_path / "run.npz")
+    assert main([str(path), "--fps", "10"]) == 0
+    assert (tmp_path / "run.mp4").stat().st_size > 1000
+    assert "5 frames" in capsys.readouterr().out
+    assert main([str(tmp_path / "missing.npz")]) == 2

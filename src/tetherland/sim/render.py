@@ -341,6 +341,37 @@ def view_log(log: SimLog, *, scenario: Scenario | None = None, speed: float = 1.
                 break
 
 
+def main(argv: list[str] | None = None) -> int:
+    """``python -m tetherland.sim.render RUN.npz [-o OUT.mp4] [--fps F] [--speed S] [--view]``."""
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m tetherland.sim.render", description="Watch a saved run log."
+    )
+    parser.add_argument("log", type=Path, help="run log (.npz) written by SimLog.save")
+    parser.add_argument("-o", "--output", type=Path, help="mp4 to write (default: LOG.mp4)")
+    parser.add_argument("--fps", type=float, default=DEFAULT_FPS)
+    parser.add_argument("--speed", type=float, default=1.0, help="playback speed factor")
+    parser.add_argument("--view", action="store_true", help="interactive viewer instead")
+    args = parser.parse_args(argv)
+    try:
+        log = SimLog.load(args.log)
+        if args.view:
+            view_log(log, speed=args.speed)
+            return 0
+        out = args.output or args.log.with_suffix(".mp4")
+        info = render_log(log, out, fps=args.fps, speed=args.speed)
+    except (TetherlandError, OSError, ValueError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(f"wrote {info.path} ({info.frames} frames at {info.fps:g} fps)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
+
+
 __all__ = [
     "RenderUnavailableError",
     "SceneRenderer",
@@ -348,6 +379,7 @@ __all__ = [
     "VideoRecorder",
     "framing_camera",
     "has_display",
+    "main",
     "render_log",
     "scenario_of_log",
     "view_log",
