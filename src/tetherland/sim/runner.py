@@ -133,7 +133,7 @@ class Runner:
     controller : Controller
     estimator : Estimator, optional
         Default: :class:`TruthEstimator` (the ground truth at each control tick, with the
-        true tension and link state).
+        true cable tension, and the true link state while the cable is engaged).
     reference : ReferenceSource, optional
         Default: hold the initial position in free flight.
     seed : int
@@ -164,6 +164,8 @@ class Runner:
             raise TypeError(f"{type(estimator).__name__} does not implement the Estimator protocol")
         if reference is not None and not isinstance(reference, ReferenceSource):
             raise TypeError(f"{type(reference).__name__} does not implement ReferenceSource")
+        if plant is not None and plant.scenario != scenario:
+            raise ValueError("the plant was built for another scenario than the runner's")
         self.scenario = scenario
         self.schedule = Schedule.from_scenario(scenario)
         self.plant = Plant(scenario) if plant is None else plant
