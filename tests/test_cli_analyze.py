@@ -93,7 +93,10 @@ def test_show_prints_loadable_toml(capsys, tmp_path: Path):
         (["analyze", "slope50", "--set", "vehicle.mass=-1"], "allowed range (0, 100]"),
         (["analyze", "slope50", "--set", "vehicle.mass=nan"], "vehicle.mass"),
         (["analyze", "slope50", "--set", "surface.slope_deg=91"], "allowed range [0, 90]"),
-        (["analyze", "slope50", "--set", "tether.length=0.05"], "tether.length = 0.05 m"),
+        (
+            ["analyze", "slope50", "--set", "vehicle.h_R=0.9", "--set", "tether.length=0.8"],
+            "tether.length = 0.8 m",
+        ),
         (["analyze", "slope50", "--set", "vehicle.f_min=9"], "vehicle.f_min"),
         (["analyze", "slope50", "--set", "anchor.landing_point=[0,0,2]"], "anchor.landing_point"),
         (["analyze", "missing-file.toml"], "does not exist"),

@@ -110,9 +110,10 @@ BAD_OVERRIDES = [
     (["surface.slope_deg=95"], r"surface\.slope_deg: .*allowed range \[0, 90\]"),
     (["surface.slope_deg=-1"], r"surface\.slope_deg: .*allowed range \[0, 90\]"),
     (
-        ["vehicle.h_R=0.5", "tether.length=0.4"],
-        r"tether\.length = 0\.4 m must be > \|h_att - anchor\.h_A\|",
+        ["vehicle.h_R=0.9", "tether.length=0.8"],
+        r"tether\.length = 0\.8 m must be > \|h_att - anchor\.h_A\|",
     ),
+    (["tether.length=0.4"], r"tether\.hook_drop \+ capture_radius = 0\.6 m must be < length"),
     (["anchor.h_A=1.2"], r"tether\.length = 1\.0 m must be >"),
     (["vehicle.f_min=7"], r"vehicle\.f_min = 7\.0 N must be < f_max = 6\.0 N"),
     (["anchor.landing_point=[0, 0, 1]"], r"anchor\.landing_point must lie on the surface"),

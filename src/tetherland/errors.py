@@ -17,3 +17,7 @@ class SingularityError(TetherlandError, ArithmeticError):
     Raised instead of dividing by zero, e.g. for a horizontal surface where a direction
     is undefined, or a link elevation with ``cos(delta) = 0``.
     """
+
+
+class SimulationError(TetherlandError, RuntimeError):
+    """The physics simulation diverged or was driven with an invalid input."""

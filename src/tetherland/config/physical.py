@@ -82,10 +82,41 @@ class VehicleConfig(Section):
 
 
 class TetherConfig(Section):
-    """A passive cable of constant length between the anchor and the vehicle."""
+    """A passive cable of constant length between the anchor and the vehicle, and its hook.
+
+    Hook model (simulation, chapter 6.6.1): the hook point is the attachment point lowered
+    by ``hook_drop`` along -z_W (the hook hanging under the vehicle). The cable engages when
+    the hook point crosses the capture disk (centre p_A, normal ``approach_direction``,
+    radius ``capture_radius``) moving along the approach direction, and releases when it
+    crosses the disk again the opposite way.
+    """
 
     length: float = Field(1.0, gt=0, le=100)
     """Cable length l from the anchor to the attachment point [m]."""
+    capture_radius: float = Field(0.1, gt=0, le=10)
+    """Radius of the capture disk around the anchor within which the hook catches [m]."""
+    approach_direction: Vec3 = (0.0, 0.0, -1.0)
+    """Direction in F_A in which the hook point must cross the capture disk to engage
+    (default: lowered vertically onto the anchor); reversing through it releases [-]."""
+    hook_drop: float = Field(0.5, ge=0, le=100)
+    """Distance of the hook point below the attachment point, along -z_W; 0 puts the hook
+    at the attachment point [m]."""
+
+    @field_validator("approach_direction")
+    @classmethod
+    def _nonzero_direction(cls, value: Vec3) -> Vec3:
+        if sum(v * v for v in value) < 1e-18:
+            raise ValueError("approach_direction must be a non-zero vector")
+        return value
+
+    @model_validator(mode="after")
+    def _hook_within_reach(self) -> TetherConfig:
+        if self.hook_drop + self.capture_radius >= self.length:
+            raise ValueError(
+                f"hook_drop + capture_radius = {self.hook_drop + self.capture_radius:g} m must "
+                f"be < length = {self.length} m (the cable must be slack when the hook catches)"
+            )
+        return self
 
 
 class SurfaceConfig(Section):

@@ -1,0 +1,277 @@
+"""Roles and records shared by the plant, estimators, controllers and the mission.
+
+Controllers, estimators and the mission import this module, never :mod:`tetherland.sim`,
+so that each can run against the simulation or against a real vehicle.
+
+Data flow of one run (chapter Fig. 6.3, section 6.6.4)::
+
+    IMU 1 kHz ──► Estimator.predict ─┐
+    mocap 120 Hz ► Estimator.update ─┴► Estimator.estimate() ─► StateEstimate
+    StateEstimate ─► ReferenceSource.reference(t, est) ─► Reference   (the supervisor)
+    (t, StateEstimate, Reference) ─► Controller.update ─► Command     (500 Hz, rotor speeds)
+
+Conventions: SI units, vectors in F_W unless the name says otherwise, quaternions
+scalar-first (w, x, y, z), body frame FLU with z_B the thrust axis. Every record is a
+frozen dataclass; arrays inside records must not be modified after construction.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import IntEnum
+from types import MappingProxyType
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from tetherland.geometry import FloatArray
+from tetherland.state import LinkState, RigidBodyState
+
+_EMPTY: Mapping[str, float] = MappingProxyType({})
+
+
+def _no_diagnostics() -> Mapping[str, float]:
+    return _EMPTY
+
+
+@dataclass(frozen=True, slots=True)
+class ImuSample:
+    """One IMU reading (strapdown, body frame).
+
+    Attributes
+    ----------
+    t : float
+        Sample time [s].
+    specific_force_B : (3,) array
+        Specific force a - g in F_B (at rest on level ground it reads +g z_B) [m/s^2].
+    omega_B : (3,) array
+        Angular rate in F_B [rad/s].
+    """
+
+    t: float
+    specific_force_B: FloatArray
+    omega_B: FloatArray
+
+
+@dataclass(frozen=True, slots=True)
+class MocapSample:
+    """One motion-capture pose of the body, delivered after a latency.
+
+    Attributes
+    ----------
+    t_measured : float
+        Instant the pose refers to [s].
+    t_delivered : float
+        Instant the sample reaches the estimator, t_measured + latency [s].
+    p_W : (3,) array
+        Position of the centre of mass [m]; NaN when ``valid`` is False.
+    q_WB : (4,) array
+        Attitude (w, x, y, z), F_B -> F_W; NaN when ``valid`` is False.
+    valid : bool
+        False during a dropout (the tracker lost the body).
+    """
+
+    t_measured: float
+    t_delivered: float
+    p_W: FloatArray
+    q_WB: FloatArray
+    valid: bool = True
+
+
+@dataclass(frozen=True, slots=True)
+class StateEstimate:
+    """What an estimator knows at time ``t``.
+
+    Attributes
+    ----------
+    t : float
+        Time of the estimate [s].
+    body : RigidBodyState
+        Position, velocity, attitude and body rate of the centre of mass.
+    gyro_bias_B, accel_bias_B : (3,) array or None
+        Estimated IMU biases in F_B [rad/s], [m/s^2].
+    covariance : (n, n) array or None
+        Error covariance in the estimator's own error-state ordering (documented by it).
+    link : LinkState or None
+        Estimated link angles (phi, delta) and rates, when tethered [rad, rad/s].
+    tension : float or None
+        Estimated cable tension f_L [N].
+    """
+
+    t: float
+    body: RigidBodyState
+    gyro_bias_B: FloatArray | None = None
+    accel_bias_B: FloatArray | None = None
+    covariance: FloatArray | None = None
+    link: LinkState | None = None
+    tension: float | None = None
+
+
+class ControlMode(IntEnum):
+    """Which controller the supervisor wants active (chapter 6.6.3)."""
+
+    FREE_FLIGHT = 0
+    """Position and attitude control without the cable (approach, hooking, stretching)."""
+    TETHERED = 1
+    """Tethered output tracking of y^b = [phi, delta, theta_A, psi] (Gamma_HC^b or DFL)."""
+    MOTORS_OFF = 2
+    """Rotors commanded to zero speed (landed, deploying: t_G to t_T)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Reference:
+    """What the supervisor asks of the controller at time ``t``.
+
+    Attributes
+    ----------
+    t : float
+        Time the reference is for [s].
+    mode : ControlMode
+        Which control law applies.
+    phase : int
+        Mission phase code (defined by the mission; logged as is) [-].
+    p_W : (k, 3) array or None
+        Desired position and its first k-1 time derivatives as rows (p, v, a, ...) [m, m/s, ...].
+    yaw : float
+        Desired heading psi [rad].
+    output : (k, 4) array or None
+        Tethered output y^b = [phi, delta, theta_A, psi] and its first k-1 derivatives as rows
+        (the DFL controller needs k = 5) [rad, rad/s, ...].
+    thrust_ff : float or None
+        Nominal total thrust f_R from the planner [N].
+    terminate : bool
+        True when the supervisor has finished; the runner stops after this tick.
+    """
+
+    t: float
+    mode: ControlMode = ControlMode.FREE_FLIGHT
+    phase: int = 0
+    p_W: FloatArray | None = None
+    yaw: float = 0.0
+    output: FloatArray | None = None
+    thrust_ff: float | None = None
+    terminate: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class Command:
+    """What a controller sends to the ESCs (chapter 6.6.4) and what it meant by it.
+
+    Attributes
+    ----------
+    rotor_speeds : (4,) array
+        Commanded spinning speed of each rotor, in the rotor order of
+        :class:`tetherland.models.RotorLayout` [rad/s]. Zero switches a motor off.
+    thrust : float or None
+        Total thrust f_R the controller wanted [N].
+    torque_B : (3,) array or None
+        Body torque the controller wanted, F_B [N m].
+    diagnostics : mapping of str to float
+        Extra named scalars (errors, gains in use, singularity margins) for the log.
+    """
+
+    rotor_speeds: FloatArray
+    thrust: float | None = None
+    torque_B: FloatArray | None = None
+    diagnostics: Mapping[str, float] = field(default_factory=_no_diagnostics)
+
+    @classmethod
+    def motors_off(cls) -> Command:
+        """All rotors stopped."""
+        return cls(rotor_speeds=np.zeros(4), thrust=0.0, torque_B=np.zeros(3))
+
+
+@dataclass(frozen=True, slots=True)
+class EventRecord:
+    """Something that happened during a run, for the log (phase switches, faults, hooks).
+
+    Attributes
+    ----------
+    t : float
+        When [s].
+    source : str
+        Who reports it (``"mission"``, ``"hook"``, ``"runner"``, ...).
+    kind : str
+        Short machine-readable name (``"phase"``, ``"abort"``, ``"ENGAGED"``, ...).
+    message : str
+        Human-readable reason.
+    """
+
+    t: float
+    source: str
+    kind: str
+    message: str = ""
+
+    def as_dict(self) -> dict[str, object]:
+        return {"t": self.t, "source": self.source, "kind": self.kind, "message": self.message}
+
+
+@runtime_checkable
+class EventSource(Protocol):
+    """Optional capability of a reference source (the supervisor): events for the run log."""
+
+    @property
+    def events(self) -> list[EventRecord]:
+        """Every event so far, in time order."""
+        ...
+
+
+@runtime_checkable
+class Estimator(Protocol):
+    """State estimator: IMU as process input, motion capture as measurement (section 8)."""
+
+    def predict(self, imu: ImuSample) -> None:
+        """Propagate the state to ``imu.t`` with one IMU sample (1 kHz)."""
+        ...
+
+    def update(self, mocap: MocapSample) -> None:
+        """Fuse one delayed motion-capture sample (check ``mocap.valid``)."""
+        ...
+
+    def estimate(self) -> StateEstimate:
+        """The current estimate (after the last predict/update)."""
+        ...
+
+
+@runtime_checkable
+class CommandAware(Protocol):
+    """Optional estimator capability: told each command sent (e.g. for tension estimation)."""
+
+    def command_sent(self, t: float, command: Command) -> None:
+        """``command`` is applied from time ``t`` on."""
+        ...
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """Maps the estimate and the reference to rotor speed commands (500 Hz)."""
+
+    def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
+        """Compute the command held until the next control tick."""
+        ...
+
+
+@runtime_checkable
+class ReferenceSource(Protocol):
+    """The supervisor (issue 6): chooses the mode and the reference from the estimate."""
+
+    def reference(self, t: float, estimate: StateEstimate) -> Reference:
+        """Reference for time ``t``; may switch phases based on ``estimate``."""
+        ...
+
+
+__all__ = [
+    "Command",
+    "CommandAware",
+    "ControlMode",
+    "Controller",
+    "Estimator",
+    "EventRecord",
+    "EventSource",
+    "ImuSample",
+    "MocapSample",
+    "Reference",
+    "ReferenceSource",
+    "StateEstimate",
+]

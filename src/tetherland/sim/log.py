@@ -1,0 +1,306 @@
+"""The columnar run log: one row per control tick, named columns, saved atomically as .npz.
+
+A :class:`SimLog` holds one float64 matrix (rows = control ticks) and a schema of named
+column groups; ``log["p_W"]`` is an ``(n, 3)`` view. Integer-valued columns (phase, mode,
+hook state, mocap validity) are floats in memory and integers on disk (unless they hold NaN).
+``NaN`` marks a value that was not available (e.g. no bias estimate, no mocap sample yet).
+
+On disk (``.npz``, readable with plain numpy): one array per column group, plus
+``__metadata__``, a JSON document with provenance, rates, the schema (units and meaning of
+every column), events (hook, runner) and the run status.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tetherland.geometry import FloatArray
+from tetherland.io import atomic_write_with, to_jsonable
+
+FORMAT_VERSION = 1
+METADATA_KEY = "__metadata__"
+
+
+class RunStatus(StrEnum):
+    """How a run ended."""
+
+    COMPLETED = "completed"
+    """The requested duration was simulated."""
+    TERMINATED = "terminated"
+    """The reference source asked to stop (mission finished)."""
+    DIVERGED = "diverged"
+    """The physics diverged (:class:`tetherland.errors.SimulationError`)."""
+    FAILED = "failed"
+    """A controller, estimator or supervisor raised a tetherland error (e.g. a singularity)."""
+
+
+@dataclass(frozen=True)
+class Column:
+    """A named group of columns.
+
+    Attributes
+    ----------
+    name : str
+    width : int
+        Number of matrix columns (3 for a vector, 1 for a scalar).
+    unit : str
+    doc : str
+    integer : bool
+        Stored as int64 on disk.
+    """
+
+    name: str
+    width: int
+    unit: str
+    doc: str
+    integer: bool = False
+
+
+def _c(name: str, width: int, unit: str, doc: str, integer: bool = False) -> Column:
+    return Column(name, width, unit, doc, integer)
+
+
+# Row layout. The runner fills a row from parts in exactly this order.
+SCALARS: tuple[Column, ...] = (
+    _c("t", 1, "s", "time of the control tick"),
+    _c("phase", 1, "-", "mission phase code from the reference", True),
+    _c("mode", 1, "-", "ControlMode of the reference", True),
+    _c("hook", 1, "-", "HookState of the plant (1 = cable engaged)", True),
+    _c("mocap_t", 1, "s", "measurement time of the last delivered mocap sample"),
+    _c("mocap_valid", 1, "-", "last delivered mocap sample was valid", True),
+    _c("est_tension", 1, "N", "estimated cable tension"),
+    _c("ref_yaw", 1, "rad", "reference heading"),
+    _c("cmd_thrust", 1, "N", "total thrust the controller wanted"),
+)
+TRUTH: tuple[Column, ...] = (
+    _c("p_W", 3, "m", "true position of the centre of mass"),
+    _c("q_WB", 4, "-", "true attitude (w, x, y, z)"),
+    _c("v_W", 3, "m/s", "true velocity"),
+    _c("omega_B", 3, "rad/s", "true body rate"),
+    _c("specific_force_B", 3, "m/s^2", "true specific force (a - g) in F_B"),
+    _c("tension", 1, "N", "cable tension (tendonlimitfrc)"),
+    _c("cable_length", 1, "m", "anchor-to-attachment distance"),
+    _c("lander_forces", 4, "N", "normal force on each lander"),
+    _c("frame_force", 1, "N", "normal force on hub and rotor guards (crash if > 0)"),
+    _c("rotor_speeds", 4, "rad/s", "rotor speeds"),
+    _c("rotor_thrusts", 4, "N", "rotor thrusts"),
+)
+MEASUREMENTS: tuple[Column, ...] = (
+    _c("imu_specific_force_B", 3, "m/s^2", "last IMU specific force"),
+    _c("imu_omega_B", 3, "rad/s", "last IMU angular rate"),
+    _c("imu_bias", 6, "m/s^2, rad/s", "true IMU biases [accel, gyro] of that sample"),
+    _c("mocap_p_W", 3, "m", "last delivered mocap position"),
+    _c("mocap_q_WB", 4, "-", "last delivered mocap attitude"),
+)
+ESTIMATE: tuple[Column, ...] = (
+    _c("est_p_W", 3, "m", "estimated position"),
+    _c("est_v_W", 3, "m/s", "estimated velocity"),
+    _c("est_q_WB", 4, "-", "estimated attitude"),
+    _c("est_omega_B", 3, "rad/s", "estimated body rate"),
+    _c("est_accel_bias_B", 3, "m/s^2", "estimated accelerometer bias"),
+    _c("est_gyro_bias_B", 3, "rad/s", "estimated gyro bias"),
+    _c("est_link", 4, "rad, rad/s", "estimated [phi, delta, phi', delta']"),
+)
+REFERENCE_COMMAND: tuple[Column, ...] = (
+    _c("ref_p_W", 3, "m", "reference position"),
+    _c("ref_output", 4, "rad", "reference output y^b = [phi, delta, theta_A, psi]"),
+    _c("cmd_rotor_speeds", 4, "rad/s", "commanded rotor speeds (before plant clamping)"),
+    _c("cmd_torque_B", 3, "N m", "body torque the controller wanted"),
+)
+DERIVED: tuple[Column, ...] = (
+    _c("link_phi", 1, "rad", "true elevation of the attachment point around the anchor"),
+    _c("link_delta", 1, "rad", "true azimuth of the attachment point around the anchor"),
+)
+BASE_COLUMNS: tuple[Column, ...] = SCALARS + TRUTH + MEASUREMENTS + ESTIMATE + REFERENCE_COMMAND
+
+
+def diagnostic_columns(keys: Iterable[str]) -> tuple[Column, ...]:
+    """Columns ``diag.<key>`` for the controller diagnostics to record."""
+    return tuple(_c(f"diag.{k}", 1, "-", f"controller diagnostic '{k}'") for k in keys)
+
+
+def _slices(columns: tuple[Column, ...]) -> dict[str, slice]:
+    out, i = {}, 0
+    for col in columns:
+        if col.name in out:
+            raise ValueError(f"duplicate log column '{col.name}'")
+        out[col.name] = slice(i, i + col.width)
+        i += col.width
+    return out
+
+
+def row_width(columns: tuple[Column, ...]) -> int:
+    return sum(c.width for c in columns)
+
+
+@dataclass(frozen=True)
+class SimLog:
+    """A run log: named columns over control ticks, metadata and events.
+
+    Attributes
+    ----------
+    columns : tuple of Column
+        Schema, in matrix order.
+    matrix : (n, width) array
+        All values; prefer named access ``log[name]``.
+    metadata : dict
+        JSON-compatible: provenance, rates, status, events, schema.
+    """
+
+    columns: tuple[Column, ...]
+    matrix: FloatArray
+    metadata: dict[str, Any] = field(default_factory=dict)
+    _slices: dict[str, slice] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_slices", _slices(self.columns))
+        if self.matrix.ndim != 2 or self.matrix.shape[1] != row_width(self.columns):
+            raise ValueError(
+                f"log matrix has shape {self.matrix.shape}, "
+                f"schema needs (n, {row_width(self.columns)})"
+            )
+
+    def __len__(self) -> int:
+        return self.matrix.shape[0]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._slices
+
+    def __getitem__(self, name: str) -> FloatArray:
+        """Column group ``name``: (n,) for a scalar, (n, width) otherwise (a view)."""
+        try:
+            s = self._slices[name]
+        except KeyError:
+            raise KeyError(f"no log column '{name}' (have: {', '.join(self.names)})") from None
+        return self.matrix[:, s.start] if s.stop - s.start == 1 else self.matrix[:, s]
+
+    @property
+    def names(self) -> list[str]:
+        return [c.name for c in self.columns]
+
+    @property
+    def t(self) -> FloatArray:
+        return self["t"]
+
+    @property
+    def status(self) -> RunStatus:
+        return RunStatus(self.metadata.get("status", RunStatus.COMPLETED.value))
+
+    @property
+    def events(self) -> list[dict[str, Any]]:
+        return list(self.metadata.get("events", []))
+
+    def save(self, path: str | Path) -> Path:
+        """Write ``path`` (.npz, compressed) atomically."""
+        path = Path(path)
+        if path.suffix != ".npz":
+            raise ValueError(f"log files end in .npz, got '{path.name}'")
+        meta = dict(self.metadata)
+        meta["format_version"] = FORMAT_VERSION
+        meta["schema"] = [
+            {"name": c.name, "width": c.width, "unit": c.unit, "doc": c.doc, "integer": c.integer}
+            for c in self.columns
+        ]
+        arrays: dict[str, np.ndarray] = {}
+        for c in self.columns:
+            col = self[c.name]
+            if c.integer and np.all(np.isfinite(col)):
+                col = col.astype(np.int64)  # NaN-free integer columns are stored as integers
+            arrays[c.name] = col
+        arrays[METADATA_KEY] = np.array(json.dumps(to_jsonable(meta), allow_nan=False))
+        return atomic_write_with(path, lambda tmp: np.savez_compressed(tmp, **arrays))
+
+    @classmethod
+    def load(cls, path: str | Path) -> SimLog:
+        """Read a log written by :meth:`save`."""
+        with np.load(Path(path), allow_pickle=False) as npz:
+            meta = json.loads(str(npz[METADATA_KEY]))
+            if meta.get("format_version") != FORMAT_VERSION:
+                raise ValueError(
+                    f"'{path}': log format {meta.get('format_version')} is not {FORMAT_VERSION}"
+                )
+            columns = tuple(Column(**c) for c in meta.pop("schema"))
+            n = int(npz[columns[0].name].shape[0])
+            matrix = np.empty((n, row_width(columns)))
+            log = cls(columns, matrix, meta)
+            for c in columns:
+                s = log._slices[c.name]
+                matrix[:, s] = np.asarray(npz[c.name], dtype=float).reshape(n, c.width)
+        return log
+
+
+class LogWriter:
+    """Preallocated row storage for a run (grows by doubling if a run outlives it).
+
+    Parameters
+    ----------
+    columns : tuple of Column
+        Schema; rows are written whole, in this order, by :meth:`write`.
+    capacity : int
+        Rows to preallocate.
+    """
+
+    def __init__(self, columns: tuple[Column, ...], capacity: int) -> None:
+        self.columns = columns
+        self._width = row_width(columns)
+        self._matrix = np.full((max(int(capacity), 1), self._width), np.nan)
+        self._n = 0
+
+    def __len__(self) -> int:
+        return self._n
+
+    def write(self, parts: list[FloatArray]) -> None:
+        """Append one row made of ``parts`` (1-D arrays concatenated in schema order)."""
+        if self._n == self._matrix.shape[0]:
+            grown = np.full((2 * self._n, self._width), np.nan)
+            grown[: self._n] = self._matrix
+            self._matrix = grown
+        np.concatenate(parts, out=self._matrix[self._n])
+        self._n += 1
+
+    def finish(self, metadata: Mapping[str, Any], derived: bool = True, **geometry: Any) -> SimLog:
+        """The log of the rows written so far (derived link angles added if ``derived``).
+
+        Parameters
+        ----------
+        geometry
+            ``p_A`` (3,), ``R_WA`` (3, 3) and ``r_att_B`` (3,) for the derived columns.
+        """
+        base = SimLog(self.columns, self._matrix[: self._n].copy(), dict(metadata))
+        if not derived:
+            return base
+        phi, delta = link_angles_from_log(base, **geometry)
+        matrix = np.column_stack((base.matrix, phi, delta))
+        return SimLog(self.columns + DERIVED, matrix, base.metadata)
+
+
+def link_angles_from_log(
+    log: SimLog, *, p_A: FloatArray, R_WA: FloatArray, r_att_B: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """True (phi, delta) of the attachment point around the anchor for every row [rad]."""
+    q = log["q_WB"]
+    if len(log) == 0:
+        return np.empty(0), np.empty(0)
+    w, x, y, z = q.T
+    r = np.asarray(r_att_B, dtype=float)
+    # R_WB r for every row (quaternion rotation, vectorised)
+    R = np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=1,
+    )
+    rel = log["p_W"] + R @ r - np.asarray(p_A, dtype=float)
+    d_A = rel @ np.asarray(R_WA, dtype=float)  # rows: R_WA^T rel
+    phi = np.arctan2(d_A[:, 2], d_A[:, 0])
+    delta = np.arctan2(-d_A[:, 1], np.hypot(d_A[:, 0], d_A[:, 2]))
+    return phi, delta

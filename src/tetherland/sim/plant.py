@@ -1,0 +1,481 @@
+"""The physics plant: MuJoCo scene, rotors behind their ESCs, cable and hook.
+
+Rotor model (DESIGN.md section 4, chapter 6.6.4): the input is the commanded spinning speed
+of each rotor (the ESC interface). Each speed follows a first-order lag with time constant
+tau_m, integrated exactly for a command held over the step,
+w_{k+1} = w_cmd + (w_k - w_cmd) exp(-dt / tau_m), and rotor i pushes f_i = c_f w_i^2 along
+z_B at its position with the drag torque sigma_i c_tau f_i about z_B (MuJoCo site actuators,
+so the force/torque mapping runs in C). The thrust applied during step k is c_f wbar_k^2
+with wbar_k the exact mean speed over the step, so a command held from t_k acts from t_k.
+
+Limits: the plant clamps commanded speeds to [0, w_max] with c_f w_max^2 = f_max. It does
+**not** clamp at f_min: f_min > 0 is an operating limit for controllers (propellers kept
+spinning for attitude authority), while a zero command stops the motor and gives zero
+thrust, as when the mission switches the motors off on the slope.
+
+Time: ``step()`` advances from t_k to t_{k+1}. MuJoCo evaluates sensors before integrating,
+so after ``step()`` the sensor readings (IMU, cable force, touch) refer to t_k, while
+:meth:`Plant.state` is the state at t_{k+1} = :attr:`Plant.time`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland.config import Scenario
+from tetherland.errors import SimulationError
+from tetherland.geometry import FloatArray
+from tetherland.interfaces import StateEstimate
+from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.hook import Hook, HookState
+from tetherland.sim.mjcf import SENSOR_SLICES, SceneLayout, build_mjcf
+from tetherland.state import LinkState, RigidBodyState
+
+_BAD_STATE_WARNINGS = (
+    int(mujoco.mjtWarning.mjWARN_BADQPOS),
+    int(mujoco.mjtWarning.mjWARN_BADQVEL),
+    int(mujoco.mjtWarning.mjWARN_BADQACC),
+)
+CABLE_GROUP_VISIBLE, CABLE_GROUP_HIDDEN = 0, 5
+"""Tendon groups of the engaged (drawn) and disengaged (hidden) cable."""
+
+
+def set_cable_visible(model: mujoco.MjModel, visible: bool) -> None:
+    """Draw the cable tendon (engaged) or hide it (disengaged); physics unaffected.
+
+    Hidden means moved to tendon group 5, which MuJoCo's renderers do not draw by default
+    (a transparent tendon would still cast a shadow).
+    """
+    cable = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "cable")
+    model.tendon_group[cable] = CABLE_GROUP_VISIBLE if visible else CABLE_GROUP_HIDDEN
+
+
+def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
+    """R_WB with third column ``z_B`` and x_B the projection of ``x_hint`` orthogonal to it."""
+    z = np.asarray(z_B, dtype=float)
+    z = z / np.linalg.norm(z)
+    x = np.asarray(x_hint, dtype=float) - (z @ np.asarray(x_hint, dtype=float)) * z
+    x /= np.linalg.norm(x)
+    return np.column_stack((x, np.cross(z, x), z))
+
+
+def link_state_of(
+    x: FloatArray, r_att_B: FloatArray, p_A: FloatArray, R_WA: FloatArray
+) -> LinkState:
+    """Link angles and rates of the attachment point around the anchor (DESIGN.md section 3).
+
+    Parameters
+    ----------
+    x : (13,) array
+        [p_W (3), q_WB (4), v_W (3), omega_B (3)] (MuJoCo's qpos then qvel).
+    r_att_B : (3,) array
+        Attachment point in F_B [m].
+    p_A : (3,) array
+        Anchor [m].
+    R_WA : (3, 3) array
+        Anchor frame.
+
+    The angles are those of the attachment point whether or not the cable is taut.
+    Scalar arithmetic: this runs at the control rate.
+    """
+    px, py, pz, w, qx, qy, qz, vx, vy, vz, ox, oy, oz = x.tolist()
+    ax, ay, az = r_att_B.tolist()
+    # R_WB r_att and R_WB (omega_B x r_att)
+    cx, cy, cz = oy * az - oz * ay, oz * ax - ox * az, ox * ay - oy * ax
+    R = (
+        (1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - w * qz), 2 * (qx * qz + w * qy)),
+        (2 * (qx * qy + w * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - w * qx)),
+        (2 * (qx * qz - w * qy), 2 * (qy * qz + w * qx), 1 - 2 * (qx * qx + qy * qy)),
+    )
+    p0, p1, p2 = p_A.tolist()
+    r = [
+        px - p0 + R[0][0] * ax + R[0][1] * ay + R[0][2] * az,
+        py - p1 + R[1][0] * ax + R[1][1] * ay + R[1][2] * az,
+        pz - p2 + R[2][0] * ax + R[2][1] * ay + R[2][2] * az,
+    ]
+    rd = [
+        vx + R[0][0] * cx + R[0][1] * cy + R[0][2] * cz,
+        vy + R[1][0] * cx + R[1][1] * cy + R[1][2] * cz,
+        vz + R[2][0] * cx + R[2][1] * cy + R[2][2] * cz,
+    ]
+    A = R_WA.tolist()  # rows of R_WA; F_A components are columns . r
+    d = [A[0][i] * r[0] + A[1][i] * r[1] + A[2][i] * r[2] for i in range(3)]
+    dd = [A[0][i] * rd[0] + A[1][i] * rd[1] + A[2][i] * rd[2] for i in range(3)]
+    dist = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    if dist < 1e-12:
+        return LinkState(math.nan, math.nan, math.nan, math.nan)
+    radial = (d[0] * dd[0] + d[1] * dd[1] + d[2] * dd[2]) / dist
+    u = [c / dist for c in d]  # unit link direction
+    ud = [(dd[i] - u[i] * radial) / dist for i in range(3)]  # its rate
+    h = math.hypot(u[0], u[2])
+    if h < 1e-12:
+        return LinkState(math.nan, math.atan2(-u[1], h), math.nan, math.nan)
+    h_dot = (u[0] * ud[0] + u[2] * ud[2]) / h
+    return LinkState(
+        phi=math.atan2(u[2], u[0]),
+        delta=math.atan2(-u[1], h),
+        phi_dot=(u[0] * ud[2] - u[2] * ud[0]) / (h * h),
+        delta_dot=-ud[1] * h + u[1] * h_dot,
+    )
+
+
+class Plant:
+    """The simulated vehicle, cable and scene of one scenario.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Vehicle, tether, surface, anchor and ``[sim]`` settings.
+
+    Attributes
+    ----------
+    scenario : Scenario
+    layout : SceneLayout
+        Anchor, surface frame, ground and start pad positions.
+    model, data : mujoco.MjModel, mujoco.MjData
+        The MuJoCo model (owned: the hook toggles ``model.tendon_limited``) and its data.
+    hook : Hook
+        The hook state machine and its events.
+    xml : str
+        The generated MJCF.
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.layout = SceneLayout.from_scenario(scenario)
+        self.xml = build_mjcf(scenario, self.layout)
+        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        self._cable = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, "cable")
+        self._att_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "attachment")
+        self.dt = float(m.opt.timestep)
+        self.steps_per_second = scenario.sim.steps_per_second
+        v = scenario.vehicle
+        self._r_att = np.asarray(v.cable_attachment, dtype=float)
+        self._c_f = v.thrust_coefficient
+        self._w_max = math.sqrt(v.f_max / v.thrust_coefficient)
+        tau = v.motor_time_constant
+        self._alpha = math.exp(-self.dt / tau) if tau > 0 else 0.0
+        # mean of w over a step: w_cmd + (w_k - w_cmd) tau (1 - alpha) / dt
+        self._mean_factor = tau * (1.0 - self._alpha) / self.dt if tau > 0 else 0.0
+        self._w = [0.0, 0.0, 0.0, 0.0]
+        self._w_cmd = [0.0, 0.0, 0.0, 0.0]
+        self._spinning_up = True  # False once the speeds equal the command (no work to do)
+        self._settle_tol = 1e-12 * self._w_max
+        # Views into MjData (stable for the life of ``data``).
+        self._ctrl = self.data.ctrl
+        self._p_att_view = self.data.site_xpos[self._att_site]
+        self._warnings = self.data.warning.number
+        self.sensordata = self.data.sensordata
+        geo = self.layout.geometry
+        self.hook = Hook(
+            geo.p_A,
+            self.layout.approach_W,
+            scenario.tether.capture_radius,
+            scenario.tether.hook_drop,
+            miss_radius=scenario.tether.length,
+        )
+        n = self.layout.approach_W / np.linalg.norm(self.layout.approach_W)
+        # hook.side(x, y, z) >= 0  <=>  n.(x, y, z) >= c0 (precomputed for the step loop)
+        c0 = float(n @ geo.p_A) + float(n[2]) * scenario.tether.hook_drop
+        self._hook_plane = (float(n[0]), float(n[1]), float(n[2]), c0)
+        self._prev_att = (0.0, 0.0, 0.0)
+        self._hook_side = False
+        self._tick = 0
+        self.reset()
+
+    # -- state ----------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """Simulation time t_k = k dt of the current state [s] (integer tick count inside)."""
+        return self._tick * self.dt
+
+    @property
+    def tick(self) -> int:
+        """Number of physics steps since the last reset."""
+        return self._tick
+
+    def start_state(self) -> RigidBodyState:
+        """At rest on the start pad, level, x_B along x_A (the downhill horizontal)."""
+        R = heading_rotation([0.0, 0.0, 1.0], self.layout.geometry.R_WA[:, 0])
+        p = self.layout.start_position + np.array([0.0, 0.0, self.scenario.vehicle.h_R])
+        return RigidBodyState.at_rest(p, rotmat_to_quat(R))
+
+    def landed_state(self) -> RigidBodyState:
+        """At rest at the landing point p*_L with z_B = z_S and x_B = x_S (condition (2))."""
+        geo = self.layout.geometry
+        R = heading_rotation(geo.surface.z_S, geo.surface.x_S)
+        return RigidBodyState.at_rest(geo.p_R_landed, rotmat_to_quat(R))
+
+    def reset(
+        self,
+        state: RigidBodyState | None = None,
+        *,
+        rotor_speeds: ArrayLike | None = None,
+        cable_engaged: bool = False,
+    ) -> None:
+        """Restart at t = 0 from ``state`` (default: :meth:`start_state`).
+
+        Parameters
+        ----------
+        state
+            Initial state of the vehicle.
+        rotor_speeds : (4,) array, optional
+            Initial rotor speeds, also the held command (default: stopped) [rad/s].
+        cable_engaged
+            Start with the cable hooked to the anchor.
+        """
+        mujoco.mj_resetData(self.model, self.data)
+        self._tick = 0
+        self.set_state(self.start_state() if state is None else state)
+        w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
+        self.command(w0)
+        self._w = list(self._w_cmd)
+        self._spinning_up = True
+        self._set_cable(cable_engaged)
+        self.hook.reset(cable_engaged)
+        self.forward()
+        self._track_hook_point()
+
+    def set_state(self, state: RigidBodyState) -> None:
+        """Overwrite position, attitude and velocities (time and rotors unchanged).
+
+        Kinematics and sensors are recomputed, and the hook starts tracking from the new
+        position (teleporting never counts as crossing the capture disk).
+        """
+        d = self.data
+        d.qpos[0:3] = state.p_W
+        q = np.asarray(state.q_WB, dtype=float)
+        d.qpos[3:7] = q / np.linalg.norm(q)
+        d.qvel[0:3] = state.v_W
+        d.qvel[3:6] = state.omega_B
+        self.forward()
+        self._track_hook_point()
+
+    def state(self) -> RigidBodyState:
+        """Ground truth at :attr:`time` (copies)."""
+        qpos, qvel = self.data.qpos, self.data.qvel
+        return RigidBodyState(
+            p_W=qpos[0:3].copy(),
+            v_W=qvel[0:3].copy(),
+            q_WB=qpos[3:7].copy(),
+            omega_B=qvel[3:6].copy(),
+        )
+
+    @property
+    def qpos(self) -> FloatArray:
+        """MuJoCo qpos view: [p_W (3), q_WB (4)] at :attr:`time` (do not write)."""
+        return self.data.qpos
+
+    @property
+    def qvel(self) -> FloatArray:
+        """MuJoCo qvel view: [v_W (3), omega_B (3)] at :attr:`time` (do not write)."""
+        return self.data.qvel
+
+    def forward(self) -> None:
+        """Recompute kinematics, forces and sensors at the current state (no time step)."""
+        self._ctrl[:] = [self._c_f * w * w for w in self._w]
+        mujoco.mj_forward(self.model, self.data)
+
+    def attachment_point(self) -> FloatArray:
+        """Cable attachment point p_R + R_WB r_att at :attr:`time` [m]."""
+        qpos = self.data.qpos
+        return qpos[0:3] + quat_to_rotmat(qpos[3:7]) @ self._r_att
+
+    def link_state(self) -> LinkState:
+        """Link angles and rates of the attachment point around the anchor, at :attr:`time`.
+
+        phi and delta as in DESIGN.md section 3 (F_A), whether the cable is taut or not.
+        """
+        geo = self.layout.geometry
+        x = np.concatenate((self.data.qpos, self.data.qvel))
+        return link_state_of(x, self._r_att, geo.p_A, geo.R_WA)
+
+    def truth_estimate(self) -> StateEstimate:
+        """The ground truth at :attr:`time` as a :class:`StateEstimate` (tension: last step)."""
+        return StateEstimate(
+            t=self.time, body=self.state(), link=self.link_state(), tension=self.tension
+        )
+
+    # -- rotors ---------------------------------------------------------------------------
+
+    def command(self, rotor_speeds: ArrayLike) -> None:
+        """Hold new ESC speed commands from now on, clamped to [0, w_max] [rad/s].
+
+        The caller validates (finite, shape 4); this is on the control path.
+        """
+        w_max = self._w_max
+        cmd = self._w_cmd
+        values = np.asarray(rotor_speeds, dtype=float).tolist()
+        if len(values) != 4:
+            raise SimulationError(f"expected 4 rotor speed commands, got {len(values)}")
+        for i, w in enumerate(values):
+            if w != w:
+                raise SimulationError(
+                    f"non-finite rotor speed command {values} at t = {self.time:.4f} s"
+                )
+            w = 0.0 if w < 0.0 else (w_max if w > w_max else w)
+            if w != cmd[i]:
+                cmd[i] = w
+                self._spinning_up = True
+
+    @property
+    def speed_limit(self) -> float:
+        """w_max with c_f w_max^2 = f_max [rad/s]."""
+        return self._w_max
+
+    @property
+    def commanded_speeds(self) -> FloatArray:
+        """Held (clamped) speed commands [rad/s]."""
+        return np.array(self._w_cmd)
+
+    @property
+    def rotor_speeds(self) -> FloatArray:
+        """Rotor speeds w_i at :attr:`time` [rad/s]."""
+        return np.array(self._w)
+
+    @property
+    def rotor_thrusts(self) -> FloatArray:
+        """Rotor thrusts c_f w_i^2 at :attr:`time` [N]."""
+        return self._c_f * np.square(self._w)
+
+    def rotor_state_into(self, out: FloatArray) -> None:
+        """Write [w (4), f (4)] at :attr:`time` into ``out[:8]`` (no allocation)."""
+        w = self._w
+        c_f = self._c_f
+        out[:8] = [
+            w[0],
+            w[1],
+            w[2],
+            w[3],
+            c_f * w[0] * w[0],
+            c_f * w[1] * w[1],
+            c_f * w[2] * w[2],
+            c_f * w[3] * w[3],
+        ]
+
+    # -- cable ----------------------------------------------------------------------------
+
+    @property
+    def cable_engaged(self) -> bool:
+        return self.hook.engaged
+
+    @property
+    def hook_state(self) -> HookState:
+        return self.hook.state
+
+    def engage_cable(self) -> None:
+        """Attach the cable to the anchor now (bypassing the hook geometry)."""
+        self.hook.reset(True)
+        self._set_cable(True)
+        self._track_hook_point()
+
+    def release_cable(self) -> None:
+        """Detach the cable now (bypassing the hook geometry)."""
+        self.hook.reset(False)
+        self._set_cable(False)
+        self._track_hook_point()
+
+    def _track_hook_point(self) -> None:
+        """Start tracking the hook point from the attachment site's current position."""
+        x, y, z = self._p_att_view.tolist()
+        self._prev_att = (x, y, z)
+        self._hook_side = self.hook.side(x, y, z) >= 0.0
+
+    def _set_cable(self, engaged: bool) -> None:
+        # The cable is a spatial tendon limited to [0, l]; disengaged, its limit is turned
+        # off (no constraint row, zero force) and it is not drawn.
+        self.model.tendon_limited[self._cable] = 1 if engaged else 0
+        set_cable_visible(self.model, engaged)
+
+    @property
+    def tension(self) -> float:
+        """Cable tension f_L from ``tendonlimitfrc`` at the start of the last step [N]."""
+        return float(self.sensordata[SENSOR_SLICES["cable_force"]][0])
+
+    @property
+    def cable_length(self) -> float:
+        """Distance anchor-attachment at the start of the last step [m]."""
+        return float(self.sensordata[SENSOR_SLICES["cable_length"]][0])
+
+    @property
+    def lander_forces(self) -> FloatArray:
+        """Normal contact force on each lander at the start of the last step [N]."""
+        return self.sensordata[
+            SENSOR_SLICES["lander0_touch"].start : SENSOR_SLICES["lander3_touch"].stop
+        ].copy()
+
+    @property
+    def frame_contact_force(self) -> float:
+        """Normal force on the hub and rotor guards (a crash when > 0) [N]."""
+        return float(self.sensordata[SENSOR_SLICES["frame_touch"]][0])
+
+    # -- stepping -------------------------------------------------------------------------
+
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` physics steps with the held command.
+
+        Raises
+        ------
+        SimulationError
+            If MuJoCo reports a non-finite or diverging state.
+        """
+        m, d = self.model, self.data
+        ctrl = self._ctrl
+        w, cmd = self._w, self._w_cmd
+        c_f, a = self._c_f, self._alpha
+        hook = self.hook
+        p_att = self._p_att_view
+        warn = self._warnings
+        bad_qacc = _BAD_STATE_WARNINGS[2]
+        nx, ny, nz, n_dot_p0 = self._hook_plane
+        b = self._mean_factor
+        for _ in range(n):
+            if self._spinning_up:
+                w0, w1, w2, w3 = w
+                c0, c1, c2, c3 = cmd
+                # thrust from the exact mean speed over the step, the command held
+                m0, m1, m2 = c0 + (w0 - c0) * b, c1 + (w1 - c1) * b, c2 + (w2 - c2) * b
+                m3 = c3 + (w3 - c3) * b
+                ctrl[:] = [c_f * m0 * m0, c_f * m1 * m1, c_f * m2 * m2, c_f * m3 * m3]
+            mujoco.mj_step(m, d)
+            t_k = self._tick * self.dt
+            self._tick += 1
+            if self._spinning_up:
+                w[0] = c0 + (w0 - c0) * a
+                w[1] = c1 + (w1 - c1) * a
+                w[2] = c2 + (w2 - c2) * a
+                w[3] = c3 + (w3 - c3) * a
+                # Settled (1e-12 w_max): hold exactly, skip updates until the next command.
+                if (
+                    abs(w[0] - c0) + abs(w[1] - c1) + abs(w[2] - c2) + abs(w[3] - c3)
+                ) < self._settle_tol:
+                    w[:] = cmd
+                    ctrl[:] = [c_f * c0 * c0, c_f * c1 * c1, c_f * c2 * c2, c_f * c3 * c3]
+                    self._spinning_up = False
+            # Kinematics in ``data`` refer to t_k after mj_step; a hook crossing found
+            # now takes effect from the next step.
+            x, y, z = p_att.tolist()
+            if x != x or warn[bad_qacc]:  # NaN state or MuJoCo's bad-acceleration flag
+                self._diverged(t_k)
+            side = nx * x + ny * y + nz * z >= n_dot_p0
+            if side != self._hook_side:
+                self._hook_side = side
+                if hook.cross(t_k, self._prev_att, (x, y, z)) is not None:
+                    self._set_cable(hook.engaged)
+            self._prev_att = (x, y, z)
+
+    def _diverged(self, t: float) -> None:
+        names = ("qpos", "qvel", "qacc")
+        bad = [n for n, i in zip(names, _BAD_STATE_WARNINGS, strict=True) if self._warnings[i]]
+        what = f"MuJoCo flagged a bad {', '.join(bad)}" if bad else "non-finite state"
+        raise SimulationError(
+            f"simulation diverged at t = {t:.4f} s ({what}); "
+            "check the commands and the [sim] time step and constraint time constants"
+        )

@@ -1,0 +1,433 @@
+"""Multi-rate closed loop: plant 1 kHz, IMU 1 kHz, mocap 120 Hz (late), control 500 Hz.
+
+Every rate is scheduled on the integer physics tick k (t_k = k dt), so nothing drifts:
+the IMU samples every ``N/f_imu`` ticks, the controller runs every ``N/f_ctrl`` ticks, and
+mocap sample j is taken at the first tick at or after j/f_mocap (exact rational arithmetic,
+so 120 Hz on a 1 kHz plant alternates 8- and 9-tick gaps) and delivered
+``round(latency/dt)`` ticks later. At tick k:
+
+1. the plant steps from t_k to t_{k+1} with the held command (sensors read at t_k);
+2. IMU tick: a sample stamped t_k goes to ``estimator.predict``;
+3. mocap tick: the pose at t_k is measured and queued; due samples go to ``estimator.update``;
+4. control tick: ``estimate()``, ``reference(t_k, est)``, ``controller.update(t_k, est, ref)``;
+   the command is held from t_{k+1} on (one physics step of compute/transport delay, then
+   the motor lag), and one log row is written with everything at t_k.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from tetherland.config import Scenario
+from tetherland.errors import ConfigError, SimulationError, TetherlandError
+from tetherland.geometry import FloatArray
+from tetherland.interfaces import (
+    Command,
+    CommandAware,
+    Controller,
+    Estimator,
+    EventSource,
+    MocapSample,
+    Reference,
+    ReferenceSource,
+    StateEstimate,
+)
+from tetherland.provenance import provenance
+from tetherland.sim.baselines import ConstantReference, TruthEstimator
+from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
+from tetherland.sim.mjcf import SENSOR_SLICES
+from tetherland.sim.plant import Plant, link_state_of
+from tetherland.sim.sensors import Imu, Mocap
+from tetherland.state import RigidBodyState
+
+_NAN3 = np.full(3, np.nan)
+_NAN3.setflags(write=False)
+_NAN4 = np.full(4, np.nan)
+_NAN4.setflags(write=False)
+_NAN7 = np.full(7, np.nan)
+_NAN7.setflags(write=False)
+
+Observer = Callable[[float, Plant], None]
+"""Called at every control tick after the command, with (t_k, plant); e.g. a video recorder."""
+
+
+def _ticks(rate_hz: float, steps_per_second: int, what: str) -> int:
+    n = steps_per_second / rate_hz
+    if abs(n - round(n)) > 1e-9 * n or round(n) < 1:
+        raise ConfigError(
+            f"{what} = {rate_hz:g} Hz must divide the physics rate {steps_per_second} Hz "
+            "(an integer number of physics steps per sample)"
+        )
+    return round(n)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """Integer-tick schedule of every rate (validated against the physics rate).
+
+    Attributes
+    ----------
+    steps_per_second : int
+        Physics rate N = 1/dt [Hz].
+    imu_every, control_every : int
+        Physics ticks per IMU sample and per control update.
+    mocap_rate : Fraction
+        Mocap rate as an exact fraction [Hz].
+    mocap_latency_ticks : int
+        Mocap delivery delay in physics ticks.
+    """
+
+    steps_per_second: int
+    imu_every: int
+    control_every: int
+    mocap_rate: Fraction
+    mocap_latency_ticks: int
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> Schedule:
+        N = scenario.sim.steps_per_second
+        mocap = scenario.sensors.mocap
+        if mocap.rate_hz > N:
+            raise ConfigError(
+                f"sensors.mocap.rate_hz = {mocap.rate_hz:g} Hz exceeds the physics rate {N} Hz"
+            )
+        return cls(
+            steps_per_second=N,
+            imu_every=_ticks(scenario.sensors.imu.rate_hz, N, "sensors.imu.rate_hz"),
+            control_every=_ticks(scenario.controller.rate_hz, N, "controller.rate_hz"),
+            mocap_rate=Fraction(mocap.rate_hz).limit_denominator(10_000),
+            mocap_latency_ticks=round(mocap.latency * N),
+        )
+
+    def mocap_tick(self, j: int) -> int:
+        """Physics tick of mocap sample j: the first tick at or after j / f_mocap."""
+        num = j * self.steps_per_second * self.mocap_rate.denominator
+        return -(-num // self.mocap_rate.numerator)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "physics_hz": self.steps_per_second,
+            "imu_hz": self.steps_per_second / self.imu_every,
+            "control_hz": self.steps_per_second / self.control_every,
+            "mocap_hz": float(self.mocap_rate),
+            "mocap_latency_s": self.mocap_latency_ticks / self.steps_per_second,
+        }
+
+
+class Runner:
+    """Runs a controller, an estimator and a reference source against the plant.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Everything physical, the sensor settings and all rates.
+    controller : Controller
+    estimator : Estimator, optional
+        Default: :class:`TruthEstimator` (the ground truth at each control tick, with the
+        true cable tension, and the true link state while the cable is engaged).
+    reference : ReferenceSource, optional
+        Default: hold the initial position in free flight.
+    seed : int
+        Seed of the sensor noise (IMU and mocap draw from independent child streams).
+    plant : Plant, optional
+        Reuse an existing plant (it is reset at each :meth:`run`).
+    diagnostic_keys : sequence of str
+        ``Command.diagnostics`` entries to record as ``diag.<key>`` columns.
+    observers : sequence of callables
+        Called as ``observer(t_k, plant)`` after every control tick.
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        controller: Controller,
+        *,
+        estimator: Estimator | None = None,
+        reference: ReferenceSource | None = None,
+        seed: int = 0,
+        plant: Plant | None = None,
+        diagnostic_keys: Sequence[str] = (),
+        observers: Sequence[Observer] = (),
+    ) -> None:
+        if not isinstance(controller, Controller):
+            raise TypeError(f"{type(controller).__name__} does not implement Controller.update")
+        if estimator is not None and not isinstance(estimator, Estimator):
+            raise TypeError(f"{type(estimator).__name__} does not implement the Estimator protocol")
+        if reference is not None and not isinstance(reference, ReferenceSource):
+            raise TypeError(f"{type(reference).__name__} does not implement ReferenceSource")
+        if plant is not None and plant.scenario != scenario:
+            raise ValueError("the plant was built for another scenario than the runner's")
+        self.scenario = scenario
+        self.schedule = Schedule.from_scenario(scenario)
+        self.plant = Plant(scenario) if plant is None else plant
+        self.controller = controller
+        self.estimator = TruthEstimator(self._truth_estimate) if estimator is None else estimator
+        self.reference = reference
+        self.seed = int(seed)
+        self.diagnostic_keys = tuple(diagnostic_keys)
+        self.observers = tuple(observers)
+        self._snap = np.zeros(13)  # [qpos (7), qvel (6)] at the control tick
+        self._t_snap = 0.0
+        geo = self.plant.layout.geometry
+        self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+        self._p_A, self._R_WA = geo.p_A, geo.R_WA
+        self._cable_force_index = SENSOR_SLICES["cable_force"].start
+        self._provenance: dict[str, Any] | None = None
+
+    def _truth_estimate(self) -> StateEstimate:
+        """Ground truth at the current tick; the link state only while the cable is engaged."""
+        s = self._snap.copy()
+        plant = self.plant
+        engaged = plant.hook.engaged
+        return StateEstimate(
+            t=self._t_snap,
+            body=RigidBodyState(s[0:3], s[7:10], s[3:7], s[10:13]),
+            link=link_state_of(s, self._r_att, self._p_A, self._R_WA) if engaged else None,
+            tension=plant.sensordata[self._cable_force_index].item(),
+        )
+
+    def run(
+        self,
+        duration: float,
+        *,
+        initial_state: RigidBodyState | None = None,
+        rotor_speeds: FloatArray | None = None,
+        cable_engaged: bool = False,
+        rng: np.random.Generator | None = None,
+    ) -> SimLog:
+        """Simulate ``duration`` seconds (or until the reference asks to terminate).
+
+        Parameters
+        ----------
+        duration
+            Simulated time [s]; rounded down to whole control periods.
+        initial_state
+            Vehicle state at t = 0 (default: on the start pad).
+        rotor_speeds
+            Initial rotor speeds and held command (default: stopped) [rad/s].
+        cable_engaged
+            Start hooked.
+        rng
+            Generator for the sensor noise (default: ``numpy.random.default_rng(seed)``).
+
+        Returns
+        -------
+        SimLog
+            One row per control tick; ``log.status`` tells how the run ended.
+        """
+        if not (duration > 0 and math.isfinite(duration)):
+            raise ValueError(f"duration must be a positive number of seconds, got {duration}")
+        sc, sched, plant = self.scenario, self.schedule, self.plant
+        plant.reset(initial_state, rotor_speeds=rotor_speeds, cable_engaged=cable_engaged)
+        seeded = rng is None
+        rng = np.random.default_rng(self.seed) if rng is None else rng
+        rng_imu, rng_mocap = rng.spawn(2)
+        imu = Imu(sc.sensors.imu, rng_imu, sc.sensors.noise_scale)
+        mocap = Mocap(sc.sensors.mocap, rng_mocap, sc.sensors.noise_scale)
+        reference = self.reference
+        if reference is None:
+            reference = ConstantReference(p_W=plant.qpos[0:3].copy())
+        estimator, controller = self.estimator, self.controller
+        command_aware = isinstance(estimator, CommandAware)
+
+        n_ctrl = sched.control_every
+        n_ticks = round(duration * sched.steps_per_second) // n_ctrl * n_ctrl
+        columns = BASE_COLUMNS + diagnostic_columns(self.diagnostic_keys)
+        writer = LogWriter(columns, n_ticks // n_ctrl)
+        dt = plant.dt
+        sd = plant.sensordata
+        imu_truth = sd[0:6]
+        sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["frame_touch"].stop]
+        qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
+        rotor_buf, bias_buf, scalars = np.zeros(8), np.zeros(6), np.zeros(9)
+        imu_y = np.full(6, np.nan)
+        mocap_pq = _NAN7.copy()
+        mocap_t, mocap_valid = math.nan, math.nan
+        queue: deque[tuple[int, MocapSample]] = deque()
+        j_mocap, next_mocap = 0, 0
+        imu_every, lat = sched.imu_every, sched.mocap_latency_ticks
+        diag_keys = self.diagnostic_keys
+
+        status, message, k = RunStatus.COMPLETED, "", 0
+        # Bound methods and views as locals: this loop runs at the physics rate.
+        step, imu_sample, predict, update = (
+            plant.step,
+            imu.sample,
+            estimator.predict,
+            estimator.update,
+        )
+        estimate, get_reference, control = (
+            estimator.estimate,
+            reference.reference,
+            controller.update,
+        )
+        command, mocap_measure, mocap_tick = plant.command, mocap.measure, sched.mocap_tick
+        write_row, rotor_state_into, bias_into = (
+            self._write_row,
+            plant.rotor_state_into,
+            imu.bias_into,
+        )
+        observers = self.observers
+        row_buffers = (snap, sd[0:3], sd_rest, rotor_buf, imu_y, bias_buf, mocap_pq)
+        wall0 = time.perf_counter()
+        try:
+            for k in range(n_ticks):
+                t_k = k * dt
+                control_tick = k % n_ctrl == 0
+                if control_tick or k == next_mocap:
+                    snap[0:7] = qpos
+                    snap[7:13] = qvel
+                    self._t_snap = t_k
+                    if control_tick:
+                        rotor_state_into(rotor_buf)
+                step()
+                if k % imu_every == 0:
+                    sample = imu_sample(t_k, imu_truth)
+                    predict(sample)
+                if k == next_mocap:
+                    t_del = k + lat
+                    queue.append((t_del, mocap_measure(t_k, snap[0:3], snap[3:7], t_del * dt)))
+                    j_mocap += 1
+                    next_mocap = mocap_tick(j_mocap)
+                if queue and queue[0][0] <= k:
+                    while queue and queue[0][0] <= k:
+                        m = queue.popleft()[1]
+                        update(m)
+                    mocap_t, mocap_valid = m.t_measured, float(m.valid)
+                    mocap_pq[0:3] = m.p_W
+                    mocap_pq[3:7] = m.q_WB
+                if not control_tick:
+                    continue
+                est = estimate()
+                ref = get_reference(t_k, est)
+                cmd = control(t_k, est, ref)
+                command(cmd.rotor_speeds)
+                if command_aware:
+                    estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
+                imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
+                imu_y[3:6] = sample.omega_B
+                bias_into(bias_buf)
+                write_row(
+                    writer, scalars, t_k, est, ref, cmd, plant, mocap_t, mocap_valid,
+                    row_buffers, diag_keys,
+                )  # fmt: skip
+                for observer in observers:
+                    observer(t_k, plant)
+                if ref.terminate:
+                    status = RunStatus.TERMINATED
+                    message = f"reference terminated at t = {t_k:.3f} s"
+                    break
+        except SimulationError as err:
+            status, message = RunStatus.DIVERGED, str(err)
+        except TetherlandError as err:
+            status, message = RunStatus.FAILED, f"t = {k * dt:.4f} s: {err}"
+        wall = time.perf_counter() - wall0
+        return writer.finish(
+            self._metadata(status, message, k, wall, reference, seeded),
+            p_A=self._p_A,
+            R_WA=self._R_WA,
+            r_att_B=self._r_att,
+        )
+
+    @staticmethod
+    def _write_row(
+        writer: LogWriter,
+        scalars: FloatArray,
+        t_k: float,
+        est: StateEstimate,
+        ref: Reference,
+        cmd: Command,
+        plant: Plant,
+        mocap_t: float,
+        mocap_valid: float,
+        buffers: tuple[FloatArray, ...],
+        diag_keys: tuple[str, ...],
+    ) -> None:
+        snap, sf_true, sd_rest, rotor_buf, imu_y, bias_buf, mocap_pq = buffers
+        scalars[:] = [
+            t_k,
+            ref.phase,
+            int(ref.mode),
+            int(plant.hook.engaged),
+            mocap_t,
+            mocap_valid,
+            math.nan if est.tension is None else est.tension,
+            ref.yaw,
+            math.nan if cmd.thrust is None else cmd.thrust,
+        ]
+        b = est.body
+        parts = [
+            scalars,
+            snap,
+            sf_true,
+            sd_rest,
+            rotor_buf,
+            imu_y,
+            bias_buf,
+            mocap_pq,
+            b.p_W,
+            b.v_W,
+            b.q_WB,
+            b.omega_B,
+            _NAN3 if est.accel_bias_B is None else est.accel_bias_B,
+            _NAN3 if est.gyro_bias_B is None else est.gyro_bias_B,
+            _NAN4 if est.link is None else est.link.as_array(),
+            _NAN3 if ref.p_W is None else ref.p_W[0],
+            _NAN4 if ref.output is None else ref.output[0],
+            cmd.rotor_speeds,
+            _NAN3 if cmd.torque_B is None else cmd.torque_B,
+        ]
+        if diag_keys:
+            d = cmd.diagnostics
+            parts.append(np.array([d.get(key, math.nan) for key in diag_keys]))
+        writer.write(parts)
+
+    def _metadata(
+        self,
+        status: RunStatus,
+        message: str,
+        k: int,
+        wall: float,
+        reference: ReferenceSource,
+        seeded: bool,
+    ) -> dict[str, Any]:
+        events = [dict(e.as_dict(), source="hook") for e in self.plant.hook.events]
+        if isinstance(reference, EventSource):
+            events += [e.as_dict() for e in reference.events]
+        events.sort(key=lambda e: float(e["t"]))  # type: ignore[arg-type]
+        sim_time = (k + 1) * self.plant.dt
+        if self._provenance is None:  # git and package metadata: once per runner
+            self._provenance = provenance(self.scenario, seed=self.seed)
+        prov = dict(self._provenance)
+        prov["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
+        prov["seed"] = self.seed if seeded else None
+        if not seeded:
+            prov["rng"] = "generator passed to Runner.run"
+        return {
+            "provenance": prov,
+            "status": status.value,
+            "message": message,
+            "rates": self.schedule.as_dict(),
+            "events": events,
+            "sim_time_s": sim_time,
+            "wall_time_s": wall,
+            "real_time_factor": sim_time / wall if wall > 0 else math.inf,
+            "controller": type(self.controller).__name__,
+            "estimator": type(self.estimator).__name__,
+            "reference": type(reference).__name__,
+            "anchor_W": self._p_A,
+            "R_WA": self._R_WA,
+            "cable_attachment_B": self._r_att,
+        }
+
+
+__all__ = ["Observer", "Runner", "Schedule"]

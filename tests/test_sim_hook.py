@@ -1,0 +1,132 @@
+"""Hook model: engage on a correct approach, miss when offset, release on the way back."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tetherland import GRAVITY
+from tetherland.config import load_scenario
+from tetherland.errors import ConfigError
+from tetherland.sim.hook import Hook, HookEventKind
+from tetherland.sim.plant import Plant
+from tetherland.state import RigidBodyState
+
+
+def test_hook_state_machine_unit():
+    hook = Hook([0, 0, 0], [0, 0, -1], capture_radius=0.1, hook_drop=0.0, miss_radius=1.0)
+    hook.update(0.0, 0.05, 0.0, 0.2)
+    assert hook.update(0.1, 0.05, 0.0, -0.2) is HookEventKind.ENGAGED  # down through the disk
+    assert hook.events[-1].distance == pytest.approx(0.05)
+    np.testing.assert_allclose(hook.events[-1].point_W, [0.05, 0, 0], atol=1e-15)
+    assert hook.update(0.2, 0.5, 0.0, -0.2) is None  # moving around below: still engaged
+    assert hook.update(0.3, 0.5, 0.0, 0.2) is None  # back up outside the disk: still hooked
+    assert hook.engaged
+    assert hook.update(0.4, 0.0, 0.0, -0.1) is None  # down again (forward) while engaged
+    assert hook.update(0.5, 0.0, 0.0, 0.1) is HookEventKind.RELEASED  # back up through it
+    assert not hook.engaged
+    assert hook.update(0.6, 0.5, 0.0, -0.1) is HookEventKind.MISSED  # down, 0.5 m off
+    assert hook.update(0.7, 2.0, 0.0, 0.1) is None
+    assert hook.update(0.8, 2.0, 0.0, -0.1) is None  # farther than miss_radius: not reported
+    assert [e.kind for e in hook.events] == [
+        HookEventKind.ENGAGED,
+        HookEventKind.RELEASED,
+        HookEventKind.MISSED,
+    ]
+
+
+def test_hook_drop_lowers_the_hook_point():
+    hook = Hook([0, 0, 0], [0, 0, -1], capture_radius=0.1, hook_drop=0.5)
+    hook.update(0.0, 0.0, 0.0, 0.6)  # hook point at 0.1 above the anchor
+    assert hook.update(0.1, 0.0, 0.0, 0.45) is HookEventKind.ENGAGED
+
+
+def _descend_over_anchor(plant: Plant, offset: float, v_down: float = 0.3) -> None:
+    """Hover speeds (constant velocity), hook point 0.1 m above the anchor plane, offset
+    ``offset`` along y_A, moving down at ``v_down``."""
+    sc = plant.scenario
+    geo = plant.layout.geometry
+    hook0 = geo.p_A + offset * geo.R_WA[:, 1] + np.array([0.0, 0.0, 0.1])
+    p_com = (
+        hook0 + np.array([0.0, 0.0, sc.tether.hook_drop]) - np.asarray(sc.vehicle.cable_attachment)
+    )
+    start = RigidBodyState(
+        p_com, np.array([0.0, 0.0, -v_down]), plant.start_state().q_WB, np.zeros(3)
+    )
+    w = math.sqrt(sc.vehicle.mass * GRAVITY / 4 / sc.vehicle.thrust_coefficient)
+    plant.reset(start, rotor_speeds=np.full(4, w))
+    plant.step(round(0.2 / v_down / plant.dt))  # 0.1 m through the capture plane
+
+
+@pytest.fixture(scope="module")
+def plant():
+    return Plant(load_scenario("slope50"))
+
+
+def test_correct_approach_engages_and_the_cable_then_holds(plant):
+    sc = plant.scenario
+    _descend_over_anchor(plant, offset=0.03)
+    assert plant.cable_engaged
+    (event,) = plant.hook.events
+    assert event.kind is HookEventKind.ENGAGED and event.distance == pytest.approx(0.03, abs=1e-6)
+    assert plant.tension == 0.0  # slack: engaged at 0.5 m < l from the anchor
+    assert plant.frame_contact_force == 0.0 and not np.any(plant.lander_forces)
+    # Fly away sideways: the cable stops the vehicle at length l.
+    s = plant.state()
+    plant.set_state(RigidBodyState(s.p_W, np.array([0.0, 0.6, 0.0]), s.q_WB, s.omega_B))
+    longest, peak = 0.0, 0.0
+    for _ in range(1500):
+        plant.step()
+        longest, peak = max(longest, plant.cable_length), max(peak, plant.tension)
+    assert peak > 10.0  # the cable snapped taut
+    assert longest < sc.tether.length + 2e-3  # stretch of the compliant limit only
+    assert (
+        abs(np.linalg.norm(plant.attachment_point() - plant.layout.geometry.p_A))
+        < sc.tether.length + 1e-3
+    )
+
+
+def test_offset_beyond_capture_radius_misses(plant):
+    _descend_over_anchor(plant, offset=0.15)  # capture radius 0.1 m
+    assert not plant.cable_engaged
+    (event,) = plant.hook.events
+    assert event.kind is HookEventKind.MISSED and event.distance == pytest.approx(0.15, abs=1e-6)
+    # disengaged cable: flying far away produces no tension
+    s = plant.state()
+    plant.set_state(RigidBodyState(s.p_W, np.array([0.0, 2.0, 0.0]), s.q_WB, s.omega_B))
+    plant.step(1000)
+    assert np.linalg.norm(plant.attachment_point() - plant.layout.geometry.p_A) > 1.5
+    assert plant.tension == 0.0
+
+
+def test_flying_back_out_the_same_way_releases(plant):
+    _descend_over_anchor(plant, offset=0.0)
+    assert plant.cable_engaged
+    s = plant.state()
+    plant.set_state(RigidBodyState(s.p_W, -s.v_W, s.q_WB, s.omega_B))  # reverse the path
+    plant.step(700)
+    assert not plant.cable_engaged
+    assert [e.kind for e in plant.hook.events] == [HookEventKind.ENGAGED, HookEventKind.RELEASED]
+    assert plant.model.tendon_limited[0] == 0
+
+
+def test_hook_settings_are_validated():
+    with pytest.raises(ConfigError, match="hook_drop"):
+        load_scenario("slope50", ["tether.hook_drop=0.95"])
+    with pytest.raises(ConfigError, match="approach_direction"):
+        load_scenario("slope50", ["tether.approach_direction=[0,0,0]"])
+
+
+def test_teleporting_is_not_a_crossing(plant):
+    """set_state/reset restart the hook tracking: jumping through the disk does not hook."""
+    geo = plant.layout.geometry
+    sc = plant.scenario
+    above = geo.p_A + np.array([0.0, 0.0, sc.tether.hook_drop + 0.2])
+    below = geo.p_A + np.array([0.0, 0.0, sc.tether.hook_drop - 0.05])
+    q = plant.start_state().q_WB
+    plant.reset(RigidBodyState.at_rest(above, q))
+    plant.set_state(RigidBodyState.at_rest(below, q))
+    plant.step(2)
+    assert not plant.cable_engaged and not plant.hook.events

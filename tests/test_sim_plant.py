@@ -1,0 +1,207 @@
+"""The MuJoCo plant against first principles: hover, free fall, rotors, allocation."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from tetherland import GRAVITY
+from tetherland.config import load_scenario
+from tetherland.errors import SimulationError
+from tetherland.models.quadrotor import RotorLayout
+from tetherland.rotations import quat_to_rotmat
+from tetherland.sim.mjcf import SceneLayout, build_mjcf
+from tetherland.sim.plant import Plant
+from tetherland.state import RigidBodyState
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_scenario("slope50")
+
+
+@pytest.fixture
+def plant(scenario):
+    return Plant(scenario)
+
+
+def in_air(plant: Plant, height: float = 1.5) -> RigidBodyState:
+    s = plant.start_state()
+    return RigidBodyState.at_rest(s.p_W + np.array([0.0, 0.0, height]), s.q_WB)
+
+
+def hover_speed(scenario) -> float:
+    return math.sqrt(scenario.vehicle.mass * GRAVITY / 4 / scenario.vehicle.thrust_coefficient)
+
+
+def test_mjcf_compiles_for_every_builtin_scenario():
+    import mujoco
+
+    for name in ("flat", "slope50", "pipe60", "steep80"):
+        sc = load_scenario(name)
+        model = mujoco.MjModel.from_xml_string(build_mjcf(sc))
+        body = model.body("vehicle")
+        assert body.mass[0] == pytest.approx(sc.vehicle.mass)
+        np.testing.assert_allclose(body.inertia, sc.vehicle.inertia)
+        np.testing.assert_allclose(body.ipos, 0.0, atol=1e-12)  # body frame at the CoM
+        assert model.nu == 4 and model.ntendon == 1
+        assert model.tendon_range[0, 1] == pytest.approx(sc.tether.length)
+
+
+def test_lander_tips_form_the_landers_plane(plant, scenario):
+    """Lowest points of the four lander spheres lie h_R below the CoM, at (+-w, +-w)."""
+    v = scenario.vehicle
+    tips = []
+    for i in range(4):
+        g = plant.model.geom(f"lander{i}")
+        tips.append(g.pos - np.array([0.0, 0.0, g.size[0]]))
+    tips = np.array(tips)
+    np.testing.assert_allclose(tips[:, 2], -v.h_R, atol=1e-12)
+    np.testing.assert_allclose(np.abs(tips[:, :2]), v.lander_half_width, atol=1e-12)
+
+
+def test_hover_speeds_keep_the_vehicle_still(plant, scenario):
+    """Rotor speeds for m g, lag settled: no drift over 2 s (the plant has no disturbances)."""
+    start = in_air(plant)
+    w = hover_speed(scenario)
+    plant.reset(start, rotor_speeds=np.full(4, w))
+    plant.step(2000)
+    s = plant.state()
+    assert np.linalg.norm(s.p_W - start.p_W) < 1e-6
+    assert np.linalg.norm(s.omega_B) < 1e-9
+    np.testing.assert_allclose(plant.sensordata[0:3], [0, 0, GRAVITY], atol=1e-9)
+
+
+def test_free_fall_matches_g(plant):
+    """Rotors stopped: v_z = -g t exactly; z = -g t^2/2 up to the integrator's g dt t/2."""
+    start = in_air(plant)
+    plant.reset(start)
+    n = 300
+    plant.step(n)
+    t, dt = plant.time, plant.dt
+    s = plant.state()
+    assert s.v_W[2] == pytest.approx(-GRAVITY * t, abs=1e-9)
+    # semi-implicit Euler: z_n = z_0 - g dt^2 n (n + 1) / 2
+    assert s.p_W[2] - start.p_W[2] == pytest.approx(-GRAVITY * dt * dt * n * (n + 1) / 2, abs=1e-9)
+    assert abs(s.p_W[2] - start.p_W[2] + 0.5 * GRAVITY * t * t) < 0.5 * GRAVITY * dt * t + 1e-9
+    np.testing.assert_allclose(plant.sensordata[0:3], 0.0, atol=1e-9)  # specific force
+
+
+def test_motor_lag_is_first_order_and_exact(plant, scenario):
+    tau = scenario.vehicle.motor_time_constant
+    w_cmd = 600.0
+    plant.reset(in_air(plant))
+    plant.command(np.full(4, w_cmd))
+    n = round(tau / plant.dt)
+    plant.step(n)
+    expected = w_cmd * (1 - math.exp(-n * plant.dt / tau))
+    np.testing.assert_allclose(plant.rotor_speeds, expected, rtol=1e-12)
+    np.testing.assert_allclose(
+        plant.rotor_thrusts, scenario.vehicle.thrust_coefficient * expected**2
+    )
+
+
+def test_speed_command_is_clamped_to_f_max_but_not_to_f_min(plant, scenario):
+    v = scenario.vehicle
+    plant.reset(in_air(plant), rotor_speeds=np.full(4, 1e6))
+    np.testing.assert_allclose(plant.rotor_thrusts, v.f_max, rtol=1e-12)
+    plant.reset(in_air(plant), rotor_speeds=[-5.0, 0.0, 0.0, 0.0])
+    assert np.all(plant.rotor_thrusts == 0.0)  # motors off: zero thrust, below f_min > 0
+
+
+def test_motors_off_stops_the_thrust(plant, scenario):
+    plant.reset(in_air(plant, 3.0), rotor_speeds=np.full(4, hover_speed(scenario)))
+    plant.command(np.zeros(4))
+    plant.step(500)  # 0.5 s = 16.7 tau_m
+    assert np.all(plant.rotor_thrusts < 1e-12 * scenario.vehicle.f_max)
+    plant.step(1)
+    np.testing.assert_allclose(plant.sensordata[0:3], 0.0, atol=1e-9)  # falling freely
+
+
+def test_rotor_forces_match_the_allocation_matrix(plant, scenario):
+    """Angular acceleration from unequal rotor thrusts equals J^-1 (Gamma f)[1:4] (6.19)."""
+    layout = RotorLayout.from_config(scenario.vehicle)
+    f = np.array([2.0, 3.0, 1.0, 2.5])
+    plant.reset(in_air(plant), rotor_speeds=layout.speed_from_thrust(f))
+    plant.step(1)
+    u = layout.allocation @ f
+    J = np.asarray(scenario.vehicle.inertia)
+    assert np.all(np.abs(u[1:]) > 1e-3)  # roll, pitch and yaw torques all excited
+    np.testing.assert_allclose(plant.state().omega_B, u[1:] / J * plant.dt, rtol=1e-9, atol=1e-15)
+    # specific force: total thrust along z_B over the mass
+    np.testing.assert_allclose(
+        plant.sensordata[0:3], [0, 0, u[0] / scenario.vehicle.mass], rtol=1e-9
+    )
+
+
+def test_accelerometer_measures_contact_and_cable_not_gravity(scenario):
+    """Landed, motors off, cable holding: specific force = -g expressed in F_B (a = 0)."""
+    plant = Plant(scenario)
+    plant.reset(plant.landed_state(), cable_engaged=True)
+    plant.step(3000)
+    R_WB = plant.state().R_WB
+    np.testing.assert_allclose(plant.sensordata[0:3], R_WB.T @ [0, 0, GRAVITY], atol=2e-3)
+
+
+def test_nan_command_is_refused(plant):
+    with pytest.raises(SimulationError, match="non-finite"):
+        plant.command([np.nan, 0, 0, 0])
+    with pytest.raises(SimulationError, match="4 rotor"):
+        plant.command([1.0, 2.0])
+
+
+def test_divergence_raises_instead_of_resetting(plant, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warning to MUJOCO_LOG.TXT in the cwd
+    plant.reset(in_air(plant))
+    plant.data.qvel[3] = 1e300  # absurd spin: MuJoCo flags a bad state
+    with pytest.raises(SimulationError, match="diverged"):
+        plant.step(5)
+
+
+def test_scene_layout_places_ground_and_start_pad():
+    sc = load_scenario("slope50")
+    lay = SceneLayout.from_scenario(sc)
+    surf = lay.geometry.surface
+    foot = surf.origin + sc.surface.extent * surf.x_S
+    assert lay.ground_z == pytest.approx(foot[2])
+    assert lay.start_position[2] == pytest.approx(lay.ground_z)
+    assert surf.height(lay.start_position) > 0.5  # beyond the foot: outside the slope
+    plant = Plant(sc)
+    plant.reset()  # on the start pad, motors off: rests on its landers
+    plant.step(500)
+    assert np.all(plant.lander_forces > 0.5)
+    assert np.linalg.norm(plant.state().v_W) < 1e-3
+
+
+def test_pipe_top_line_runs_through_the_surface_origin_along_x_S():
+    sc = load_scenario("pipe60")
+    plant = Plant(sc)
+    surf = plant.layout.geometry.surface
+    g = plant.model.geom("surface")
+    assert g.type[0] == int(mujoco.mjtGeom.mjGEOM_CYLINDER)
+    R = sc.surface.pipe_radius
+    axis = quat_to_rotmat(g.quat)[:, 2]
+    assert abs(axis @ surf.x_S) == pytest.approx(1.0)
+    # the origin is on the pipe, on its top line (the point with normal z_S)
+    rel = surf.origin - g.pos
+    radial = rel - (rel @ axis) * axis
+    assert np.linalg.norm(radial) == pytest.approx(R)
+    np.testing.assert_allclose(radial / R, surf.z_S, atol=1e-12)
+
+
+def test_thrust_impulse_follows_the_continuous_motor_lag(plant, scenario):
+    """Spin-up from rest: v_z(T) = 4 c_f/m int_0^T w(t)^2 dt - g T with
+    w(t) = w_c (1 - exp(-t/tau)), the command acting from t = 0 (within 0.1 %; measured
+    0.02 %: the plant applies the exact mean speed of each step)."""
+    v = scenario.vehicle
+    tau, c_f, w_c, T = v.motor_time_constant, v.thrust_coefficient, 700.0, 0.1
+    plant.reset(in_air(plant))
+    plant.command(np.full(4, w_c))
+    plant.step(round(T / plant.dt))
+    e1, e2 = math.exp(-T / tau), math.exp(-2 * T / tau)
+    integral = w_c**2 * (T - 2 * tau * (1 - e1) + 0.5 * tau * (1 - e2))
+    expected = 4 * c_f / v.mass * integral - GRAVITY * T
+    assert plant.state().v_W[2] == pytest.approx(expected, rel=1e-3)
