@@ -1,9 +1,11 @@
 """State and cable-tension estimation (DESIGN.md section 8)."""
 
+from tetherland.estimation.estimator import UkfEstimator
 from tetherland.estimation.tension import (
     MotorLagThrust,
     TensionEstimate,
     TensionEstimator,
+    ThresholdDwell,
     tension_from_forces,
 )
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
@@ -13,7 +15,9 @@ __all__ = [
     "NavState",
     "TensionEstimate",
     "TensionEstimator",
+    "ThresholdDwell",
     "Ukf",
+    "UkfEstimator",
     "UkfNoise",
     "initial_covariance",
     "tension_from_forces",

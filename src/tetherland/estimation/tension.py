@@ -53,6 +53,31 @@ class TensionEstimate:
     taut: bool
 
 
+class ThresholdDwell:
+    """A value counts as "on" once it has stayed above ``threshold`` for ``dwell`` seconds.
+
+    The supervisor's rule for a taut cable (DESIGN.md section 8); any drop below the
+    threshold restarts the timer.
+    """
+
+    def __init__(self, threshold: float, dwell: float):
+        self.threshold = threshold
+        self.dwell = dwell
+        self._above_since: float | None = None
+
+    def reset(self) -> None:
+        self._above_since = None
+
+    def update(self, t: float, value: float) -> bool:
+        """Feed ``value`` at time ``t`` [s]; return whether the rule holds now."""
+        if value > self.threshold:
+            if self._above_since is None:
+                self._above_since = t
+        else:
+            self._above_since = None
+        return self._above_since is not None and t - self._above_since >= self.dwell - 1e-12
+
+
 class TensionEstimator:
     """Filtered cable-tension estimate and the "taut" rule of the supervisor.
 
@@ -72,16 +97,15 @@ class TensionEstimator:
         if mass <= 0 or threshold < 0 or dwell < 0 or time_constant < 0:
             raise ValueError("mass > 0, threshold >= 0, dwell >= 0, time_constant >= 0 required")
         self.mass = mass
-        self.threshold = threshold
-        self.dwell = dwell
         self.time_constant = time_constant
+        self.rule = ThresholdDwell(threshold, dwell)
         self.reset()
 
     def reset(self) -> None:
         """Forget the filter state and the dwell timer."""
         self._t: float | None = None
         self._filtered = 0.0
-        self._above_since: float | None = None
+        self.rule.reset()
 
     def update(
         self,
@@ -99,13 +123,7 @@ class TensionEstimator:
             a = 1.0 - math.exp(-dt / self.time_constant)
             self._filtered += a * (raw - self._filtered)
         self._t = t
-        if self._filtered > self.threshold:
-            if self._above_since is None:
-                self._above_since = t
-        else:
-            self._above_since = None
-        taut = self._above_since is not None and t - self._above_since >= self.dwell - 1e-12
-        return TensionEstimate(raw, self._filtered, taut)
+        return TensionEstimate(raw, self._filtered, self.rule.update(t, self._filtered))
 
     @property
     def value(self) -> float:
