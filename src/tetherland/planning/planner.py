@@ -1,0 +1,315 @@
+"""The landing/takeoff planner: OCP (6.21) or spline, verified, with a rich result.
+
+>>> from tetherland.config import load_scenario
+>>> from tetherland.planning import Planner, Maneuver
+>>> planner = Planner()                       # keeps compiled solvers between calls
+>>> result = planner.plan(load_scenario("slope50"), Maneuver.LANDING)
+>>> result.status.name, result.trajectory.duration
+('SOLVED', 4.0)
+
+A result is :attr:`PlanStatus.SOLVED` only when its trajectory passed
+:func:`~tetherland.planning.verify.verify` (the fine re-simulation meets the final
+conditions, thrust and tension bounds); otherwise ``trajectory`` is None and
+``message`` says why.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+
+from tetherland.config import Scenario
+from tetherland.errors import TetherlandError
+from tetherland.geometry import LandingGeometry
+from tetherland.planning.maneuver import Maneuver, ManeuverSpec, StateForm, build_ocp, precheck
+from tetherland.planning.ocp import OcpProblem
+from tetherland.planning.solvers import (
+    InitialGuess,
+    OcpSolution,
+    OcpSolver,
+    SolverName,
+    SolverSettings,
+    SolveStatus,
+)
+from tetherland.planning.trajectory import (
+    PolynomialTrajectory,
+    ShootingTrajectory,
+    Trajectory,
+    TrajectoryMeta,
+)
+from tetherland.planning.transcription import MultipleShooting
+from tetherland.planning.verify import Tolerances, Verification, verify
+
+Method = Literal["ocp", "spline"]
+
+
+class PlanningError(TetherlandError):
+    """A plan was requested but could not be produced (one-line message)."""
+
+
+class PlanStatus(enum.Enum):
+    """Outcome of a planning request."""
+
+    SOLVED = "solved"
+    """A verified trajectory is available."""
+    INFEASIBLE = "infeasible"
+    """The maneuver cannot be done within the limits (pre-check, solver or spline check)."""
+    MAX_ITER = "max_iter"
+    """The solver hit its iteration limit."""
+    FAILED = "failed"
+    """The solver failed, or its solution did not pass the re-simulation check."""
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """What :meth:`Planner.plan` returns.
+
+    Attributes
+    ----------
+    status : PlanStatus
+    message : str
+        Why (one line); ``"ok"`` when solved.
+    maneuver : Maneuver
+    method : {"ocp", "spline"}
+    solver : str or None
+        NLP solver (ocp only).
+    cost : float or None
+        Optimal cost J (ocp only).
+    solve_time_s : float
+        Wall time of the NLP solve (0 for the spline) [s].
+    build_time_s : float
+        Time spent building the solver for this call (0 when cached) [s].
+    iterations : int
+    trajectory : Trajectory or None
+        Present only when ``status`` is SOLVED.
+    verification : Verification or None
+    solution : OcpSolution or None
+        Raw solver output (also when not solved: for warm starts and diagnosis).
+    spec : ManeuverSpec
+    """
+
+    status: PlanStatus
+    message: str
+    maneuver: Maneuver
+    method: str
+    solver: str | None
+    cost: float | None
+    solve_time_s: float
+    build_time_s: float
+    iterations: int
+    trajectory: Trajectory | None
+    verification: Verification | None
+    solution: OcpSolution | None
+    spec: ManeuverSpec
+
+    @property
+    def success(self) -> bool:
+        return self.status is PlanStatus.SOLVED
+
+    def require(self) -> Trajectory:
+        """The trajectory, or :class:`PlanningError` with the reason."""
+        if self.status is not PlanStatus.SOLVED or self.trajectory is None:
+            raise PlanningError(f"{self.maneuver.value} plan {self.status.value}: {self.message}")
+        return self.trajectory
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready key numbers (``final_error`` etc. are None when unavailable)."""
+        v = self.verification
+        return {
+            "status": self.status.value,
+            "message": self.message,
+            "maneuver": self.maneuver.value,
+            "method": self.method,
+            "solver": self.solver,
+            "solve_time_s": self.solve_time_s,
+            "build_time_s": self.build_time_s,
+            "iterations": self.iterations,
+            "cost": self.cost,
+            "duration_s": self.spec.duration,
+            "final_error": None if v is None else dict(v.final_error),
+            "min_tension_N": None if v is None else v.min_tension,
+            "min_rotor_thrust_N": None if v is None else v.min_rotor_thrust,
+            "max_rotor_thrust_N": None if v is None else v.max_rotor_thrust,
+            "boundary": {
+                "phi_start_deg": math.degrees(self.spec.phi_start),
+                "theta_A_start_deg": math.degrees(self.spec.theta_start),
+                "phi_final_deg": math.degrees(self.spec.phi_final),
+                "theta_A_final_deg": math.degrees(self.spec.theta_final),
+            },
+        }
+
+
+_STATUS = {
+    SolveStatus.INFEASIBLE: PlanStatus.INFEASIBLE,
+    SolveStatus.MAX_ITER: PlanStatus.MAX_ITER,
+    SolveStatus.FAILED: PlanStatus.FAILED,
+}
+
+
+def trajectory_meta(scenario: Scenario, spec: ManeuverSpec) -> TrajectoryMeta:
+    """The :class:`TrajectoryMeta` of a scenario's maneuver."""
+    geo = LandingGeometry.from_scenario(scenario)
+    p = spec.params
+    return TrajectoryMeta(
+        scenario=scenario.name,
+        maneuver=spec.maneuver.value,
+        mass=p.mass,
+        length=p.length,
+        inertia_B=np.asarray(scenario.vehicle.inertia, dtype=float),
+        allocation=p.allocation,
+        heading=p.heading,
+        R_WA=geo.R_WA,
+        p_A=geo.p_A,
+        gravity=p.gravity,
+    )
+
+
+def spline_trajectory(meta: TrajectoryMeta, spec: ManeuverSpec) -> PolynomialTrajectory:
+    """The rest-to-rest polynomial reference between the maneuver's boundary outputs."""
+    return PolynomialTrajectory(
+        meta, spec.duration, (spec.phi_start, spec.phi_final), (spec.theta_start, spec.theta_final)
+    )
+
+
+class Planner:
+    """Plans landing and takeoff trajectories; keeps one compiled solver per structure.
+
+    Parameters
+    ----------
+    form : {"wrench", "rotor"}
+        State coordinates of the OCP (see :func:`build_ocp`).
+    tolerances : Tolerances
+        Acceptance thresholds of the re-simulation check.
+    """
+
+    def __init__(self, form: StateForm = "wrench", tolerances: Tolerances | None = None) -> None:
+        self.form: StateForm = form
+        self.tolerances = tolerances or Tolerances()
+        self._solvers: dict[tuple[MultipleShooting, SolverSettings], OcpSolver] = {}
+
+    def ocp_solver(self, transcription: MultipleShooting, settings: SolverSettings) -> OcpSolver:
+        """The cached :class:`OcpSolver` for these settings."""
+        key = (transcription, settings)
+        if key not in self._solvers:
+            self._solvers[key] = OcpSolver(transcription, settings)
+        return self._solvers[key]
+
+    def problem(
+        self, scenario: Scenario, maneuver: Maneuver | str = Maneuver.LANDING
+    ) -> OcpProblem:
+        """The OCP (6.21) of a scenario's maneuver (for inspection or custom solving)."""
+        return build_ocp(ManeuverSpec.from_scenario(scenario, maneuver), self.form)
+
+    def plan(
+        self,
+        scenario: Scenario,
+        maneuver: Maneuver | str = Maneuver.LANDING,
+        *,
+        method: Method | None = None,
+        solver: SolverName | None = None,
+        warm_start: PlanResult | OcpSolution | None = None,
+    ) -> PlanResult:
+        """Plan ``maneuver`` for ``scenario``.
+
+        Parameters
+        ----------
+        method, solver
+            Override ``scenario.planner.method`` / ``.solver``.
+        warm_start
+            A previous result (or solution) of a problem with the same structure: its
+            nodes (and multipliers with IPOPT) start the solver. Ignored otherwise.
+        """
+        cfg = scenario.planner
+        method = method or cfg.method
+        spec = ManeuverSpec.from_scenario(scenario, maneuver)
+        meta = trajectory_meta(scenario, spec)
+        base = PlanResult(
+            status=PlanStatus.FAILED, message="", maneuver=spec.maneuver, method=method,
+            solver=None, cost=None, solve_time_s=0.0, build_time_s=0.0, iterations=0,
+            trajectory=None, verification=None, solution=None, spec=spec,
+        )  # fmt: skip
+        reasons = precheck(spec)
+        if reasons:
+            return replace(base, status=PlanStatus.INFEASIBLE, message="; ".join(reasons))
+        if method == "spline":
+            traj = spline_trajectory(meta, spec)
+            return self._accept(base, traj, infeasible_if_bad=True)
+        if method != "ocp":
+            raise ValueError(f"method must be 'ocp' or 'spline', got {method!r}")
+        settings = SolverSettings(solver or cfg.solver, cfg.tolerance, cfg.max_iter)
+        transcription = MultipleShooting(cfg.nodes, "rk4", cfg.steps_per_interval)
+        problem = build_ocp(spec, self.form)
+        ocp = self.ocp_solver(transcription, settings)
+        if isinstance(warm_start, PlanResult):
+            warm_start = warm_start.solution
+        guess: InitialGuess | OcpSolution
+        if (
+            warm_start is not None
+            and warm_start.structure_key == problem.structure_key
+            and warm_start.X.shape[0] == transcription.nodes + 1
+            and np.all(np.isfinite(warm_start.X))
+        ):
+            guess = warm_start
+        else:
+            guess = self.initial_guess(meta, spec, transcription.nodes)
+        sol = ocp.solve(problem, guess)
+        base = replace(
+            base, solver=settings.name, cost=sol.cost, solve_time_s=sol.solve_time,
+            build_time_s=sol.build_time, iterations=sol.iterations, solution=sol,
+        )  # fmt: skip
+        if not sol.success:
+            return replace(
+                base,
+                status=_STATUS[sol.status],
+                message=f"{settings.name} did not solve the OCP: {sol.return_status} "
+                f"after {sol.iterations} iterations",
+            )
+        traj = ShootingTrajectory.simulate(
+            meta, sol.times, spec.x_start, self._rotor_inputs(spec, sol)
+        )
+        return self._accept(base, traj, infeasible_if_bad=False)
+
+    def initial_guess(self, meta: TrajectoryMeta, spec: ManeuverSpec, nodes: int) -> InitialGuess:
+        """The spline reference at the nodes, in the OCP's state coordinates (cold start)."""
+        times = np.linspace(0.0, spec.duration, nodes + 1)
+        s = spline_trajectory(meta, spec).sample(times)
+        X = s.states()
+        GM = spec.params.Gamma_M
+        v = s.thrust_accels[:-1] @ GM.T
+        if self.form == "wrench":
+            X = np.column_stack((X[:, :4], s.thrusts @ GM.T, s.thrust_rates @ GM.T))
+        return InitialGuess(X=X, U=v)
+
+    def _rotor_inputs(self, spec: ManeuverSpec, sol: OcpSolution) -> np.ndarray:
+        # The OCP input is v = [f_R'', tau_y'']; the rotors' is f'' = G v.
+        return sol.U @ spec.params.G.T
+
+    def _accept(self, base: PlanResult, traj: Trajectory, *, infeasible_if_bad: bool) -> PlanResult:
+        check = verify(traj, base.spec, self.tolerances)
+        if check.ok:
+            return replace(
+                base, status=PlanStatus.SOLVED, message="ok", trajectory=traj, verification=check
+            )
+        what = "the spline reference" if infeasible_if_bad else "re-simulated solution"
+        return replace(
+            base,
+            status=PlanStatus.INFEASIBLE if infeasible_if_bad else PlanStatus.FAILED,
+            message=f"{what} fails its check: " + "; ".join(check.problems),
+            verification=check,
+        )
+
+
+def plan(
+    scenario: Scenario,
+    maneuver: Maneuver | str = Maneuver.LANDING,
+    *,
+    method: Method | None = None,
+    solver: SolverName | None = None,
+    planner: Planner | None = None,
+) -> PlanResult:
+    """One-shot :meth:`Planner.plan` (pass ``planner`` to reuse compiled solvers)."""
+    return (planner or Planner()).plan(scenario, maneuver, method=method, solver=solver)
