@@ -47,16 +47,24 @@ def rotmat_to_quat(R: ArrayLike) -> FloatArray:
     tr = R[0, 0] + R[1, 1] + R[2, 2]
     if tr > 0.0:
         s = 2.0 * math.sqrt(tr + 1.0)
-        q = np.array([0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s])
+        q = np.array(
+            [0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
+        )
     elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
         s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
-        q = np.array([(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s])
+        q = np.array(
+            [(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s]
+        )
     elif R[1, 1] > R[2, 2]:
         s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
-        q = np.array([(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s])
+        q = np.array(
+            [(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s]
+        )
     else:
         s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
-        q = np.array([(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s])
+        q = np.array(
+            [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s]
+        )
     q /= np.linalg.norm(q)
     return -q if q[0] < 0 else q
 
@@ -88,11 +96,7 @@ def exp_so3(phi: ArrayLike) -> FloatArray:
     K = hat(phi)
     if angle < _SMALL:
         return np.eye(3) + K + 0.5 * K @ K
-    return (
-        np.eye(3)
-        + (math.sin(angle) / angle) * K
-        + ((1.0 - math.cos(angle)) / angle**2) * K @ K
-    )
+    return np.eye(3) + (math.sin(angle) / angle) * K + ((1.0 - math.cos(angle)) / angle**2) * K @ K
 
 
 def log_so3(R: ArrayLike) -> FloatArray:

@@ -167,13 +167,21 @@ def _surface_at(template: Surface, slope: float, azimuth: float = 0.0) -> Surfac
     )
 
 
-def _tethered_margins(surface: Surface, c: float, limits: VehicleLimits, g: float) -> dict[str, float]:
+def _tethered_margins(
+    surface: Surface, c: float, limits: VehicleLimits, g: float
+) -> dict[str, float]:
     """Signed margins (>= 0 feasible) of every tethered requirement [N]."""
     beta = surface.slope
     f_R, f_L = landing_hover(beta, c, limits.mass, g)
     d = inclined_hover_direction(surface.R_WS, c)
     rest = contact_forces(
-        surface, limits.mass, 0.0, surface.z_S, tethered_rest_tension(surface, d, limits.mass, g), d, g
+        surface,
+        limits.mass,
+        0.0,
+        surface.z_S,
+        tethered_rest_tension(surface, d, limits.mass, g),
+        d,
+        g,
     )
     return {
         "rotor_low": f_R - limits.min_controllable_thrust,
@@ -258,7 +266,9 @@ def analyze_tethered(
         thrust_within_limits=thrust_ok,
         feasible=thrust_ok and cond4 and rest.holds,
         max_slope_rad=max_feasible_slope(
-            lambda b: min(_tethered_margins(_surface_at(surface, b), geometry.c, limits, g).values())
+            lambda b: min(
+                _tethered_margins(_surface_at(surface, b), geometry.c, limits, g).values()
+            )
         ),
         reasons=tuple(reasons),
     )

@@ -6,7 +6,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-
 from tetherland import GRAVITY
 from tetherland.analysis.feasibility import (
     ContactFreeAnalysis,

@@ -20,7 +20,9 @@ from tetherland.geometry import FloatArray, Surface
 _COS_EPS = 1e-9
 
 
-def inclined_hover(phi: float, theta_A: float, mass: float, g: float = GRAVITY) -> tuple[float, float]:
+def inclined_hover(
+    phi: float, theta_A: float, mass: float, g: float = GRAVITY
+) -> tuple[float, float]:
     """Thrust and tension holding the planar model (6.18) still at (phi, theta_A).
 
     f_R = m g cos(phi)/cos(phi + theta_A),  f_L = m g sin(theta_A)/cos(phi + theta_A).
@@ -38,8 +40,8 @@ def inclined_hover(phi: float, theta_A: float, mass: float, g: float = GRAVITY) 
     den = math.cos(phi + theta_A)
     if abs(den) < _COS_EPS:
         raise SingularityError(
-            f"thrust axis parallel to the link (phi + theta_A = {math.degrees(phi + theta_A):.3f} deg):"
-            " no inclined hovering"
+            "thrust axis parallel to the link "
+            f"(phi + theta_A = {math.degrees(phi + theta_A):.3f} deg): no inclined hovering"
         )
     return mass * g * math.cos(phi) / den, mass * g * math.sin(theta_A) / den
 
@@ -149,7 +151,9 @@ def tethered_max_touchdown_thrust(
     return mass * g * float(surface.z_S[2]) + f_L * float(surface.z_S @ d) - surface.f_N_min
 
 
-def free_flight_max_touchdown_thrust(surface: Surface, mass: float, g: float = GRAVITY) -> float | None:
+def free_flight_max_touchdown_thrust(
+    surface: Surface, mass: float, g: float = GRAVITY
+) -> float | None:
     """Largest f_R(t_L+) with which a robot without cable stays put (6.6)-(6.7), corrected.
 
     With z_B = z_S: f_N = m g z_S.z_W - f_R >= f_N_min and m g |x_S.z_W| <= mu (f_N - f_N_min),

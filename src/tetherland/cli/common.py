@@ -12,7 +12,9 @@ from tetherland.config import Scenario, load_scenario
 
 ScenarioArg = Annotated[
     str,
-    typer.Argument(help="Built-in scenario name (see `tetherland scenarios`) or path to a TOML file."),
+    typer.Argument(
+        help="Built-in scenario name (see `tetherland scenarios`) or path to a TOML file."
+    ),
 ]
 SetOption = Annotated[
     list[str] | None,
@@ -41,6 +43,6 @@ def deg(value: float | None, digits: int = 2) -> str:
     return "-" if value is None else f"{math.degrees(value):.{digits}f} deg"
 
 
-def vec(v) -> str:  # noqa: ANN001 - any sequence of floats
+def vec(v) -> str:
     """Format a 3-vector."""
     return "[" + ", ".join(f"{float(x):+.3f}" for x in v) + "]"

@@ -75,7 +75,9 @@ def parse_override(text: str) -> tuple[list[str], Any]:
     key, sep, raw = text.partition("=")
     keys = [k.strip() for k in key.strip().split(".")]
     if not sep or not all(keys) or not raw.strip():
-        raise ConfigError(f"override '{text}': expected section.key=value, e.g. surface.slope_deg=60")
+        raise ConfigError(
+            f"override '{text}': expected section.key=value, e.g. surface.slope_deg=60"
+        )
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
@@ -101,12 +103,14 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
     return out
 
 
-def _field_info(model: type[BaseModel], loc: Sequence[Any]):  # noqa: ANN202
+def _field_info(model: type[BaseModel], loc: Sequence[Any]):
     """Walk ``loc`` through nested models; return the FieldInfo of the last named field."""
     info = None
     current: Any = model
     for part in loc:
-        if isinstance(part, int) or not (isinstance(current, type) and issubclass(current, BaseModel)):
+        if isinstance(part, int) or not (
+            isinstance(current, type) and issubclass(current, BaseModel)
+        ):
             continue
         info = current.model_fields.get(part)
         if info is None:
@@ -153,7 +157,9 @@ def format_validation_error(err: ValidationError, model: type[BaseModel] = Scena
         section = _field_info(model, loc)
         section_model = section.annotation if section is not None else None
         first_word = msg.split(" ", 1)[0]
-        if first["type"] == "value_error" and first_word in getattr(section_model, "model_fields", {}):
+        if first["type"] == "value_error" and first_word in getattr(
+            section_model, "model_fields", {}
+        ):
             text = f"{name}.{msg}"  # a section-level check that names its field first
         if "input" in first and first["type"] not in ("value_error", "assertion_error"):
             value = first["input"]

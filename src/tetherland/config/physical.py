@@ -77,9 +77,7 @@ class VehicleConfig(Section):
                 f"{(self.f_max - self.f_min) / 2:g} N"
             )
         if self.lander_radius >= self.h_R:
-            raise ValueError(
-                f"lander_radius = {self.lander_radius} m must be < h_R = {self.h_R} m"
-            )
+            raise ValueError(f"lander_radius = {self.lander_radius} m must be < h_R = {self.h_R} m")
         return self
 
 
@@ -116,7 +114,8 @@ class SurfaceConfig(Section):
     pipe_radius: float = Field(0.25, gt=0, le=10)
     """Pipe radius (``kind = "pipe"`` only) [m]."""
     extent: float = Field(3.0, gt=0, le=100)
-    """Half-length of the simulated surface patch along x_S and y_S (plane) or the axis (pipe) [m]."""
+    """Half-length of the simulated surface patch along x_S and y_S (plane) or the axis (pipe)
+    [m]."""
 
     @field_validator("normal")
     @classmethod
@@ -130,8 +129,8 @@ class SurfaceConfig(Section):
         given = {"slope_deg", "azimuth_deg"} & self.model_fields_set
         if self.normal is not None and given:
             raise ValueError(
-                f"normal and {sorted(given)[0]} are mutually exclusive: give the normal, or slope_deg "
-                "and azimuth_deg"
+                f"normal and {sorted(given)[0]} are mutually exclusive: give the normal, or "
+                "slope_deg and azimuth_deg"
             )
         return self
 
@@ -153,7 +152,5 @@ class AnchorConfig(Section):
     @model_validator(mode="after")
     def _one_placement(self) -> AnchorConfig:
         if self.position is not None and self.landing_point is not None:
-            raise ValueError(
-                "position and landing_point are mutually exclusive: give at most one"
-            )
+            raise ValueError("position and landing_point are mutually exclusive: give at most one")
         return self

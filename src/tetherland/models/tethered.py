@@ -85,9 +85,7 @@ def tethered_rhs(
     return np.array([phi_dot, delta_dot, acc.phi_ddot, acc.delta_ddot])
 
 
-def link_position_velocity(
-    x: ArrayLike, length: float
-) -> tuple[FloatArray, FloatArray]:
+def link_position_velocity(x: ArrayLike, length: float) -> tuple[FloatArray, FloatArray]:
     """Position l d_A and velocity J_q q' of the link end relative to the anchor, in F_A."""
     phi, delta, phi_dot, delta_dot = (float(v) for v in x)
     return (
@@ -97,7 +95,12 @@ def link_position_velocity(
 
 
 def tension_coordinate_free(
-    d: ArrayLike, d_dot: ArrayLike, thrust: ArrayLike, mass: float, length: float, g: float = GRAVITY
+    d: ArrayLike,
+    d_dot: ArrayLike,
+    thrust: ArrayLike,
+    mass: float,
+    length: float,
+    g: float = GRAVITY,
 ) -> float:
     """f_L = d.(f_R z_B - m g z_W) + m l ||d'||^2 (any frame, all three vectors in it)."""
     d = np.asarray(d, dtype=float)
