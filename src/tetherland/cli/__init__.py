@@ -13,6 +13,7 @@ from typer.exceptions import TyperException
 
 from tetherland import __version__
 from tetherland.cli.analyze import analyze
+from tetherland.cli.plan import plan
 from tetherland.cli.scenarios import scenarios, show
 from tetherland.errors import TetherlandError
 
@@ -44,6 +45,7 @@ def _root(
 app.command()(scenarios)
 app.command()(show)
 app.command()(analyze)
+app.command()(plan)
 
 
 def main(argv: list[str] | None = None) -> int:
