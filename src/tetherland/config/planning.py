@@ -48,10 +48,13 @@ class PlannerConfig(Section):
     """Trajectory generator: the optimal control problem (6.21) or a smooth spline."""
     solver: Literal["fatrop", "ipopt"] = "fatrop"
     """NLP solver for the OCP."""
+    fallback_solver: bool = True
+    """Retry with IPOPT when fatrop returns no acceptable solution."""
     nodes: int = Field(50, ge=10, le=2000)
     """Number of shooting intervals N [-]."""
-    steps_per_interval: int = Field(2, ge=1, le=50)
-    """RK4 steps inside each shooting interval [-]."""
+    integrator_step: float = Field(0.08, gt=0, le=1)
+    """Largest RK4 step of the shooting integrator: ceil(T / (N step)) steps per interval;
+    doubled (twice at most) when a solution fails the fine re-simulation check [s]."""
     landing_duration: float = Field(4.0, gt=0.5, le=60)
     """Duration t_L - t_0 of the tethered landing [s]."""
     takeoff_duration: float = Field(4.0, gt=0.5, le=60)
@@ -72,5 +75,8 @@ class PlannerConfig(Section):
     """Convergence tolerance of the NLP solver [-]."""
     max_iter: int = Field(500, ge=1, le=100000)
     """Iteration limit of the NLP solver [-]."""
+    mu_init: float = Field(1e-2, gt=0, le=10)
+    """Initial barrier parameter of the interior-point solvers; the default suits the
+    cold start from the spline reference (the solvers' own default is 0.1) [-]."""
     weights: PlannerWeights = PlannerWeights()
     """Cost gains of J1..J5 and the bump width."""

@@ -289,7 +289,7 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
     """
     P, p_value, s = _param_symbols(spec)
     c = _Coefficients(s)
-    t, T = ca.SX.sym("t"), ca.SX.sym("T")
+    t, T, h = ca.SX.sym("t"), ca.SX.sym("T"), ca.SX.sym("h")
     G = ca.reshape(s["G"], 2, 4).T  # (4, 2), row-major values
     if form == "wrench":
         x, u = ca.SX.sym("z", 8), ca.SX.sym("v", 2)
@@ -297,6 +297,7 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
         terms = wrench_form_terms(x, None, c, CASADI)
         u_f = G @ u
         thrusts = G @ x[4:6]
+        thrusts_mid = G @ (x[4:6] + 0.5 * h * x[6:8])
         x0 = spec.model.to_wrench_form(spec.x_start)
         terminal_wrench = ca.vertcat(x[4] - s["f_R_f"], x[5], x[6], x[7])
         state_names = (
@@ -316,6 +317,7 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
         ode = rotor_form_rhs(x, u_f, c, CASADI)
         terms = rotor_form_terms(x, None, c, CASADI)
         thrusts = x[4:8]
+        thrusts_mid = x[4:8] + 0.5 * h * x[8:12]
         x0 = spec.x_start
         row = s["torque_row"]
         terminal_wrench = ca.vertcat(
@@ -330,7 +332,7 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
     else:
         raise ValueError(f"form must be 'wrench' or 'rotor', got {form!r}")
     phi, theta, dphi, dtheta = x[0], x[1], x[2], x[3]
-    h = ca.exp(-(((phi - s["phi_s"]) / s["width"]) ** 4))
+    bump = ca.exp(-(((phi - s["phi_s"]) / s["width"]) ** 4))
     L = (
         s["k_phi"] * (phi - s["phi_f"]) ** 2
         + s["k_theta"] * (theta - s["theta_f"]) ** 2
@@ -338,8 +340,8 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
         + s["k_theta_dot"] * dtheta**2
         + s["k_phi_ddot"] * terms["phi_ddot"] ** 2
         + s["k_theta_ddot"] * terms["theta_ddot"] ** 2
-        + s["k_theta_near"] * h * (theta - s["theta_s"]) ** 2
-        + s["k_rates_near"] * h * (dphi**2 + dtheta**2)
+        + s["k_theta_near"] * bump * (theta - s["theta_s"]) ** 2
+        + s["k_rates_near"] * bump * (dphi**2 + dtheta**2)
         + s["k_thrust_accel"] * ca.sumsqr(u_f)
     )
     E = s["k_final_theta_dot"] * dtheta**2 + s["k_final_phi_dot"] * dphi**2
@@ -347,8 +349,11 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
     floor = (
         s["f_L_min"] - s["a0"] * ca.fmax(0, 1 - t / ramp) - s["aT"] * ca.fmax(0, 1 - (T - t) / ramp)
     )
-    path = [terms["tension"] - floor]
-    path_lb, path_ub = [0.0], [np.inf]
+    # Rotor thrusts are quadratic in t on each interval (f'' held): f_k, f_k + f_k' h/2 and
+    # f_{k+1} are their Bernstein coefficients, whose hull contains the whole arc. Bounding
+    # them bounds the thrusts between the nodes too, not only at the nodes.
+    path = [terms["tension"] - floor, thrusts_mid]
+    path_lb, path_ub = [0.0] + [spec.f_lo] * 4, [np.inf] + [spec.f_hi] * 4
     if form == "wrench":
         path.append(thrusts)
         path_lb += [spec.f_lo] * 4
@@ -360,7 +365,7 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
         x_lb[4:8], x_ub[4:8] = spec.f_lo, spec.f_hi
     terminal = ca.vertcat(phi - s["phi_f"], theta - s["theta_f"], dphi, dtheta, terminal_wrench)
     return OcpProblem(
-        x=x, u=u, p=P, t=t, T=T,
+        x=x, u=u, p=P, t=t, T=T, h=h,
         ode=ode, stage_cost=L, terminal_cost=E, path=ca.vertcat(*path), terminal=terminal,
         duration=spec.duration, x0=x0, p_value=p_value,
         path_lb=np.array(path_lb), path_ub=np.array(path_ub),

@@ -8,13 +8,15 @@ compiled solver (see :mod:`tetherland.planning.solvers`):
   minimise    integral_0^T L(x, u, t, p) dt + E(x(T), p)
   subject to  x' = f(x, u, p)                     dynamics
               x(0) = x_0                          initial state
-              g_lb <= g(x, u, t, p) <= g_ub       path constraints on (0, T)
+              g_lb <= g(x, u, t, p, h) <= g_ub    path constraints on (0, T)
               x_lb <= x <= x_ub                   state bounds on (0, T)
               u_lb <= u <= u_ub                   input bounds on [0, T)
               h(x(T), p) = 0                      terminal constraints
 
 Path constraints and state bounds hold on the open interval: the boundary states are
 fixed by the initial and terminal conditions and are checked by the problem's author.
+A path constraint may use the symbol ``h``, the length of the transcription's interval
+(T/N for multiple shooting), to bound a quantity between the nodes.
 """
 
 from __future__ import annotations
@@ -46,8 +48,8 @@ class OcpProblem:
     ----------
     x, u, p : casadi.SX
         Column symbols of the state (nx), input (nu) and parameters (np).
-    t, T : casadi.SX
-        Scalar symbols of the time and of the duration.
+    t, T, h : casadi.SX
+        Scalar symbols of the time, of the duration and of the transcription's interval.
     ode : casadi.SX
         f(x, u, p): the state derivative (nx).
     stage_cost : casadi.SX
@@ -55,7 +57,7 @@ class OcpProblem:
     terminal_cost : casadi.SX
         E(x, p), scalar.
     path : casadi.SX
-        g(x, u, t, p, T), column (may be empty).
+        g(x, u, t, p, T, h), column (may be empty).
     terminal : casadi.SX
         h(x, p), column, constrained to zero.
     duration : float
@@ -77,6 +79,7 @@ class OcpProblem:
     p: ca.SX
     t: ca.SX
     T: ca.SX
+    h: ca.SX
     ode: ca.SX
     stage_cost: ca.SX
     terminal_cost: ca.SX
@@ -113,7 +116,7 @@ class OcpProblem:
                 raise ValueError(f"{lo} > {hi} for some entry")
         f = ca.Function(
             "ocp_structure",
-            [self.x, self.u, self.p, self.t, self.T],
+            [self.x, self.u, self.p, self.t, self.T, self.h],
             [self.ode, self.stage_cost, self.terminal_cost, self.path, self.terminal],
         )
         object.__setattr__(self, "_key", hashlib.sha1(f.serialize().encode()).hexdigest())
@@ -132,9 +135,9 @@ class OcpProblem:
         return self._key
 
     def functions(self) -> dict[str, ca.Function]:
-        """The statement's expressions as CasADi Functions of (x, u, t, p, T)."""
-        args = [self.x, self.u, self.t, self.p, self.T]
-        names = ["x", "u", "t", "p", "T"]
+        """The statement's expressions as CasADi Functions of (x, u, t, p, T, h)."""
+        args = [self.x, self.u, self.t, self.p, self.T, self.h]
+        names = ["x", "u", "t", "p", "T", "h"]
         return {
             "ode": ca.Function(
                 "ode", [self.x, self.u, self.p], [self.ode], ["x", "u", "p"], ["xdot"]

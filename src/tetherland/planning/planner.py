@@ -22,7 +22,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tetherland.config import Scenario
+from tetherland.config import PlannerConfig, Scenario
 from tetherland.errors import TetherlandError
 from tetherland.geometry import LandingGeometry
 from tetherland.planning.maneuver import Maneuver, ManeuverSpec, StateForm, build_ocp, precheck
@@ -64,6 +64,57 @@ class PlanStatus(enum.Enum):
     """The solver failed, or its solution did not pass the re-simulation check."""
 
 
+MAX_REFINEMENTS = 2
+"""How often a solution failing the re-simulation is re-solved with twice the integrator
+steps per shooting interval."""
+
+
+@dataclass(frozen=True)
+class Attempt:
+    """One NLP solve made for a plan.
+
+    Attributes
+    ----------
+    solver : str
+    steps : int
+        RK4 steps per shooting interval.
+    status : SolveStatus
+    return_status : str
+        The solver's own status.
+    iterations : int
+    solve_time_s, build_time_s : float
+        Solver wall time and solver construction time (0 when cached) [s].
+    verified : bool or None
+        Whether the re-simulated solution passed :func:`verify` (None: not checked).
+    """
+
+    solver: str
+    steps: int
+    status: SolveStatus
+    return_status: str
+    iterations: int
+    solve_time_s: float
+    build_time_s: float
+    verified: bool | None = None
+
+
+def _totals(attempts: list[Attempt]) -> dict[str, Any]:
+    return {
+        "solve_time_s": sum(a.solve_time_s for a in attempts),
+        "build_time_s": sum(a.build_time_s for a in attempts),
+        "iterations": sum(a.iterations for a in attempts),
+    }
+
+
+def _usable(warm: OcpSolution | None, problem: OcpProblem, nodes: int) -> bool:
+    return (
+        warm is not None
+        and warm.structure_key == problem.structure_key
+        and warm.X.shape[0] == nodes + 1
+        and bool(np.all(np.isfinite(warm.X)))
+    )
+
+
 @dataclass(frozen=True)
 class PlanResult:
     """What :meth:`Planner.plan` returns.
@@ -88,8 +139,11 @@ class PlanResult:
         Present only when ``status`` is SOLVED.
     verification : Verification or None
     solution : OcpSolution or None
-        Raw solver output (also when not solved: for warm starts and diagnosis).
+        Raw output of the last solve (also when not solved: for warm starts and diagnosis).
     spec : ManeuverSpec
+    attempts : tuple of Attempt
+        Every NLP solve made (fallback solver, integrator refinements), in order;
+        ``solve_time_s``, ``build_time_s`` and ``iterations`` are their totals.
     """
 
     status: PlanStatus
@@ -105,6 +159,7 @@ class PlanResult:
     verification: Verification | None
     solution: OcpSolution | None
     spec: ManeuverSpec
+    attempts: tuple[Attempt, ...] = ()
 
     @property
     def success(self) -> bool:
@@ -130,6 +185,18 @@ class PlanResult:
             "iterations": self.iterations,
             "cost": self.cost,
             "duration_s": self.spec.duration,
+            "attempts": [
+                {
+                    "solver": a.solver,
+                    "steps_per_interval": a.steps,
+                    "status": a.status.value,
+                    "return_status": a.return_status,
+                    "iterations": a.iterations,
+                    "solve_time_s": a.solve_time_s,
+                    "verified": a.verified,
+                }
+                for a in self.attempts
+            ],
             "final_error": None if v is None else dict(v.final_error),
             "min_tension_N": None if v is None else v.min_tension,
             "min_rotor_thrust_N": None if v is None else v.min_rotor_thrust,
@@ -240,38 +307,85 @@ class Planner:
             return self._accept(base, traj, infeasible_if_bad=True)
         if method != "ocp":
             raise ValueError(f"method must be 'ocp' or 'spline', got {method!r}")
-        settings = SolverSettings(solver or cfg.solver, cfg.tolerance, cfg.max_iter)
-        transcription = MultipleShooting(cfg.nodes, "rk4", cfg.steps_per_interval)
+        return self._plan_ocp(base, meta, cfg, solver or cfg.solver, warm_start)
+
+    def _plan_ocp(
+        self,
+        base: PlanResult,
+        meta: TrajectoryMeta,
+        cfg: PlannerConfig,
+        primary: SolverName,
+        warm_start: PlanResult | OcpSolution | None,
+    ) -> PlanResult:
+        spec = base.spec
         problem = build_ocp(spec, self.form)
-        ocp = self.ocp_solver(transcription, settings)
+        steps = max(1, math.ceil(spec.duration / (cfg.nodes * cfg.integrator_step) - 1e-9))
         if isinstance(warm_start, PlanResult):
             warm_start = warm_start.solution
-        guess: InitialGuess | OcpSolution
-        if (
-            warm_start is not None
-            and warm_start.structure_key == problem.structure_key
-            and warm_start.X.shape[0] == transcription.nodes + 1
-            and np.all(np.isfinite(warm_start.X))
-        ):
-            guess = warm_start
-        else:
-            guess = self.initial_guess(meta, spec, transcription.nodes)
-        sol = ocp.solve(problem, guess)
-        base = replace(
-            base, solver=settings.name, cost=sol.cost, solve_time_s=sol.solve_time,
-            build_time_s=sol.build_time, iterations=sol.iterations, solution=sol,
-        )  # fmt: skip
-        if not sol.success:
-            return replace(
-                base,
-                status=_STATUS[sol.status],
-                message=f"{settings.name} did not solve the OCP: {sol.return_status} "
-                f"after {sol.iterations} iterations",
+        order: list[SolverName] = [primary]
+        if cfg.fallback_solver and primary != "ipopt":
+            order.append("ipopt")
+        attempts: list[Attempt] = []
+        last: PlanResult = base
+        for name in order:
+            settings = SolverSettings(name, cfg.tolerance, cfg.max_iter, cfg.mu_init)
+            guess: InitialGuess | OcpSolution
+            if _usable(warm_start, problem, cfg.nodes) and name == primary:
+                guess = warm_start  # type: ignore[assignment]
+            else:
+                guess = self.initial_guess(meta, spec, cfg.nodes)
+            for refine in range(MAX_REFINEMENTS + 1):
+                transcription = MultipleShooting(cfg.nodes, "rk4", steps * 2**refine)
+                sol = self.ocp_solver(transcription, settings).solve(problem, guess)
+                attempt = Attempt(
+                    solver=name, steps=transcription.steps, status=sol.status,
+                    return_status=sol.return_status, iterations=sol.iterations,
+                    solve_time_s=sol.solve_time, build_time_s=sol.build_time,
+                )  # fmt: skip
+                last = replace(
+                    base, solver=name, cost=sol.cost, solution=sol,
+                    **_totals([*attempts, attempt]), attempts=(*attempts, attempt),
+                )  # fmt: skip
+                if not sol.success:
+                    attempts.append(attempt)
+                    last = replace(
+                        last,
+                        status=_STATUS[sol.status],
+                        message=f"{name} did not solve the OCP: {sol.return_status} "
+                        f"after {sol.iterations} iterations",
+                    )
+                    break
+                traj = ShootingTrajectory.simulate(
+                    meta, sol.times, spec.x_start, self._rotor_inputs(spec, sol)
+                )
+                check = verify(traj, spec, self.tolerances)
+                attempt = replace(attempt, verified=check.ok)
+                attempts.append(attempt)
+                last = replace(last, attempts=tuple(attempts), verification=check)
+                if check.ok:
+                    return replace(last, status=PlanStatus.SOLVED, message="ok", trajectory=traj)
+                # A converged solution that fails the fine re-simulation: the shooting
+                # integrator was too coarse. Refine it, warm-started from this solution.
+                last = replace(
+                    last,
+                    status=PlanStatus.FAILED,
+                    message="re-simulated solution fails its check: " + "; ".join(check.problems),
+                )
+                guess = sol
+        if len(attempts) > 1:
+            tried = "; ".join(
+                f"{a.solver} (steps {a.steps}): {a.return_status}"
+                + (
+                    ""
+                    if a.verified is None
+                    else f", re-simulation {'ok' if a.verified else 'failed'}"
+                )
+                for a in attempts
             )
-        traj = ShootingTrajectory.simulate(
-            meta, sol.times, spec.x_start, self._rotor_inputs(spec, sol)
-        )
-        return self._accept(base, traj, infeasible_if_bad=False)
+            statuses = {a.status for a in attempts}
+            status = PlanStatus.INFEASIBLE if statuses == {SolveStatus.INFEASIBLE} else last.status
+            return replace(last, status=status, message=f"{last.message} [attempts: {tried}]")
+        return last
 
     def initial_guess(self, meta: TrajectoryMeta, spec: ManeuverSpec, nodes: int) -> InitialGuess:
         """The spline reference at the nodes, in the OCP's state coordinates (cold start)."""

@@ -42,10 +42,36 @@ _UNIFIED = {
 _IPOPT = {
     "Solve_Succeeded": SolveStatus.SUCCESS,
     "Solved_To_Acceptable_Level": SolveStatus.SUCCESS,
+    "Search_Direction_Becomes_Too_Small": SolveStatus.SUCCESS,
     "Infeasible_Problem_Detected": SolveStatus.INFEASIBLE,
     "Maximum_Iterations_Exceeded": SolveStatus.MAX_ITER,
     "Maximum_CpuTime_Exceeded": SolveStatus.MAX_ITER,
     "Maximum_WallTime_Exceeded": SolveStatus.MAX_ITER,
+}
+
+
+# fatrop::IpSolverReturnFlag (fatrop >= 1.0, bundled with CasADi 3.7+).
+_FATROP_FLAGS = {
+    0: "Success",
+    1: "MaxIterExceeded",
+    2: "StopAtTinyStep",
+    3: "StopAtAcceptablePoint",
+    4: "LocalInfeasibility",
+    5: "FeasiblePointFound",
+    6: "DivergingIterates",
+    7: "ErrorInStepComputation",
+    8: "InvalidOption",
+    9: "InternalError",
+    10: "Unknown",
+}
+# Acceptable-point and tiny-step exits count as candidate solutions: like every solution
+# they must pass the planner's re-simulation check before they are used.
+_FATROP = {
+    0: SolveStatus.SUCCESS,
+    1: SolveStatus.MAX_ITER,
+    2: SolveStatus.SUCCESS,
+    3: SolveStatus.SUCCESS,
+    4: SolveStatus.INFEASIBLE,
 }
 
 
@@ -60,6 +86,9 @@ class SolverSettings:
         Convergence tolerance (KKT error) [-].
     max_iter : int
         Iteration limit.
+    mu_init : float or None
+        Initial barrier parameter of the interior-point method (None: the solver's
+        default, 0.1); smaller values suit a good initial guess.
     verbose : bool
         Print the solver's iteration log.
     """
@@ -67,6 +96,7 @@ class SolverSettings:
     name: SolverName = "fatrop"
     tol: float = 1e-6
     max_iter: int = 500
+    mu_init: float | None = None
     verbose: bool = False
 
     def __post_init__(self) -> None:
@@ -85,6 +115,8 @@ class SolverSettings:
                 "print_level": 5 if self.verbose else 0,
                 "sb": "yes",
             }
+            if self.mu_init is not None:
+                ipopt["mu_init"] = self.mu_init
             if warm:
                 ipopt.update(
                     warm_start_init_point="yes",
@@ -98,6 +130,11 @@ class SolverSettings:
             "max_iter": self.max_iter,
             "print_level": 10 if self.verbose else 0,
         }
+        if self.mu_init is not None:
+            fatrop["mu_init"] = self.mu_init
+        # fatrop's tolerance is absolute (IPOPT scales its own): accept a point whose KKT
+        # error stays below a looser bound for some iterations, as IPOPT does by default.
+        fatrop.update(tol_acceptable=max(1e-4, 100 * self.tol), acceptable_iter=15)
         if warm:
             fatrop.update(mu_init=1e-4, bound_push=1e-6)
         return {
@@ -167,16 +204,12 @@ def _classify(solver: str, stats: dict[str, Any]) -> tuple[SolveStatus, str]:
     if solver == "ipopt":
         raw = str(stats.get("return_status", unified))
         status = _IPOPT.get(raw, _UNIFIED.get(unified, SolveStatus.FAILED))
+        if status is SolveStatus.SUCCESS and not stats.get("success", True):
+            status = SolveStatus.FAILED
     else:
-        flag = stats.get("fatrop", {}).get("return_flag", stats.get("return_status"))
-        raw = f"{unified} (fatrop return flag {flag})"
-        status = (
-            SolveStatus.SUCCESS
-            if stats.get("success")
-            else _UNIFIED.get(unified, SolveStatus.FAILED)
-        )
-    if status is SolveStatus.SUCCESS and not stats.get("success", True):
-        status = SolveStatus.FAILED
+        flag = int(stats.get("fatrop", {}).get("return_flag", -1))
+        raw = f"{_FATROP_FLAGS.get(flag, 'Unknown')} (fatrop return flag {flag})"
+        status = _FATROP.get(flag, SolveStatus.FAILED)
     return status, raw
 
 

@@ -96,10 +96,10 @@ class MultipleShooting:
                 equality += [True] * nx
                 layout.append(("init", nx))
             elif n_path:
-                g.append(fn["path"](X[k], U[k], k * dt, p, T))
+                g.append(fn["path"](X[k], U[k], k * dt, p, T, dt))
                 equality += [False] * n_path
                 layout.append(("path", n_path))
-            cost += fn["stage_cost"](X[k], U[k], k * dt, p, T) * dt
+            cost += fn["stage_cost"](X[k], U[k], k * dt, p, T, dt) * dt
         w.append(X[N])
         n_term = problem.terminal.numel()
         if n_term:

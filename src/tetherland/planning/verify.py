@@ -41,7 +41,7 @@ class Tolerances:
 
     angle: float = 1e-4
     rate: float = 1e-4
-    thrust: float = 1e-2
+    thrust: float = 1e-6
     tension: float = 1e-2
     surface: float = 1e-4
 
