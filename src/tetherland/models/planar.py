@@ -150,6 +150,13 @@ class PlanarParams:
         )
 
     @property
+    def coefficients(self) -> FloatArray:
+        """[m, l, J_y, g, torque_row (4)]: the constants the dynamics depend on (8,)."""
+        return np.concatenate(
+            ([self.mass, self.length, self.inertia, self.gravity], self.torque_row)
+        )
+
+    @property
     def e_B(self) -> FloatArray:
         """y_A in F_B: the body axis of the planar rotation."""
         return np.array([math.sin(self.heading), math.cos(self.heading), 0.0])
@@ -379,13 +386,30 @@ class ExtendedPlanarModel:
         """CasADi Function ``step(x[12], u[4], h) -> x(t + h)``: one classical RK4 step of
         (6.20) with the input held (exact for the thrusts, which are polynomial in t)."""
         x, u, h = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h")
+        step = parametric_rk4_step()
+        return ca.Function(
+            "planar_rk4",
+            [x, u, h],
+            [step(x, u, h, self.params.coefficients)],
+            ["x", "u", "h"],
+            ["x_next"],
+        )
 
-        def f(z: ca.SX) -> ca.SX:
-            return rotor_form_rhs(z, u, self.params, CASADI)
 
-        k1 = f(x)
-        k2 = f(x + 0.5 * h * k1)
-        k3 = f(x + 0.5 * h * k2)
-        k4 = f(x + h * k3)
-        x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        return ca.Function("planar_rk4", [x, u, h], [x_next], ["x", "u", "h"], ["x_next"])
+def parametric_rk4_step() -> ca.Function:
+    """``step(x[12], u[4], h, c[8]) -> x(t + h)``: one RK4 step of (6.20) with the input
+    held, for the model constants c = :attr:`PlanarParams.coefficients`."""
+    x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", 8)
+    coeffs = SimpleNamespace(
+        mass=c[0], length=c[1], inertia=c[2], gravity=c[3], torque_row=[c[4 + i] for i in range(4)]
+    )
+
+    def f(z: ca.SX) -> ca.SX:
+        return rotor_form_rhs(z, u, coeffs, CASADI)
+
+    k1 = f(x)
+    k2 = f(x + 0.5 * h * k1)
+    k3 = f(x + 0.5 * h * k2)
+    k4 = f(x + h * k3)
+    x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return ca.Function("planar_rk4", [x, u, h, c], [x_next], ["x", "u", "h", "c"], ["x_next"])

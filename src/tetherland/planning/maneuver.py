@@ -243,30 +243,62 @@ def precheck(spec: ManeuverSpec) -> list[str]:
     return reasons
 
 
-def _param_symbols(spec: ManeuverSpec) -> tuple[ca.SX, FloatArray, dict[str, ca.SX]]:
-    """The OCP parameters as symbols (so one solver serves all scenarios) and their values."""
+_PARAM_NAMES = (
+    "mass", "length", "inertia", "gravity", "torque_row", "G", "phi_f", "theta_f", "phi_s",
+    "theta_s", "width", "f_R_f", "f_L_min", "a0", "aT", "ramp", *_WEIGHT_NAMES,
+)  # fmt: skip
+_PARAM_SIZES = {"torque_row": 4, "G": 8}
+
+
+def _param_values(spec: ManeuverSpec) -> dict[str, float | FloatArray]:
+    """The OCP's parameters (symbols in the statement, so one solver serves all scenarios)."""
     p = spec.params
-    f_R_final, _ = spec.hover("final")
-    items: list[tuple[str, float | FloatArray]] = [
-        ("mass", p.mass), ("length", p.length), ("inertia", p.inertia), ("gravity", p.gravity),
-        ("torque_row", p.torque_row), ("G", p.G.reshape(-1)),
-        ("phi_f", spec.phi_final), ("theta_f", spec.theta_final),
-        ("phi_s", spec.phi_surface), ("theta_s", spec.theta_surface), ("width", spec.bump_width),
-        ("f_R_f", f_R_final), ("f_L_min", spec.min_tension),
-        ("a0", max(0.0, spec.min_tension - spec.hover("start")[1])),
-        ("aT", max(0.0, spec.min_tension - spec.hover("final")[1])),
-        ("ramp", spec.tension_ramp),
-    ] + [(name, getattr(spec.weights, name)) for name in _WEIGHT_NAMES]  # fmt: skip
-    syms: dict[str, ca.SX] = {}
-    values = []
-    for name, value in items:
-        arr = np.atleast_1d(np.asarray(value, dtype=float))
-        syms[name] = ca.SX.sym(name, arr.size)
-        values.append(arr)
-    return ca.vertcat(*syms.values()), np.concatenate(values), syms
+    f_R_final, f_L_final = spec.hover("final")
+    values: dict[str, float | FloatArray] = {
+        "mass": p.mass, "length": p.length, "inertia": p.inertia, "gravity": p.gravity,
+        "torque_row": p.torque_row, "G": p.G.reshape(-1),
+        "phi_f": spec.phi_final, "theta_f": spec.theta_final,
+        "phi_s": spec.phi_surface, "theta_s": spec.theta_surface, "width": spec.bump_width,
+        "f_R_f": f_R_final, "f_L_min": spec.min_tension,
+        "a0": max(0.0, spec.min_tension - spec.hover("start")[1]),
+        "aT": max(0.0, spec.min_tension - f_L_final),
+        "ramp": spec.tension_ramp,
+    }  # fmt: skip
+    values.update({name: getattr(spec.weights, name) for name in _WEIGHT_NAMES})
+    return values
 
 
-def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
+def _numbers(spec: ManeuverSpec, form: StateForm) -> dict[str, object]:
+    """The numerical data of the OCP of ``spec`` (everything but the statement)."""
+    nx = 8 if form == "wrench" else 12
+    x_lb, x_ub = np.full(nx, -np.inf), np.full(nx, np.inf)
+    x_lb[0], x_ub[0] = spec.phi_surface, spec.phi_max
+    path_lb, path_ub = [0.0] + [spec.f_lo] * 4, [np.inf] + [spec.f_hi] * 4
+    if form == "wrench":
+        path_lb += [spec.f_lo] * 4
+        path_ub += [spec.f_hi] * 4
+        x0 = spec.model.to_wrench_form(spec.x_start)
+    else:
+        x_lb[4:8], x_ub[4:8] = spec.f_lo, spec.f_hi
+        x0 = spec.x_start
+    values = _param_values(spec)
+    p_value = [np.atleast_1d(np.asarray(values[n], dtype=float)) for n in _PARAM_NAMES]
+    return {
+        "duration": spec.duration,
+        "x0": x0,
+        "p_value": np.concatenate(p_value),
+        "path_lb": np.array(path_lb),
+        "path_ub": np.array(path_ub),
+        "x_lb": x_lb,
+        "x_ub": x_ub,
+        "u_lb": np.full(2, -np.inf),
+        "u_ub": np.full(2, np.inf),
+    }
+
+
+def build_ocp(
+    spec: ManeuverSpec, form: StateForm = "wrench", template: OcpProblem | None = None
+) -> OcpProblem:
     """The optimal control problem (6.21) of a maneuver.
 
     Parameters
@@ -278,6 +310,9 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
         directions u = G v; ``wrench`` (default, a third smaller) uses [f_R, tau_y] and
         their rates instead of the four thrusts, f = G [f_R, tau_y]. Both state the same
         problem; the rotor bounds become linear path constraints in the wrench form.
+    template : OcpProblem, optional
+        A problem previously built for the same ``form``: its symbolic statement is
+        reused (every number of ``spec`` enters as data), which skips rebuilding it.
 
     Cost (section 6.5.2), with h(phi) = exp(-((phi - phi*)/w)^4):
       J1 = k_phi (phi - phi_f)^2 + k_theta (theta_A - theta_A,f)^2 + k_phi' phi'^2
@@ -286,8 +321,24 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
       J3 = k_rates,near h(phi) (phi'^2 + theta_A'^2)
       J4 = k_u sum f_i''^2
       J5 = k_tL,theta theta_A'(t_L)^2 + k_tL,phi phi'(t_L)^2
+    Constraints: (6.20) dynamics, initial hover, f_L >= f_L_min(t) (6.21d), rotor thrusts
+    in [f_min + margin, f_max - margin] at the nodes and between them (6.21c),
+    phi* <= phi <= pi - gamma - beta (above the surface), terminal hover.
     """
-    P, p_value, s = _param_symbols(spec)
+    if form not in ("wrench", "rotor"):
+        raise ValueError(f"form must be 'wrench' or 'rotor', got {form!r}")
+    numbers = _numbers(spec, form)
+    if template is not None:
+        if template.nx != (8 if form == "wrench" else 12):
+            raise ValueError(f"template is not a {form}-form problem")
+        return template.with_numbers(**numbers)
+    return OcpProblem(**_statement(form), **numbers)
+
+
+def _statement(form: StateForm) -> dict[str, object]:
+    """The symbolic statement of (6.21) in the given state coordinates."""
+    s = {name: ca.SX.sym(name, _PARAM_SIZES.get(name, 1)) for name in _PARAM_NAMES}
+    P = ca.vertcat(*s.values())
     c = _Coefficients(s)
     t, T, h = ca.SX.sym("t"), ca.SX.sym("T"), ca.SX.sym("h")
     G = ca.reshape(s["G"], 2, 4).T  # (4, 2), row-major values
@@ -298,27 +349,16 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
         u_f = G @ u
         thrusts = G @ x[4:6]
         thrusts_mid = G @ (x[4:6] + 0.5 * h * x[6:8])
-        x0 = spec.model.to_wrench_form(spec.x_start)
         terminal_wrench = ca.vertcat(x[4] - s["f_R_f"], x[5], x[6], x[7])
-        state_names = (
-            "phi",
-            "theta_A",
-            "phi_dot",
-            "theta_A_dot",
-            "f_R",
-            "tau_y",
-            "f_R_dot",
-            "tau_y_dot",
-        )
-        input_names = ("f_R_ddot", "tau_y_ddot")
-    elif form == "rotor":
+        state_names: tuple[str, ...] = ("phi", "theta_A", "phi_dot", "theta_A_dot")
+        state_names += ("f_R", "tau_y", "f_R_dot", "tau_y_dot")
+    else:
         x, u = ca.SX.sym("x", 12), ca.SX.sym("v", 2)
         u_f = G @ u
         ode = rotor_form_rhs(x, u_f, c, CASADI)
         terms = rotor_form_terms(x, None, c, CASADI)
         thrusts = x[4:8]
         thrusts_mid = x[4:8] + 0.5 * h * x[8:12]
-        x0 = spec.x_start
         row = s["torque_row"]
         terminal_wrench = ca.vertcat(
             ca.sum1(x[4:8]) - s["f_R_f"],
@@ -328,9 +368,6 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
         )
         rotors = tuple(f"f{i}{d}" for d in ("", "_dot") for i in range(1, 5))
         state_names = ("phi", "theta_A", "phi_dot", "theta_A_dot", *rotors)
-        input_names = ("f_R_ddot", "tau_y_ddot")
-    else:
-        raise ValueError(f"form must be 'wrench' or 'rotor', got {form!r}")
     phi, theta, dphi, dtheta = x[0], x[1], x[2], x[3]
     bump = ca.exp(-(((phi - s["phi_s"]) / s["width"]) ** 4))
     L = (
@@ -353,25 +390,15 @@ def build_ocp(spec: ManeuverSpec, form: StateForm = "wrench") -> OcpProblem:
     # f_{k+1} are their Bernstein coefficients, whose hull contains the whole arc. Bounding
     # them bounds the thrusts between the nodes too, not only at the nodes.
     path = [terms["tension"] - floor, thrusts_mid]
-    path_lb, path_ub = [0.0] + [spec.f_lo] * 4, [np.inf] + [spec.f_hi] * 4
     if form == "wrench":
         path.append(thrusts)
-        path_lb += [spec.f_lo] * 4
-        path_ub += [spec.f_hi] * 4
-    nx = x.numel()
-    x_lb, x_ub = np.full(nx, -np.inf), np.full(nx, np.inf)
-    x_lb[0], x_ub[0] = spec.phi_surface, spec.phi_max
-    if form == "rotor":
-        x_lb[4:8], x_ub[4:8] = spec.f_lo, spec.f_hi
     terminal = ca.vertcat(phi - s["phi_f"], theta - s["theta_f"], dphi, dtheta, terminal_wrench)
-    return OcpProblem(
-        x=x, u=u, p=P, t=t, T=T, h=h,
-        ode=ode, stage_cost=L, terminal_cost=E, path=ca.vertcat(*path), terminal=terminal,
-        duration=spec.duration, x0=x0, p_value=p_value,
-        path_lb=np.array(path_lb), path_ub=np.array(path_ub),
-        x_lb=x_lb, x_ub=x_ub, u_lb=np.full(2, -np.inf), u_ub=np.full(2, np.inf),
-        state_names=state_names, input_names=input_names,
-    )  # fmt: skip
+    return {
+        "x": x, "u": u, "p": P, "t": t, "T": T, "h": h,
+        "ode": ode, "stage_cost": L, "terminal_cost": E, "path": ca.vertcat(*path),
+        "terminal": terminal, "state_names": state_names,
+        "input_names": ("f_R_ddot", "tau_y_ddot"),
+    }  # fmt: skip
 
 
 class _Coefficients:

@@ -21,6 +21,7 @@ A path constraint may use the symbol ``h``, the length of the transcription's in
 
 from __future__ import annotations
 
+import copy
 import hashlib
 from dataclasses import dataclass, field
 
@@ -99,9 +100,18 @@ class OcpProblem:
     _key: str = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        if self.ode.numel() != self.nx:
+            raise ValueError(f"ode has {self.ode.numel()} entries for {self.nx} states")
+        self._check_numbers()
+        f = ca.Function(
+            "ocp_structure",
+            [self.x, self.u, self.p, self.t, self.T, self.h],
+            [self.ode, self.stage_cost, self.terminal_cost, self.path, self.terminal],
+        )
+        object.__setattr__(self, "_key", hashlib.sha1(f.serialize().encode()).hexdigest())
+
+    def _check_numbers(self) -> None:
         nx, nu, npar, ng = self.nx, self.nu, self.p.numel(), self.path.numel()
-        if self.ode.numel() != nx:
-            raise ValueError(f"ode has {self.ode.numel()} entries for {nx} states")
         if not (self.duration > 0 and np.isfinite(self.duration)):
             raise ValueError(f"duration must be a positive number, got {self.duration}")
         for name, n in (
@@ -114,12 +124,23 @@ class OcpProblem:
         for lo, hi in (("path_lb", "path_ub"), ("x_lb", "x_ub"), ("u_lb", "u_ub")):
             if np.any(getattr(self, lo) > getattr(self, hi)):
                 raise ValueError(f"{lo} > {hi} for some entry")
-        f = ca.Function(
-            "ocp_structure",
-            [self.x, self.u, self.p, self.t, self.T, self.h],
-            [self.ode, self.stage_cost, self.terminal_cost, self.path, self.terminal],
-        )
-        object.__setattr__(self, "_key", hashlib.sha1(f.serialize().encode()).hexdigest())
+
+    _NUMBERS = ("duration", "x0", "p_value", "path_lb", "path_ub", "x_lb", "x_ub", "u_lb", "u_ub")
+
+    def with_numbers(self, **numbers: object) -> OcpProblem:
+        """The same statement (and structure key) with other numerical data.
+
+        Accepts ``duration``, ``x0``, ``p_value``, the path bounds and the simple bounds;
+        much cheaper than building the statement again.
+        """
+        unknown = set(numbers) - set(self._NUMBERS)
+        if unknown:
+            raise TypeError(f"with_numbers() got unexpected fields {sorted(unknown)}")
+        new = copy.copy(self)
+        for name, value in numbers.items():
+            object.__setattr__(new, name, value)
+        new._check_numbers()
+        return new
 
     @property
     def nx(self) -> int:

@@ -36,6 +36,7 @@ from tetherland.planning.solvers import (
     SolveStatus,
 )
 from tetherland.planning.trajectory import (
+    PlanarSimulator,
     PolynomialTrajectory,
     ShootingTrajectory,
     Trajectory,
@@ -257,6 +258,8 @@ class Planner:
         self.form: StateForm = form
         self.tolerances = tolerances or Tolerances()
         self._solvers: dict[tuple[MultipleShooting, SolverSettings], OcpSolver] = {}
+        self._template: OcpProblem | None = None
+        self.simulator = PlanarSimulator()
 
     def ocp_solver(self, transcription: MultipleShooting, settings: SolverSettings) -> OcpSolver:
         """The cached :class:`OcpSolver` for these settings."""
@@ -269,7 +272,13 @@ class Planner:
         self, scenario: Scenario, maneuver: Maneuver | str = Maneuver.LANDING
     ) -> OcpProblem:
         """The OCP (6.21) of a scenario's maneuver (for inspection or custom solving)."""
-        return build_ocp(ManeuverSpec.from_scenario(scenario, maneuver), self.form)
+        return self._problem(ManeuverSpec.from_scenario(scenario, maneuver))
+
+    def _problem(self, spec: ManeuverSpec) -> OcpProblem:
+        # The statement holds no numbers: build it once, then only swap the data.
+        problem = build_ocp(spec, self.form, self._template)
+        self._template = problem
+        return problem
 
     def plan(
         self,
@@ -318,7 +327,7 @@ class Planner:
         warm_start: PlanResult | OcpSolution | None,
     ) -> PlanResult:
         spec = base.spec
-        problem = build_ocp(spec, self.form)
+        problem = self._problem(spec)
         steps = max(1, math.ceil(spec.duration / (cfg.nodes * cfg.integrator_step) - 1e-9))
         if isinstance(warm_start, PlanResult):
             warm_start = warm_start.solution
@@ -356,7 +365,7 @@ class Planner:
                     )
                     break
                 traj = ShootingTrajectory.simulate(
-                    meta, sol.times, spec.x_start, self._rotor_inputs(spec, sol)
+                    meta, sol.times, spec.x_start, self._rotor_inputs(spec, sol), self.simulator
                 )
                 check = verify(traj, spec, self.tolerances)
                 attempt = replace(attempt, verified=check.ok)

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
+import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -38,7 +39,13 @@ from tetherland.errors import ConfigError
 from tetherland.geometry import FloatArray
 from tetherland.io import atomic_write_text
 from tetherland.models.flatness import FlatnessMap, NominalState, OutputDerivatives
-from tetherland.models.planar import NUMPY, ExtendedPlanarModel, PlanarParams, planar_flat_inputs
+from tetherland.models.planar import (
+    NUMPY,
+    ExtendedPlanarModel,
+    PlanarParams,
+    parametric_rk4_step,
+    planar_flat_inputs,
+)
 from tetherland.planning.spline import rest_to_rest
 
 FORMAT_VERSION = 1
@@ -162,6 +169,47 @@ class TrajectorySamples:
             (self.phi[:, :1], self.theta_A[:, :1], self.phi[:, 1:2], self.theta_A[:, 1:2],
              self.thrusts, self.thrust_rates)
         )  # fmt: skip
+
+
+class PlanarSimulator:
+    """Integrates (6.20) with f'' held on each interval, in fixed RK4 substeps.
+
+    The CasADi functions are compiled once per step count and reused (keep one
+    simulator for repeated plans, as :class:`~tetherland.planning.Planner` does).
+    """
+
+    def __init__(self) -> None:
+        self._step = parametric_rk4_step()
+        self._chains: dict[tuple[str, int, int], ca.Function] = {}
+
+    def _chain(self, kind: str, n: int, m: int) -> ca.Function:
+        key = (kind, n, m)
+        if key not in self._chains:
+            chain = self._step.mapaccum(n)
+            self._chains[key] = chain.map(m) if kind == "restart" else chain
+        return self._chains[key]
+
+    def run(
+        self, params: PlanarParams, times: FloatArray, x0: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        """States after every substep, (N, sub, 12), integrating through all intervals."""
+        N = len(times) - 1
+        h = np.repeat(np.diff(times) / sub, sub)[None, :]
+        ends = self._chain("through", N * sub, 1)(
+            x0, np.repeat(U.T, sub, axis=1), h, params.coefficients
+        )
+        return np.asarray(ends).T.reshape(N, sub, 12)
+
+    def restart(
+        self, params: PlanarParams, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        """States after every substep, (N, sub, 12), each interval started at its node X[k]."""
+        N = len(times) - 1
+        h = np.repeat(np.diff(times) / sub, sub)[None, :]
+        ends = self._chain("restart", sub, N)(
+            X[:-1].T, np.repeat(U.T, sub, axis=1), h, params.coefficients
+        )
+        return np.asarray(ends).T.reshape(N, sub, 12)
 
 
 def _substeps(interval: float) -> int:
@@ -300,6 +348,7 @@ class ShootingTrajectory(Trajectory):
         X: ArrayLike,
         U: ArrayLike,
         substeps: int | None = None,
+        simulator: PlanarSimulator | None = None,
         _table: FloatArray | None = None,
     ) -> None:
         times = np.asarray(times, dtype=float)
@@ -319,11 +368,8 @@ class ShootingTrajectory(Trajectory):
         # than DENSE_STEP), integrated from the node states with the input held.
         self._sub = substeps or _substeps(float(np.max(np.diff(self.times))))
         if _table is None:
-            sub = self._sub
-            step = self.model.casadi_rk4_step().mapaccum(sub).map(N)
-            h = np.repeat(np.diff(self.times) / sub, sub)
-            ends = np.asarray(step(self.X[:-1].T, np.repeat(self.U.T, sub, axis=1), h[None, :]))
-            ends = ends.T.reshape(N, sub, 12)
+            sim = simulator or PlanarSimulator()
+            ends = sim.restart(self.params, self.times, self.X, self.U, self._sub)
             _table = np.concatenate((self.X[:-1, None, :], ends[:, :-1, :]), axis=1)
         self._table = _table
 
@@ -337,23 +383,24 @@ class ShootingTrajectory(Trajectory):
 
     @classmethod
     def simulate(
-        cls, meta: TrajectoryMeta, times: ArrayLike, x0: ArrayLike, U: ArrayLike
+        cls,
+        meta: TrajectoryMeta,
+        times: ArrayLike,
+        x0: ArrayLike,
+        U: ArrayLike,
+        simulator: PlanarSimulator | None = None,
     ) -> ShootingTrajectory:
         """Integrate (6.20) from ``x0`` with the inputs ``U`` held on each interval (RK4
         steps of at most :data:`DENSE_STEP`) and keep the continuous node states."""
         times = np.asarray(times, dtype=float)
         U = np.asarray(U, dtype=float)
-        N = len(times) - 1
+        x0 = np.asarray(x0, dtype=float)
         sub = _substeps(float(np.max(np.diff(times))))
-        step = ExtendedPlanarModel(meta.params).casadi_rk4_step().mapaccum(N * sub)
-        h = np.repeat(np.diff(times) / sub, sub)
-        ends = np.asarray(
-            step(np.asarray(x0, dtype=float), np.repeat(U.T, sub, axis=1), h[None, :])
-        )
-        ends = ends.T.reshape(N, sub, 12)
-        X = np.vstack((np.asarray(x0, dtype=float)[None, :], ends[:, -1, :]))
+        sim = simulator or PlanarSimulator()
+        ends = sim.run(meta.params, times, x0, U, sub)
+        X = np.vstack((x0[None, :], ends[:, -1, :]))
         table = np.concatenate((X[:-1, None, :], ends[:, :-1, :]), axis=1)
-        return cls(meta, times, X, U, sub, _table=table)
+        return cls(meta, times, X, U, sub, simulator=sim, _table=table)
 
     def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         N = len(self.times) - 1
