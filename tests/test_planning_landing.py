@@ -191,3 +191,16 @@ def test_summary_has_the_cli_keys(planner):
         assert s[key] is not None
     assert set(s["final_error"]) == {"phi_rad", "theta_A_rad", "phi_rate", "theta_A_rate"}
     assert max(abs(v) for v in s["final_error"].values()) < 1e-4
+
+
+def test_chapter_rotor_form_plans_the_same_landing(planner):
+    """The planner on the chapter's 12-state extension (6.20) agrees with the default."""
+    scenario = load_scenario("slope50", ["surface.slope_deg=60"])
+    rotor = Planner(form="rotor").plan(scenario, solver="ipopt")
+    check_plan(rotor)
+    default = planner.plan(scenario, solver="ipopt")
+    assert rotor.cost == pytest.approx(default.cost, rel=1e-6)
+    t = np.linspace(0.0, 4.0, 21)
+    np.testing.assert_allclose(
+        rotor.trajectory.sample(t).thrusts, default.trajectory.sample(t).thrusts, atol=1e-4
+    )
