@@ -246,6 +246,9 @@ def spline_trajectory(meta: TrajectoryMeta, spec: ManeuverSpec) -> PolynomialTra
 class Planner:
     """Plans landing and takeoff trajectories; keeps one compiled solver per structure.
 
+    The first OCP plan builds the NLP solver (a few hundred ms); later plans of any
+    scenario reuse it. A planner holds mutable caches: use one per thread.
+
     Parameters
     ----------
     form : {"wrench", "rotor"}

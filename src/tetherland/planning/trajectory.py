@@ -291,7 +291,13 @@ class Trajectory(ABC):
         return self._flatness
 
     def nominal(self, t: float) -> NominalState:
-        """Nominal state and input of the quadrotor at ``t`` (flatness, figure 6.5 "n")."""
+        """Nominal state and input of the quadrotor at ``t`` (flatness, figure 6.5 "n").
+
+        Uses the chapter's model (cable at the centre of mass). For the rotor thrusts
+        that also cancel the cable torque of the attachment offset (6.6.5), evaluate
+        ``FlatnessMap.from_scenario(scenario, with_cable_offset=True)`` on
+        :meth:`output`.
+        """
         return self.flatness.evaluate(self.output(t))
 
     def nominal_many(self, times: ArrayLike) -> dict[str, FloatArray]:
