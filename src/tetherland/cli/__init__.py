@@ -14,6 +14,7 @@ from typer.exceptions import TyperException
 from tetherland import __version__
 from tetherland.cli.analyze import analyze
 from tetherland.cli.campaign import campaign
+from tetherland.cli.plan import plan
 from tetherland.cli.scenarios import scenarios, show
 from tetherland.errors import TetherlandError
 
@@ -46,6 +47,7 @@ app.command()(scenarios)
 app.command()(show)
 app.command()(analyze)
 app.command()(campaign)
+app.command()(plan)
 
 
 def main(argv: list[str] | None = None) -> int:

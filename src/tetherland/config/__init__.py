@@ -21,7 +21,7 @@ from tetherland.config.loader import (
 from tetherland.config.mission import MissionConfig
 from tetherland.config.perturbation import PerturbationConfig
 from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
-from tetherland.config.planning import PlannerConfig
+from tetherland.config.planning import PlannerConfig, PlannerWeights
 from tetherland.config.scenario import Scenario
 from tetherland.config.sensors import ImuConfig, MocapConfig, SensorsConfig
 from tetherland.config.simulation import SimConfig
@@ -35,6 +35,7 @@ __all__ = [
     "MocapConfig",
     "PerturbationConfig",
     "PlannerConfig",
+    "PlannerWeights",
     "Scenario",
     "ScenarioInfo",
     "Section",

@@ -1,0 +1,415 @@
+"""Planar tethered model (6.18) and its double dynamic extension (6.20), numpy and CasADi.
+
+In the vertical plane P_M = span(x_A, z_A) (delta = 0, roll = 0, psi = psi* constant):
+
+  phi''     = -(g/l) cos(phi) + cos(phi + theta_A) f_R / (m l)        (6.18)
+  theta_A'' = tau_y / J_y
+  f_L       = f_R sin(phi + theta_A) - m g sin(phi) + m l phi'^2
+
+with u_M = [f_R, tau_y] = Gamma_M f (6.19): f_R = sum f_i and tau_y = e_B . tau_B, the
+torque about y_A (e_B = R_BA y_A = [sin psi, cos psi, 0]); J_y = e_B . J e_B.
+
+Double dynamic extension (6.20), "rotor form": state
+x = [phi, theta_A, phi', theta_A', f_1..f_4, f_1'..f_4'] (12), input u = [f_1''..f_4''];
+phi'', phi''', theta_A'', theta_A''' are functions of x and the 4th derivatives of x and
+u (:meth:`ExtendedPlanarModel.derivatives`). The chapter lists phi'', phi''' as states too;
+that is the same system.
+
+"Wrench form": the same dynamics in w = [f_R, tau_y]: state
+z = [phi, theta_A, phi', theta_A', f_R, tau_y, f_R', tau_y'] (8), input v = [f_R'', tau_y''].
+The rotor thrusts that keep the motion planar (no roll and no yaw torque) are
+f = G w with G = Gamma^-1 restricted to the (f_R, tau_y) directions; Gamma_M G = I.
+
+Every formula below is written once for a generic math backend (``numpy`` for numbers
+and arrays, ``casadi`` for symbols); parameters may be numbers or CasADi symbols.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import TYPE_CHECKING, Any
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland import GRAVITY
+from tetherland.errors import ConfigError
+from tetherland.geometry import FloatArray
+from tetherland.models.quadrotor import RotorLayout
+
+if TYPE_CHECKING:
+    from tetherland.config import Scenario
+
+NX = 12
+"""Size of the rotor-form extended state."""
+NU = 4
+"""Size of the rotor-form input (rotor thrust second derivatives)."""
+NZ = 8
+"""Size of the wrench-form extended state."""
+NV = 2
+"""Size of the wrench-form input [f_R'', tau_y'']."""
+
+PHI, THETA, PHI_DOT, THETA_DOT = 0, 1, 2, 3
+THRUSTS = slice(4, 8)
+THRUST_RATES = slice(8, 12)
+
+NUMPY = SimpleNamespace(sin=np.sin, cos=np.cos, stack=np.stack)
+CASADI = SimpleNamespace(sin=ca.sin, cos=ca.cos, stack=lambda items: ca.vertcat(*items))
+
+
+@dataclass(frozen=True)
+class PlanarParams:
+    """Constants of the planar model.
+
+    Attributes
+    ----------
+    mass : float
+        m [kg].
+    length : float
+        l, anchor to the link end [m].
+    inertia : float
+        J_y = e_B . J e_B, moment of inertia about y_A [kg m^2].
+    torque_row : (4,) array
+        e_B . (rows 2-4 of Gamma): tau_y = torque_row . f [m].
+    allocation : (4, 4) array
+        Gamma of the rotor layout (6.19) [-, m].
+    heading : float
+        psi*, the constant rotation about z_B [rad].
+    gravity : float
+        g [m/s^2].
+    """
+
+    mass: float
+    length: float
+    inertia: float
+    torque_row: FloatArray
+    allocation: FloatArray
+    heading: float = 0.0
+    gravity: float = GRAVITY
+
+    @classmethod
+    def from_matrices(
+        cls,
+        mass: float,
+        length: float,
+        inertia_B: ArrayLike,
+        allocation: ArrayLike,
+        heading: float = 0.0,
+        gravity: float = GRAVITY,
+    ) -> PlanarParams:
+        """Planar constants for a vehicle flying with heading ``psi*`` = ``heading``.
+
+        Parameters
+        ----------
+        inertia_B : (3,) or (3, 3) array
+            J in F_B [kg m^2].
+        allocation : (4, 4) array
+            Gamma (6.19).
+
+        Raises
+        ------
+        ConfigError
+            If y_A is not a principal axis of the body for this heading (J_xx != J_yy
+            and psi* not a multiple of 90 deg): rotating about it would then need roll
+            and yaw torques, which the planar model does not have.
+        """
+        J = np.asarray(inertia_B, dtype=float)
+        J = np.diag(J) if J.shape == (3,) else J
+        e_B = np.array([math.sin(heading), math.cos(heading), 0.0])
+        Je = J @ e_B
+        J_y = float(e_B @ Je)
+        if np.linalg.norm(Je - J_y * e_B) > 1e-9 * np.linalg.norm(J):
+            raise ConfigError(
+                f"heading psi* = {math.degrees(heading):g} deg: y_A is not a principal axis of "
+                "the body (J_xx != J_yy), the planar model (6.18) does not apply; "
+                "use a multiple of 90 deg"
+            )
+        Gamma = np.asarray(allocation, dtype=float)
+        return cls(
+            mass=mass,
+            length=length,
+            inertia=J_y,
+            torque_row=e_B @ Gamma[1:4],
+            allocation=Gamma,
+            heading=heading,
+            gravity=gravity,
+        )
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario, heading: float = 0.0) -> PlanarParams:
+        v = scenario.vehicle
+        return cls.from_matrices(
+            v.mass,
+            scenario.tether.length,
+            v.inertia,
+            RotorLayout.from_config(v).allocation,
+            heading,
+        )
+
+    @property
+    def coefficients(self) -> FloatArray:
+        """[m, l, J_y, g, torque_row (4)]: the constants the dynamics depend on (8,)."""
+        return np.concatenate(
+            ([self.mass, self.length, self.inertia, self.gravity], self.torque_row)
+        )
+
+    @property
+    def e_B(self) -> FloatArray:
+        """y_A in F_B: the body axis of the planar rotation."""
+        return np.array([math.sin(self.heading), math.cos(self.heading), 0.0])
+
+    @property
+    def Gamma_M(self) -> FloatArray:
+        """(2, 4) map f -> [f_R, tau_y] (6.19)."""
+        return np.vstack((np.ones(4), self.torque_row))
+
+    @property
+    def G(self) -> FloatArray:
+        """(4, 2) map [f_R, tau_y] -> rotor thrusts with zero roll and yaw torque [-, 1/m]."""
+        Gi = np.linalg.inv(self.allocation)
+        return np.column_stack((Gi[:, 0], Gi[:, 1:4] @ self.e_B))
+
+
+def planar_terms(
+    phi: Any,
+    theta: Any,
+    dphi: Any,
+    dtheta: Any,
+    F: Any,
+    tau: Any,
+    dF: Any,
+    dtau: Any,
+    ddF: Any,
+    ddtau: Any,
+    c: Any,
+    ops: SimpleNamespace,
+) -> dict[str, Any]:
+    """Accelerations, jerks, snaps and tension of the planar model, for any backend.
+
+    Arguments are numbers, arrays or CasADi symbols: the output elevation and tilt with
+    their rates, the planar wrench w = [F = f_R, tau = tau_y] with w' and w'' (``ddF`` and
+    ``ddtau`` may be None, then the snaps are omitted), and ``c`` an object with
+    ``mass``, ``length``, ``inertia``, ``gravity``.
+    """
+    a1 = -c.gravity / c.length
+    a2 = 1.0 / (c.mass * c.length)
+    s = phi + theta
+    ds = dphi + dtheta
+    cs, ss = ops.cos(s), ops.sin(s)
+    cp, sp = ops.cos(phi), ops.sin(phi)
+    ddphi = a1 * cp + a2 * cs * F  # (6.18)
+    ddtheta = tau / c.inertia
+    out = {
+        "phi_ddot": ddphi,
+        "theta_ddot": ddtheta,
+        "phi_dddot": -a1 * sp * dphi - a2 * ss * ds * F + a2 * cs * dF,
+        "theta_dddot": dtau / c.inertia,
+        "tension": F * ss - c.mass * c.gravity * sp + c.mass * c.length * dphi**2,
+    }
+    if ddF is not None:
+        dds = ddphi + ddtheta
+        out["phi_ddddot"] = (
+            -a1 * cp * dphi**2
+            - a1 * sp * ddphi
+            - a2 * cs * ds**2 * F
+            - a2 * ss * dds * F
+            - 2.0 * a2 * ss * ds * dF
+            + a2 * cs * ddF
+        )
+        out["theta_ddddot"] = ddtau / c.inertia
+    return out
+
+
+def planar_flat_inputs(
+    phi_d: ArrayLike, theta_d: ArrayLike, c: Any, ops: SimpleNamespace = NUMPY
+) -> dict[str, Any]:
+    """Planar flatness: the wrench w = [f_R, tau_y] and its first two derivatives.
+
+    ``phi_d`` = [phi, phi', phi'', phi''', phi''''] and ``theta_d`` = [theta_A, ...,
+    theta_A''''] (first axis the derivative order; trailing axes broadcast). Inverts
+    (6.18): f_R = m l (phi'' + (g/l) cos phi) / cos(phi + theta_A), tau_y = J_y theta_A''.
+    Singular where cos(phi + theta_A) = 0 (thrust axis along the link).
+    """
+    p0, p1, p2, p3, p4 = (phi_d[i] for i in range(5))
+    t0, t1, t2, t3, t4 = (theta_d[i] for i in range(5))
+    k = c.gravity / c.length
+    ml = c.mass * c.length
+    A = p2 + k * ops.cos(p0)
+    A1 = p3 - k * ops.sin(p0) * p1
+    A2 = p4 - k * (ops.cos(p0) * p1**2 + ops.sin(p0) * p2)
+    s, s1, s2 = p0 + t0, p1 + t1, p2 + t2
+    B = ops.cos(s)
+    B1 = -ops.sin(s) * s1
+    B2 = -ops.cos(s) * s1**2 - ops.sin(s) * s2
+    F = ml * A / B
+    F1 = ml * (A1 * B - A * B1) / B**2
+    F2 = ml * (A2 / B - 2.0 * A1 * B1 / B**2 - A * B2 / B**2 + 2.0 * A * B1**2 / B**3)
+    J = c.inertia
+    return {
+        "f_R": F,
+        "f_R_dot": F1,
+        "f_R_ddot": F2,
+        "tau": J * t2,
+        "tau_dot": J * t3,
+        "tau_ddot": J * t4,
+    }
+
+
+def _dot4(row: Any, f: Any) -> Any:
+    return row[0] * f[0] + row[1] * f[1] + row[2] * f[2] + row[3] * f[3]
+
+
+def rotor_form_terms(x: Any, u: Any, c: Any, ops: SimpleNamespace) -> dict[str, Any]:
+    """:func:`planar_terms` of a rotor-form state ``x`` (12) and input ``u`` (4, or None)."""
+    f, df = [x[4 + i] for i in range(4)], [x[8 + i] for i in range(4)]
+    ones = (1.0, 1.0, 1.0, 1.0)
+    row = c.torque_row
+    ddF = None if u is None else _dot4(ones, [u[i] for i in range(4)])
+    ddtau = None if u is None else _dot4(row, [u[i] for i in range(4)])
+    return planar_terms(
+        x[0], x[1], x[2], x[3],
+        _dot4(ones, f), _dot4(row, f), _dot4(ones, df), _dot4(row, df),
+        ddF, ddtau, c, ops,
+    )  # fmt: skip
+
+
+def rotor_form_rhs(x: Any, u: Any, c: Any, ops: SimpleNamespace) -> Any:
+    """(6.20): d/dt [phi, theta_A, phi', theta_A', f, f'] = [phi', theta_A', phi'', theta_A'',
+    f', u]."""
+    t = rotor_form_terms(x, None, c, ops)
+    return ops.stack(
+        [x[2], x[3], t["phi_ddot"], t["theta_ddot"]]
+        + [x[8 + i] for i in range(4)]
+        + [u[i] for i in range(4)]
+    )
+
+
+def wrench_form_terms(z: Any, v: Any, c: Any, ops: SimpleNamespace) -> dict[str, Any]:
+    """:func:`planar_terms` of a wrench-form state ``z`` (8) and input ``v`` (2, or None)."""
+    return planar_terms(
+        z[0], z[1], z[2], z[3], z[4], z[5], z[6], z[7],
+        None if v is None else v[0], None if v is None else v[1], c, ops,
+    )  # fmt: skip
+
+
+def wrench_form_rhs(z: Any, v: Any, c: Any, ops: SimpleNamespace) -> Any:
+    """d/dt [phi, theta_A, phi', theta_A', f_R, tau_y, f_R', tau_y'] (the wrench form of 6.20)."""
+    t = wrench_form_terms(z, None, c, ops)
+    return ops.stack([z[2], z[3], t["phi_ddot"], t["theta_ddot"], z[6], z[7], v[0], v[1]])
+
+
+@dataclass(frozen=True)
+class ExtendedPlanarModel:
+    """The double dynamic extension (6.20) of the planar model, numerical and symbolic.
+
+    Numerical methods take numpy arrays whose first axis is the state (12) or input (4)
+    index; trailing axes are vectorised (e.g. x of shape (12, n) for n samples).
+    """
+
+    params: PlanarParams
+
+    # -- numerical -------------------------------------------------------------------
+    def rhs(self, x: ArrayLike, u: ArrayLike) -> FloatArray:
+        """x' for the rotor-form state ``x`` and input ``u`` = f'' (6.20)."""
+        return rotor_form_rhs(
+            np.asarray(x, dtype=float), np.asarray(u, dtype=float), self.params, NUMPY
+        )
+
+    def derivatives(self, x: ArrayLike, u: ArrayLike | None = None) -> dict[str, FloatArray]:
+        """phi'', theta_A'', phi''', theta_A''' and f_L from ``x``; with ``u`` also the snaps.
+
+        Keys: ``phi_ddot``, ``theta_ddot``, ``phi_dddot``, ``theta_dddot``, ``tension``,
+        and with ``u``: ``phi_ddddot``, ``theta_ddddot`` [rad/s^k, N].
+        """
+        x = np.asarray(x, dtype=float)
+        return rotor_form_terms(
+            x, None if u is None else np.asarray(u, dtype=float), self.params, NUMPY
+        )
+
+    def wrench(self, x: ArrayLike) -> FloatArray:
+        """[f_R, tau_y, f_R', tau_y'] of a rotor-form state [N, N m, N/s, N m/s]."""
+        x = np.asarray(x, dtype=float)
+        GM = self.params.Gamma_M
+        return np.concatenate(
+            (np.tensordot(GM, x[THRUSTS], 1), np.tensordot(GM, x[THRUST_RATES], 1))
+        )
+
+    def hover_state(self, phi: float, theta: float) -> FloatArray:
+        """Rotor-form state of inclined hovering at (phi, theta_A): zero rates, f = G [f_R, 0]."""
+        p = self.params
+        den = math.cos(phi + theta)
+        f_R = p.mass * p.gravity * math.cos(phi) / den
+        return np.concatenate(
+            ([phi, theta, 0.0, 0.0], self.params.G @ np.array([f_R, 0.0]), np.zeros(4))
+        )
+
+    def to_wrench_form(self, x: ArrayLike) -> FloatArray:
+        """Rotor-form state (12) -> wrench-form state (8) (drops roll/yaw torque components)."""
+        x = np.asarray(x, dtype=float)
+        w = self.wrench(x)
+        return np.concatenate((x[:4], w))
+
+    def from_wrench_form(self, z: ArrayLike) -> FloatArray:
+        """Wrench-form state (8) -> rotor-form state (12) with planar-consistent thrusts."""
+        z = np.asarray(z, dtype=float)
+        G = self.params.G
+        return np.concatenate((z[:4], np.tensordot(G, z[4:6], 1), np.tensordot(G, z[6:8], 1)))
+
+    # -- symbolic --------------------------------------------------------------------
+    def casadi_rhs(self) -> ca.Function:
+        """CasADi Function ``f(x[12], u[4]) -> x'`` of (6.20) with this model's constants."""
+        x, u = ca.SX.sym("x", NX), ca.SX.sym("u", NU)
+        return ca.Function(
+            "planar_rhs", [x, u], [rotor_form_rhs(x, u, self.params, CASADI)], ["x", "u"], ["xdot"]
+        )
+
+    def casadi_derivatives(self) -> ca.Function:
+        """CasADi Function ``(x, u) -> (phi'', phi''', phi'''', theta_A'', theta_A''',
+        theta_A'''', f_L)``."""
+        x, u = ca.SX.sym("x", NX), ca.SX.sym("u", NU)
+        t = rotor_form_terms(x, u, self.params, CASADI)
+        names = [
+            "phi_ddot",
+            "phi_dddot",
+            "phi_ddddot",
+            "theta_ddot",
+            "theta_dddot",
+            "theta_ddddot",
+            "tension",
+        ]
+        return ca.Function("planar_derivatives", [x, u], [t[n] for n in names], ["x", "u"], names)
+
+    def casadi_rk4_step(self) -> ca.Function:
+        """CasADi Function ``step(x[12], u[4], h) -> x(t + h)``: one classical RK4 step of
+        (6.20) with the input held (exact for the thrusts, which are polynomial in t)."""
+        x, u, h = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h")
+        step = parametric_rk4_step()
+        return ca.Function(
+            "planar_rk4",
+            [x, u, h],
+            [step(x, u, h, self.params.coefficients)],
+            ["x", "u", "h"],
+            ["x_next"],
+        )
+
+
+def parametric_rk4_step() -> ca.Function:
+    """``step(x[12], u[4], h, c[8]) -> x(t + h)``: one RK4 step of (6.20) with the input
+    held, for the model constants c = :attr:`PlanarParams.coefficients`."""
+    x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", 8)
+    coeffs = SimpleNamespace(
+        mass=c[0], length=c[1], inertia=c[2], gravity=c[3], torque_row=[c[4 + i] for i in range(4)]
+    )
+
+    def f(z: ca.SX) -> ca.SX:
+        return rotor_form_rhs(z, u, coeffs, CASADI)
+
+    k1 = f(x)
+    k2 = f(x + 0.5 * h * k1)
+    k3 = f(x + 0.5 * h * k2)
+    k4 = f(x + h * k3)
+    x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return ca.Function("planar_rk4", [x, u, h, c], [x_next], ["x", "u", "h", "c"], ["x_next"])

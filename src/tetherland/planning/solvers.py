@@ -1,0 +1,321 @@
+"""NLP solvers for transcribed optimal control problems: IPOPT and fatrop (bundled in CasADi).
+
+:class:`OcpSolver` builds the CasADi ``nlpsol`` of a problem structure once and reuses it
+for every later problem of the same structure (same symbolic statement, transcription and
+solver settings): only numbers change between solves. A solve can be warm-started from
+a previous :class:`OcpSolution` (primal values, and the multipliers for IPOPT).
+"""
+
+from __future__ import annotations
+
+import enum
+import time
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland.geometry import FloatArray
+from tetherland.planning.ocp import OcpProblem
+from tetherland.planning.transcription import MultipleShooting, Transcript
+
+SolverName = Literal["fatrop", "ipopt"]
+SOLVERS: tuple[str, ...] = ("fatrop", "ipopt")
+
+
+class SolveStatus(enum.Enum):
+    """Outcome of an NLP solve, from the solver's own return status."""
+
+    SUCCESS = "success"
+    INFEASIBLE = "infeasible"
+    MAX_ITER = "max_iter"
+    FAILED = "failed"
+
+
+_UNIFIED = {
+    "SOLVER_RET_SUCCESS": SolveStatus.SUCCESS,
+    "SOLVER_RET_INFEASIBLE": SolveStatus.INFEASIBLE,
+    "SOLVER_RET_LIMITED": SolveStatus.MAX_ITER,
+}
+_IPOPT = {
+    "Solve_Succeeded": SolveStatus.SUCCESS,
+    "Solved_To_Acceptable_Level": SolveStatus.SUCCESS,
+    "Search_Direction_Becomes_Too_Small": SolveStatus.SUCCESS,
+    "Infeasible_Problem_Detected": SolveStatus.INFEASIBLE,
+    "Maximum_Iterations_Exceeded": SolveStatus.MAX_ITER,
+    "Maximum_CpuTime_Exceeded": SolveStatus.MAX_ITER,
+    "Maximum_WallTime_Exceeded": SolveStatus.MAX_ITER,
+}
+
+
+# fatrop::IpSolverReturnFlag (fatrop >= 1.0, bundled with CasADi 3.7+).
+_FATROP_FLAGS = {
+    0: "Success",
+    1: "MaxIterExceeded",
+    2: "StopAtTinyStep",
+    3: "StopAtAcceptablePoint",
+    4: "LocalInfeasibility",
+    5: "FeasiblePointFound",
+    6: "DivergingIterates",
+    7: "ErrorInStepComputation",
+    8: "InvalidOption",
+    9: "InternalError",
+    10: "Unknown",
+}
+# Acceptable-point and tiny-step exits count as candidate solutions: like every solution
+# they must pass the planner's re-simulation check before they are used.
+_FATROP = {
+    0: SolveStatus.SUCCESS,
+    1: SolveStatus.MAX_ITER,
+    2: SolveStatus.SUCCESS,
+    3: SolveStatus.SUCCESS,
+    4: SolveStatus.INFEASIBLE,
+}
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Which NLP solver and how hard it tries.
+
+    Attributes
+    ----------
+    name : {"fatrop", "ipopt"}
+    tol : float
+        Convergence tolerance (KKT error) [-].
+    max_iter : int
+        Iteration limit.
+    mu_init : float or None
+        Initial barrier parameter of the interior-point method (None: the solver's
+        default, 0.1); smaller values suit a good initial guess.
+    verbose : bool
+        Print the solver's iteration log.
+    """
+
+    name: SolverName = "fatrop"
+    tol: float = 1e-6
+    max_iter: int = 500
+    mu_init: float | None = None
+    verbose: bool = False
+
+    def __post_init__(self) -> None:
+        if self.name not in SOLVERS:
+            raise ValueError(f"solver must be one of {', '.join(SOLVERS)}, got {self.name!r}")
+        if not self.tol > 0 or self.max_iter < 1:
+            raise ValueError("tol must be > 0 and max_iter >= 1")
+
+    def options(self, transcript: Transcript, warm: bool) -> dict[str, Any]:
+        """CasADi ``nlpsol`` options (warm: tuned to start near a solution)."""
+        common: dict[str, Any] = {"expand": True, "print_time": False, "error_on_fail": False}
+        if self.name == "ipopt":
+            ipopt: dict[str, Any] = {
+                "tol": self.tol,
+                "max_iter": self.max_iter,
+                "print_level": 5 if self.verbose else 0,
+                "sb": "yes",
+            }
+            if self.mu_init is not None:
+                ipopt["mu_init"] = self.mu_init
+            if warm:
+                ipopt.update(
+                    warm_start_init_point="yes",
+                    mu_init=1e-5,
+                    warm_start_bound_push=1e-6,
+                    warm_start_mult_bound_push=1e-6,
+                )
+            return {**common, "ipopt": ipopt}
+        fatrop: dict[str, Any] = {
+            "tol": self.tol,
+            "max_iter": self.max_iter,
+            "print_level": 10 if self.verbose else 0,
+        }
+        if self.mu_init is not None:
+            fatrop["mu_init"] = self.mu_init
+        # fatrop's tolerance is absolute (IPOPT scales its own): accept a point whose KKT
+        # error stays below a looser bound for some iterations, as IPOPT does by default.
+        fatrop.update(tol_acceptable=max(1e-4, 100 * self.tol), acceptable_iter=15)
+        if warm:
+            fatrop.update(mu_init=1e-4, bound_push=1e-6)
+        return {
+            **common,
+            "structure_detection": "auto",
+            "equality": list(transcript.equality),
+            "fatrop": fatrop,
+        }
+
+
+@dataclass(frozen=True)
+class OcpSolution:
+    """What a solver returned for one problem (raw nodes; no verification).
+
+    Attributes
+    ----------
+    status : SolveStatus
+    return_status : str
+        The solver's own status (e.g. ``Solve_Succeeded``, ``SOLVER_RET_SUCCESS``).
+    solver : str
+    times : (N+1,) array
+        Node times [s].
+    X : (N+1, nx) array
+        Node states.
+    U : (N, nu) array
+        Inputs, constant on [t_k, t_{k+1}).
+    cost : float
+    iterations : int
+    solve_time : float
+        Wall time of the solver call [s].
+    build_time : float
+        Time spent building the solver for this call (0 when it was cached) [s].
+    structure_key : str
+    lam_x, lam_g : arrays
+        Multipliers (for warm starts).
+    """
+
+    status: SolveStatus
+    return_status: str
+    solver: str
+    times: FloatArray
+    X: FloatArray
+    U: FloatArray
+    cost: float
+    iterations: int
+    solve_time: float
+    build_time: float
+    structure_key: str
+    lam_x: FloatArray = field(repr=False)
+    lam_g: FloatArray = field(repr=False)
+
+    @property
+    def success(self) -> bool:
+        return self.status is SolveStatus.SUCCESS
+
+
+@dataclass(frozen=True)
+class InitialGuess:
+    """Node states (N+1, nx) and inputs (N, nu) to start the solver from."""
+
+    X: FloatArray
+    U: FloatArray
+
+
+def _classify(solver: str, stats: dict[str, Any]) -> tuple[SolveStatus, str]:
+    unified = str(stats.get("unified_return_status", ""))
+    if solver == "ipopt":
+        raw = str(stats.get("return_status", unified))
+        status = _IPOPT.get(raw, _UNIFIED.get(unified, SolveStatus.FAILED))
+        if status is SolveStatus.SUCCESS and not stats.get("success", True):
+            status = SolveStatus.FAILED
+    else:
+        flag = int(stats.get("fatrop", {}).get("return_flag", -1))
+        raw = f"{_FATROP_FLAGS.get(flag, 'Unknown')} (fatrop return flag {flag})"
+        status = _FATROP.get(flag, SolveStatus.FAILED)
+    return status, raw
+
+
+class OcpSolver:
+    """Transcribes and solves OCPs, caching one transcription and NLP solver per structure.
+
+    Parameters
+    ----------
+    transcription : MultipleShooting
+    settings : SolverSettings
+
+    The cache lives in the instance: keep one :class:`OcpSolver` (or one
+    :class:`~tetherland.planning.planner.Planner`) for repeated solves.
+    """
+
+    def __init__(
+        self, transcription: MultipleShooting | None = None, settings: SolverSettings | None = None
+    ) -> None:
+        self.transcription = transcription or MultipleShooting()
+        self.settings = settings or SolverSettings()
+        self._transcripts: dict[str, Transcript] = {}
+        self._solvers: dict[tuple[str, bool], ca.Function] = {}
+
+    def transcript(self, problem: OcpProblem) -> Transcript:
+        """The (cached) transcript of ``problem``'s structure."""
+        key = problem.structure_key
+        if key not in self._transcripts:
+            self._transcripts[key] = self.transcription.transcribe(problem)
+        return self._transcripts[key]
+
+    def _nlpsol(self, transcript: Transcript, warm: bool) -> tuple[ca.Function, float]:
+        key = (transcript.structure_key, warm)
+        if key in self._solvers:
+            return self._solvers[key], 0.0
+        t0 = time.perf_counter()
+        opts = self.settings.options(transcript, warm)
+        solver = ca.nlpsol(f"ocp_{self.settings.name}", self.settings.name, transcript.nlp, opts)
+        self._solvers[key] = solver
+        return solver, time.perf_counter() - t0
+
+    def prepare(self, problem: OcpProblem, warm: bool = False) -> float:
+        """Build (or find) the solver for ``problem``'s structure; returns the build time [s]."""
+        return self._nlpsol(self.transcript(problem), warm)[1]
+
+    def solve(
+        self, problem: OcpProblem, guess: InitialGuess | OcpSolution | None = None
+    ) -> OcpSolution:
+        """Solve ``problem`` from ``guess`` (a warm start when it is a previous solution).
+
+        Without a guess the solver starts from the initial state held constant and zero
+        inputs. Solver exceptions are caught and reported as :attr:`SolveStatus.FAILED`.
+        """
+        tr = self.transcript(problem)
+        N = tr.nodes
+        warm = isinstance(guess, OcpSolution)
+        solver, build_time = self._nlpsol(tr, warm)
+        if guess is None:
+            X0 = np.tile(problem.x0, (N + 1, 1))
+            U0 = np.zeros((N, problem.nu))
+        else:
+            X0, U0 = np.asarray(guess.X, dtype=float), np.asarray(guess.U, dtype=float)
+            if X0.shape != (N + 1, problem.nx) or U0.shape != (N, problem.nu):
+                raise ValueError(
+                    f"guess shapes {X0.shape}, {U0.shape} do not match the transcription "
+                    f"({N + 1}, {problem.nx}), ({N}, {problem.nu})"
+                )
+        args: dict[str, ArrayLike] = {"x0": tr.pack(X0, U0), **tr.numbers(problem)}
+        if warm and self.settings.name == "ipopt" and guess.structure_key == problem.structure_key:
+            args.update(lam_x0=guess.lam_x, lam_g0=guess.lam_g)
+        t0 = time.perf_counter()
+        try:
+            res = solver(**args)
+        except RuntimeError as err:  # evaluation errors (NaN, ...) inside the solver
+            elapsed = time.perf_counter() - t0
+            nan_x = np.full_like(X0, np.nan)
+            return OcpSolution(
+                status=SolveStatus.FAILED,
+                return_status=f"exception: {str(err).splitlines()[-1][:200]}",
+                solver=self.settings.name,
+                times=tr.times(problem.duration),
+                X=nan_x,
+                U=np.full_like(U0, np.nan),
+                cost=float("nan"),
+                iterations=0,
+                solve_time=elapsed,
+                build_time=build_time,
+                structure_key=problem.structure_key,
+                lam_x=np.zeros(tr.n_w),
+                lam_g=np.zeros(len(tr.equality)),
+            )
+        elapsed = time.perf_counter() - t0
+        stats = solver.stats()
+        status, raw = _classify(self.settings.name, stats)
+        X, U = tr.unpack(np.asarray(res["x"]).reshape(-1))
+        return OcpSolution(
+            status=status,
+            return_status=raw,
+            solver=self.settings.name,
+            times=tr.times(problem.duration),
+            X=X,
+            U=U,
+            cost=float(res["f"]),
+            iterations=int(stats.get("iter_count", 0)),
+            solve_time=elapsed,
+            build_time=build_time,
+            structure_key=problem.structure_key,
+            lam_x=np.asarray(res["lam_x"]).reshape(-1),
+            lam_g=np.asarray(res["lam_g"]).reshape(-1),
+        )

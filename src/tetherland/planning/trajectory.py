@@ -1,0 +1,523 @@
+"""Planned references y^bd(t) with derivatives, nominal state and input, and CSV files.
+
+A :class:`Trajectory` answers, at any time t (held at its end values outside [0, T]):
+the output y^bd = [phi, delta = 0, theta_A, psi*] with derivatives up to the 4th order,
+the planar extended state x = [phi, theta_A, phi', theta_A', f, f'] and input f'' of
+(6.20), the tension, and through :class:`~tetherland.models.flatness.FlatnessMap` the
+full nominal state and input of the quadrotor.
+
+Two kinds share this interface:
+
+* :class:`ShootingTrajectory` (``ocp``): the node states and piecewise-constant inputs
+  f'' of an OCP solution. Between nodes the model (6.20) is integrated with the input
+  held (fine RK4 steps, exact for the thrusts, which are C^1), so phi and theta_A and
+  their derivatives are those of the model: phi is C^3, phi'''' jumps with f''.
+* :class:`PolynomialTrajectory` (``spline``): 9th-order rest-to-rest polynomials for phi
+  and theta_A; thrusts and tension from planar flatness.
+
+CSV files start with ``#`` header lines (format, kind, scenario, maneuver, version and a
+JSON ``meta`` line with the model constants), then one row per node (ocp) or sample
+(spline); :func:`load_trajectory` rebuilds the same trajectory.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland import GRAVITY, __version__
+from tetherland.errors import ConfigError
+from tetherland.geometry import FloatArray
+from tetherland.io import atomic_write_text
+from tetherland.models.flatness import FlatnessMap, NominalState, OutputDerivatives
+from tetherland.models.planar import (
+    NUMPY,
+    ExtendedPlanarModel,
+    PlanarParams,
+    parametric_rk4_step,
+    planar_flat_inputs,
+)
+from tetherland.planning.spline import rest_to_rest
+
+FORMAT_VERSION = 1
+DENSE_STEP = 2e-3
+"""Largest RK4 step between the nodes of a :class:`ShootingTrajectory` [s]."""
+
+_COLUMNS = (
+    ["t"] + [f"phi_d{k}" for k in range(5)] + [f"theta_A_d{k}" for k in range(5)]
+    + [f"f{i}" for i in range(1, 5)] + [f"f{i}_dot" for i in range(1, 5)]
+    + [f"f{i}_ddot" for i in range(1, 5)] + ["f_R", "tension"]
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class TrajectoryMeta:
+    """Where a trajectory comes from and the model constants needed to evaluate it.
+
+    Attributes
+    ----------
+    scenario : str
+    maneuver : str
+        ``landing`` or ``takeoff``.
+    mass, length : float
+        [kg], [m].
+    inertia_B : (3,) or (3, 3) array
+        [kg m^2].
+    allocation : (4, 4) array
+        Gamma (6.19).
+    heading : float
+        psi* [rad].
+    R_WA : (3, 3) array
+        Anchor frame.
+    p_A : (3,) array
+        Anchor point in F_W [m].
+    gravity : float
+    version : str
+        tetherland version that made it.
+    """
+
+    scenario: str
+    maneuver: str
+    mass: float
+    length: float
+    inertia_B: FloatArray
+    allocation: FloatArray
+    heading: float = 0.0
+    R_WA: FloatArray = field(default_factory=lambda: np.eye(3))
+    p_A: FloatArray = field(default_factory=lambda: np.zeros(3))
+    gravity: float = GRAVITY
+    version: str = __version__
+
+    @property
+    def params(self) -> PlanarParams:
+        return PlanarParams.from_matrices(
+            self.mass, self.length, self.inertia_B, self.allocation, self.heading, self.gravity
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "scenario": self.scenario,
+            "maneuver": self.maneuver,
+            "mass": self.mass,
+            "length": self.length,
+            "inertia_B": np.asarray(self.inertia_B).tolist(),
+            "allocation": np.asarray(self.allocation).tolist(),
+            "heading": self.heading,
+            "R_WA": np.asarray(self.R_WA).tolist(),
+            "p_A": np.asarray(self.p_A).tolist(),
+            "gravity": self.gravity,
+            "version": self.version,
+        }
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any]) -> TrajectoryMeta:
+        arrays = {
+            k: np.asarray(d[k], dtype=float) for k in ("inertia_B", "allocation", "R_WA", "p_A")
+        }
+        scalars = {
+            k: d[k]
+            for k in ("scenario", "maneuver", "mass", "length", "heading", "gravity", "version")
+        }
+        return cls(**scalars, **arrays)
+
+
+@dataclass(frozen=True)
+class TrajectorySamples:
+    """A trajectory sampled at times ``t`` (arrays with a leading sample axis n).
+
+    Attributes
+    ----------
+    t : (n,) array [s]
+    phi, theta_A : (n, 5) arrays
+        Value and derivatives 1..4 [rad, rad/s^k].
+    psi : float
+        psi* [rad] (delta is 0).
+    thrusts, thrust_rates, thrust_accels : (n, 4) arrays
+        f, f', f'' [N, N/s, N/s^2].
+    f_R, tension : (n,) arrays
+        Total thrust and cable tension [N].
+    """
+
+    t: FloatArray
+    phi: FloatArray
+    theta_A: FloatArray
+    psi: float
+    thrusts: FloatArray
+    thrust_rates: FloatArray
+    thrust_accels: FloatArray
+    f_R: FloatArray
+    tension: FloatArray
+
+    def outputs(self) -> FloatArray:
+        """(n, 16) rows of :meth:`OutputDerivatives.as_vector` for the flatness map."""
+        n = len(self.t)
+        psi = np.tile([self.psi, 0.0, 0.0], (n, 1))
+        return np.hstack((self.phi, np.zeros((n, 5)), self.theta_A[:, :3], psi))
+
+    def states(self) -> FloatArray:
+        """(n, 12) rotor-form extended states [phi, theta_A, phi', theta_A', f, f']."""
+        return np.hstack(
+            (self.phi[:, :1], self.theta_A[:, :1], self.phi[:, 1:2], self.theta_A[:, 1:2],
+             self.thrusts, self.thrust_rates)
+        )  # fmt: skip
+
+
+class PlanarSimulator:
+    """Integrates (6.20) with f'' held on each interval, in fixed RK4 substeps.
+
+    The CasADi functions are compiled once per step count and reused (keep one
+    simulator for repeated plans, as :class:`~tetherland.planning.Planner` does).
+    """
+
+    def __init__(self) -> None:
+        self._step = parametric_rk4_step()
+        self._chains: dict[tuple[str, int, int], ca.Function] = {}
+
+    def _chain(self, kind: str, n: int, m: int) -> ca.Function:
+        key = (kind, n, m)
+        if key not in self._chains:
+            chain = self._step.mapaccum(n)
+            self._chains[key] = chain.map(m) if kind == "restart" else chain
+        return self._chains[key]
+
+    def run(
+        self, params: PlanarParams, times: FloatArray, x0: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        """States after every substep, (N, sub, 12), integrating through all intervals."""
+        N = len(times) - 1
+        h = np.repeat(np.diff(times) / sub, sub)[None, :]
+        ends = self._chain("through", N * sub, 1)(
+            x0, np.repeat(U.T, sub, axis=1), h, params.coefficients
+        )
+        return np.asarray(ends).T.reshape(N, sub, 12)
+
+    def restart(
+        self, params: PlanarParams, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        """States after every substep, (N, sub, 12), each interval started at its node X[k]."""
+        N = len(times) - 1
+        h = np.repeat(np.diff(times) / sub, sub)[None, :]
+        ends = self._chain("restart", sub, N)(
+            X[:-1].T, np.repeat(U.T, sub, axis=1), h, params.coefficients
+        )
+        return np.asarray(ends).T.reshape(N, sub, 12)
+
+
+def _substeps(interval: float) -> int:
+    return max(1, math.ceil(interval / DENSE_STEP - 1e-9))
+
+
+class Trajectory(ABC):
+    """A planned landing or takeoff reference on [0, T]; see the module docstring."""
+
+    kind: ClassVar[str]
+
+    def __init__(self, meta: TrajectoryMeta, duration: float) -> None:
+        if not duration > 0:
+            raise ValueError(f"duration must be > 0, got {duration}")
+        self.meta = meta
+        self.duration = float(duration)
+        self.params = meta.params
+        self.model = ExtendedPlanarModel(self.params)
+        self._flatness: FlatnessMap | None = None
+
+    # -- the one method a kind must provide ----------------------------------------
+    @abstractmethod
+    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """phi (n,5), theta_A (n,5), x (n,12), u (n,4) for times in [0, T]."""
+
+    @abstractmethod
+    def _rows(self) -> FloatArray:
+        """Times of the CSV rows."""
+
+    @abstractmethod
+    def _extra_meta(self) -> dict[str, Any]:
+        """Kind-specific JSON needed to rebuild the trajectory from its CSV."""
+
+    # -- interface -------------------------------------------------------------------
+    def sample(self, times: ArrayLike) -> TrajectorySamples:
+        """Everything at ``times`` [s]; before 0 and after T the end values are held
+        (derivatives, thrust rates and f'' zero)."""
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        tc = np.clip(t, 0.0, self.duration)
+        phi, theta, x, u = self._evaluate(tc)
+        outside = (t < 0.0) | (t > self.duration)
+        if np.any(outside):
+            phi[outside, 1:] = 0.0
+            theta[outside, 1:] = 0.0
+            x[outside, 2:4] = 0.0
+            x[outside, 8:12] = 0.0
+            u[outside] = 0.0
+        d = self.model.derivatives(x.T)
+        return TrajectorySamples(
+            t=t,
+            phi=phi,
+            theta_A=theta,
+            psi=self.params.heading,
+            thrusts=x[:, 4:8],
+            thrust_rates=x[:, 8:12],
+            thrust_accels=u,
+            f_R=x[:, 4:8].sum(axis=1),
+            tension=np.asarray(d["tension"]),
+        )
+
+    def output(self, t: float) -> OutputDerivatives:
+        """y^bd(t) = [phi, 0, theta_A, psi*] with derivatives (4th order for phi, delta)."""
+        s = self.sample([t])
+        return OutputDerivatives.planar(s.phi[0], s.theta_A[0], s.psi)
+
+    def state(self, t: float) -> FloatArray:
+        """Planar extended state (12,) of (6.20) at ``t``."""
+        return self.sample([t]).states()[0]
+
+    @property
+    def flatness(self) -> FlatnessMap:
+        """The flatness map of this trajectory's vehicle (built on first use)."""
+        if self._flatness is None:
+            m = self.meta
+            self._flatness = FlatnessMap(
+                mass=m.mass, length=m.length, inertia=m.inertia_B, allocation=m.allocation,
+                R_WA=m.R_WA, p_A=m.p_A, gravity=m.gravity,
+            )  # fmt: skip
+        return self._flatness
+
+    def nominal(self, t: float) -> NominalState:
+        """Nominal state and input of the quadrotor at ``t`` (flatness, figure 6.5 "n").
+
+        Uses the chapter's model (cable at the centre of mass). For the rotor thrusts
+        that also cancel the cable torque of the attachment offset (6.6.5), evaluate
+        ``FlatnessMap.from_scenario(scenario, with_cable_offset=True)`` on
+        :meth:`output`.
+        """
+        return self.flatness.evaluate(self.output(t))
+
+    def nominal_many(self, times: ArrayLike) -> dict[str, FloatArray]:
+        """:meth:`FlatnessMap.evaluate_many` at ``times``."""
+        return self.flatness.evaluate_many(self.sample(times).outputs())
+
+    @property
+    def initial_output(self) -> FloatArray:
+        return self.output(0.0).value
+
+    @property
+    def final_output(self) -> FloatArray:
+        return self.output(self.duration).value
+
+    # -- files -----------------------------------------------------------------------
+    def to_csv(self) -> str:
+        """The CSV text (header lines, column names, rows)."""
+        s = self.sample(self._rows())
+        data = np.column_stack(
+            (s.t, s.phi, s.theta_A, s.thrusts, s.thrust_rates, s.thrust_accels, s.f_R, s.tension)
+        )
+        meta = {**self.meta.to_json(), "duration": self.duration, **self._extra_meta()}
+        head = [
+            "# tetherland trajectory",
+            f"# format: {FORMAT_VERSION}",
+            f"# kind: {self.kind}",
+            f"# scenario: {self.meta.scenario}",
+            f"# maneuver: {self.meta.maneuver}",
+            f"# version: {self.meta.version}",
+            f"# meta: {json.dumps(meta)}",
+            ",".join(_COLUMNS),
+        ]
+        body = "\n".join(",".join(format(v, ".17g") for v in row) for row in data)
+        return "\n".join(head) + "\n" + body + "\n"
+
+    def save_csv(self, path: str | Path) -> Path:
+        """Write :meth:`to_csv` to ``path`` atomically."""
+        return atomic_write_text(path, self.to_csv())
+
+
+class ShootingTrajectory(Trajectory):
+    """An OCP solution: node states X (N+1, 12) and inputs U (N, 4) held on each interval.
+
+    Use :meth:`simulate` to build one from an initial state and inputs: it integrates
+    the model through all intervals so that the node states are continuous.
+    """
+
+    kind = "ocp"
+
+    def __init__(
+        self,
+        meta: TrajectoryMeta,
+        times: ArrayLike,
+        X: ArrayLike,
+        U: ArrayLike,
+        substeps: int | None = None,
+        simulator: PlanarSimulator | None = None,
+        _table: FloatArray | None = None,
+    ) -> None:
+        times = np.asarray(times, dtype=float)
+        super().__init__(meta, float(times[-1] - times[0]))
+        self.times = times - times[0]
+        self.X = np.asarray(X, dtype=float)
+        self.U = np.asarray(U, dtype=float)
+        N = len(self.times) - 1
+        if self.X.shape != (N + 1, 12) or self.U.shape != (N, 4):
+            raise ValueError(
+                f"need X (N+1, 12) and U (N, 4) for {N + 1} times, "
+                f"got {self.X.shape}, {self.U.shape}"
+            )
+        if np.any(np.diff(self.times) <= 0):
+            raise ValueError("node times must increase")
+        # Dense table: the state at every substep of every interval (substeps no longer
+        # than DENSE_STEP), integrated from the node states with the input held.
+        self._sub = substeps or _substeps(float(np.max(np.diff(self.times))))
+        if _table is None:
+            sim = simulator or PlanarSimulator()
+            ends = sim.restart(self.params, self.times, self.X, self.U, self._sub)
+            _table = np.concatenate((self.X[:-1, None, :], ends[:, :-1, :]), axis=1)
+        self._table = _table
+
+    def _rk4(self, x: FloatArray, u: FloatArray, h: FloatArray | float) -> FloatArray:
+        f = self.model.rhs
+        k1 = f(x, u)
+        k2 = f(x + 0.5 * h * k1, u)
+        k3 = f(x + 0.5 * h * k2, u)
+        k4 = f(x + h * k3, u)
+        return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+    @classmethod
+    def simulate(
+        cls,
+        meta: TrajectoryMeta,
+        times: ArrayLike,
+        x0: ArrayLike,
+        U: ArrayLike,
+        simulator: PlanarSimulator | None = None,
+    ) -> ShootingTrajectory:
+        """Integrate (6.20) from ``x0`` with the inputs ``U`` held on each interval (RK4
+        steps of at most :data:`DENSE_STEP`) and keep the continuous node states."""
+        times = np.asarray(times, dtype=float)
+        U = np.asarray(U, dtype=float)
+        x0 = np.asarray(x0, dtype=float)
+        sub = _substeps(float(np.max(np.diff(times))))
+        sim = simulator or PlanarSimulator()
+        ends = sim.run(meta.params, times, x0, U, sub)
+        X = np.vstack((x0[None, :], ends[:, -1, :]))
+        table = np.concatenate((X[:-1, None, :], ends[:, :-1, :]), axis=1)
+        return cls(meta, times, X, U, sub, simulator=sim, _table=table)
+
+    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        N = len(self.times) - 1
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, N - 1)
+        h_sub = (self.times[k + 1] - self.times[k]) / self._sub
+        j = np.clip(np.floor((t - self.times[k]) / h_sub).astype(int), 0, self._sub - 1)
+        x0 = self._table[k, j].T  # (12, n)
+        u = self.U[k].T  # (4, n)
+        x = self._rk4(x0, u, t - (self.times[k] + j * h_sub))
+        d = self.model.derivatives(x, u)
+        phi = np.stack((x[0], x[2], d["phi_ddot"], d["phi_dddot"], d["phi_ddddot"]), axis=1)
+        theta = np.stack((x[1], x[3], d["theta_ddot"], d["theta_dddot"], d["theta_ddddot"]), axis=1)
+        return phi, theta, x.T.copy(), u.T.copy()
+
+    def _rows(self) -> FloatArray:
+        return self.times
+
+    def _extra_meta(self) -> dict[str, Any]:
+        return {"substeps": self._sub}
+
+
+class PolynomialTrajectory(Trajectory):
+    """Rest-to-rest 9th-order polynomials for phi and theta_A (:mod:`.spline`)."""
+
+    kind = "spline"
+    ROWS = 101
+
+    def __init__(
+        self,
+        meta: TrajectoryMeta,
+        duration: float,
+        phi: tuple[float, float],
+        theta_A: tuple[float, float],
+    ) -> None:
+        super().__init__(meta, duration)
+        self.phi_ends = (float(phi[0]), float(phi[1]))
+        self.theta_ends = (float(theta_A[0]), float(theta_A[1]))
+
+    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        phi = rest_to_rest(*self.phi_ends, self.duration, t)
+        theta = rest_to_rest(*self.theta_ends, self.duration, t)
+        w = planar_flat_inputs(phi, theta, self.params, NUMPY)
+        G = self.params.G
+        f = G @ np.vstack((w["f_R"], w["tau"]))
+        f1 = G @ np.vstack((w["f_R_dot"], w["tau_dot"]))
+        f2 = G @ np.vstack((w["f_R_ddot"], w["tau_ddot"]))
+        x = np.vstack((phi[0], theta[0], phi[1], theta[1], f, f1))
+        return phi.T.copy(), theta.T.copy(), x.T.copy(), f2.T.copy()
+
+    def _rows(self) -> FloatArray:
+        return np.linspace(0.0, self.duration, self.ROWS)
+
+    def _extra_meta(self) -> dict[str, Any]:
+        return {"phi_ends": list(self.phi_ends), "theta_A_ends": list(self.theta_ends)}
+
+
+def _parse(text: str) -> tuple[dict[str, str], FloatArray]:
+    header: dict[str, str] = {}
+    lines = text.splitlines()
+    i = 0
+    while i < len(lines) and lines[i].startswith("#"):
+        key, sep, value = lines[i][1:].partition(":")
+        if sep:
+            header[key.strip()] = value.strip()
+        i += 1
+    if i >= len(lines) or lines[i].split(",") != _COLUMNS:
+        raise ConfigError("trajectory CSV: missing or unexpected column header")
+    data = np.loadtxt(io.StringIO("\n".join(lines[i + 1 :])), delimiter=",", ndmin=2)
+    return header, data
+
+
+def trajectory_from_csv(text: str) -> Trajectory:
+    """Rebuild a trajectory from :meth:`Trajectory.to_csv` text."""
+    header, data = _parse(text)
+    if header.get("format") != str(FORMAT_VERSION):
+        raise ConfigError(f"trajectory CSV: unsupported format {header.get('format')!r}")
+    try:
+        meta_json = json.loads(header["meta"])
+        meta = TrajectoryMeta.from_json(meta_json)
+    except (KeyError, json.JSONDecodeError) as err:
+        raise ConfigError(f"trajectory CSV: bad meta header ({err})") from None
+    kind = header.get("kind")
+    if kind == ShootingTrajectory.kind:
+        t = data[:, 0]
+        X = np.column_stack((data[:, 1], data[:, 6], data[:, 2], data[:, 7], data[:, 11:19]))
+        return ShootingTrajectory(meta, t, X, data[:-1, 19:23], substeps=int(meta_json["substeps"]))
+    if kind == PolynomialTrajectory.kind:
+        return PolynomialTrajectory(
+            meta,
+            meta_json["duration"],
+            tuple(meta_json["phi_ends"]),
+            tuple(meta_json["theta_A_ends"]),
+        )
+    raise ConfigError(f"trajectory CSV: unknown kind {kind!r}")
+
+
+def load_trajectory(path: str | Path) -> Trajectory:
+    """Read a trajectory CSV written by :meth:`Trajectory.save_csv`."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as err:
+        raise ConfigError(f"cannot read trajectory file '{path}': {err}") from None
+    return trajectory_from_csv(text)
+
+
+__all__ = [
+    "PolynomialTrajectory",
+    "ShootingTrajectory",
+    "Trajectory",
+    "TrajectoryMeta",
+    "TrajectorySamples",
+    "load_trajectory",
+    "trajectory_from_csv",
+]

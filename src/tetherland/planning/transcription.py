@@ -1,0 +1,206 @@
+"""Direct multiple shooting of an :class:`~tetherland.planning.ocp.OcpProblem`.
+
+Decision variables are ordered stage-wise, w = [x_0, u_0, x_1, u_1, ..., x_{N-1}, u_{N-1}, x_N],
+and the constraints stage-wise too,
+
+  [gap_0, x_0 - x_init, gap_1, g(x_1, u_1), ..., gap_{N-1}, g(x_{N-1}, u_{N-1}), h(x_N)]
+
+with the gap-closing constraints written gap_k = x_{k+1} - F(x_k, u_k): this is the form
+fatrop's structure detection needs (identity block on x_{k+1}); IPOPT does not mind.
+F integrates the dynamics over one interval of T/N with ``steps`` fixed steps of the
+chosen integrator, the input held constant. The stage cost is integrated by the
+rectangle rule, L(x_k, u_k, t_k) T/N, so that it stays separable by stage.
+
+The numbers (parameters, duration, initial state) enter as NLP parameters
+P = [p, T, x_init], so one transcription serves every problem of the same structure.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Literal
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland.geometry import FloatArray
+from tetherland.planning.ocp import OcpProblem
+
+Integrator = Literal["rk4", "euler"]
+
+
+def _step(f: Callable[[ca.SX], ca.SX], x: ca.SX, h: ca.SX, method: Integrator) -> ca.SX:
+    if method == "euler":
+        return x + h * f(x)
+    k1 = f(x)
+    k2 = f(x + 0.5 * h * k1)
+    k3 = f(x + 0.5 * h * k2)
+    k4 = f(x + h * k3)
+    return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@dataclass(frozen=True)
+class MultipleShooting:
+    """Multiple-shooting transcription settings.
+
+    Attributes
+    ----------
+    nodes : int
+        Number of shooting intervals N.
+    integrator : {"rk4", "euler"}
+        Fixed-step integrator inside each interval.
+    steps : int
+        Integrator steps per interval.
+    """
+
+    nodes: int = 50
+    integrator: Integrator = "rk4"
+    steps: int = 2
+
+    def __post_init__(self) -> None:
+        if self.nodes < 2:
+            raise ValueError(f"nodes must be >= 2, got {self.nodes}")
+        if self.steps < 1:
+            raise ValueError(f"steps must be >= 1, got {self.steps}")
+        if self.integrator not in ("rk4", "euler"):
+            raise ValueError(f"integrator must be 'rk4' or 'euler', got {self.integrator!r}")
+
+    def transcribe(self, problem: OcpProblem) -> Transcript:
+        """Build the NLP of ``problem`` (symbolic; numbers enter via :meth:`Transcript.numbers`)."""
+        N, nx, nu = self.nodes, problem.nx, problem.nu
+        fn = problem.functions()
+        p, T = problem.p, problem.T
+        x_init = ca.SX.sym("x_init", nx)
+        h = T / (N * self.steps)
+        x_s, u_s = ca.SX.sym("xs", nx), ca.SX.sym("us", nu)
+        xf = x_s
+        for _ in range(self.steps):
+            xf = _step(lambda z: fn["ode"](z, u_s, p), xf, h, self.integrator)
+        F = ca.Function("F", [x_s, u_s, p, T], [xf])
+
+        X = [ca.SX.sym(f"x_{k}", nx) for k in range(N + 1)]
+        U = [ca.SX.sym(f"u_{k}", nu) for k in range(N)]
+        w, g, equality, layout = [], [], [], []
+        cost = 0
+        dt = T / N
+        n_path = problem.path.numel()
+        for k in range(N):
+            w += [X[k], U[k]]
+            g.append(X[k + 1] - F(X[k], U[k], p, T))
+            equality += [True] * nx
+            layout.append(("gap", nx))
+            if k == 0:
+                g.append(X[0] - x_init)
+                equality += [True] * nx
+                layout.append(("init", nx))
+            elif n_path:
+                g.append(fn["path"](X[k], U[k], k * dt, p, T, dt))
+                equality += [False] * n_path
+                layout.append(("path", n_path))
+            cost += fn["stage_cost"](X[k], U[k], k * dt, p, T, dt) * dt
+        w.append(X[N])
+        n_term = problem.terminal.numel()
+        if n_term:
+            g.append(fn["terminal"](X[N], p))
+            equality += [True] * n_term
+            layout.append(("terminal", n_term))
+        cost += fn["terminal_cost"](X[N], p)
+        nlp = {"x": ca.vertcat(*w), "f": cost, "g": ca.vertcat(*g), "p": ca.vertcat(p, T, x_init)}
+        return Transcript(
+            method=self,
+            structure_key=problem.structure_key,
+            nlp=nlp,
+            equality=tuple(equality),
+            layout=tuple(layout),
+            nx=nx,
+            nu=nu,
+            interval_map=F,
+        )
+
+
+@dataclass(frozen=True)
+class Transcript:
+    """The NLP of a transcribed problem, with the maps between its vectors and trajectories.
+
+    Attributes
+    ----------
+    method : MultipleShooting
+    structure_key : str
+        :attr:`OcpProblem.structure_key` of the problems it serves.
+    nlp : dict
+        CasADi NLP ``{"x", "f", "g", "p"}``.
+    equality : tuple of bool
+        Per constraint row, whether it is an equality (fatrop's structure detection).
+    layout : tuple of (kind, size)
+        The constraint blocks in order: ``gap``, ``init``, ``path``, ``terminal``.
+    nx, nu : int
+    interval_map : casadi.Function
+        F(x, u, p, T): the state at the end of one interval.
+    """
+
+    method: MultipleShooting
+    structure_key: str
+    nlp: dict[str, ca.SX]
+    equality: tuple[bool, ...]
+    layout: tuple[tuple[str, int], ...]
+    nx: int
+    nu: int
+    interval_map: ca.Function = field(repr=False)
+
+    @property
+    def nodes(self) -> int:
+        return self.method.nodes
+
+    @property
+    def n_w(self) -> int:
+        return (self.nodes + 1) * self.nx + self.nodes * self.nu
+
+    def times(self, duration: float) -> FloatArray:
+        """Node times t_k = k T / N [s]."""
+        return np.linspace(0.0, duration, self.nodes + 1)
+
+    def pack(self, X: ArrayLike, U: ArrayLike) -> FloatArray:
+        """w from node states (N+1, nx) and inputs (N, nu)."""
+        X = np.asarray(X, dtype=float).reshape(self.nodes + 1, self.nx)
+        U = np.asarray(U, dtype=float).reshape(self.nodes, self.nu)
+        return np.concatenate([np.concatenate((X[k], U[k])) for k in range(self.nodes)] + [X[-1]])
+
+    def unpack(self, w: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Node states (N+1, nx) and inputs (N, nu) from w."""
+        w = np.asarray(w, dtype=float).reshape(-1)
+        stride = self.nx + self.nu
+        body = w[: self.nodes * stride].reshape(self.nodes, stride)
+        X = np.vstack((body[:, : self.nx], w[self.nodes * stride :][None, :]))
+        return X, body[:, self.nx :].copy()
+
+    def numbers(self, problem: OcpProblem) -> dict[str, FloatArray]:
+        """``lbx``, ``ubx``, ``lbg``, ``ubg`` and ``p`` for one problem of this structure.
+
+        State bounds apply at the interior nodes 1..N-1 only (the boundary states are
+        fixed by the initial and terminal conditions).
+        """
+        if problem.structure_key != self.structure_key:
+            raise ValueError("problem structure differs from the transcribed one")
+        N = self.nodes
+        inf_x = np.full(self.nx, np.inf)
+        lbX = [problem.x_lb if 0 < k < N else -inf_x for k in range(N + 1)]
+        ubX = [problem.x_ub if 0 < k < N else inf_x for k in range(N + 1)]
+        lbx = self.pack(lbX, [problem.u_lb] * N)
+        ubx = self.pack(ubX, [problem.u_ub] * N)
+        lbg, ubg = [], []
+        for kind, n in self.layout:
+            if kind == "path":
+                lbg.append(problem.path_lb)
+                ubg.append(problem.path_ub)
+            else:
+                lbg.append(np.zeros(n))
+                ubg.append(np.zeros(n))
+        return {
+            "lbx": lbx,
+            "ubx": ubx,
+            "lbg": np.concatenate(lbg),
+            "ubg": np.concatenate(ubg),
+            "p": np.concatenate((problem.p_value, [problem.duration], problem.x0)),
+        }
