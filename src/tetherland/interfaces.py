@@ -120,6 +120,28 @@ class ControlMode(IntEnum):
 
 
 @dataclass(frozen=True, slots=True)
+class Feedforward:
+    """Nominal values along a planned tethered trajectory (flatness), for feed-forward.
+
+    Attributes
+    ----------
+    omega_B, omega_dot_B : (3,) arrays
+        Nominal angular velocity [rad/s] and acceleration [rad/s^2] in the nominal F_B.
+    f_R, f_R_dot, f_R_ddot : float
+        Nominal total thrust and its derivatives [N, N/s, N/s^2].
+    tension : float
+        Nominal cable tension [N].
+    """
+
+    omega_B: FloatArray
+    omega_dot_B: FloatArray
+    f_R: float
+    f_R_dot: float = 0.0
+    f_R_ddot: float = 0.0
+    tension: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
 class Reference:
     """What the supervisor asks of the controller at time ``t``.
 
@@ -140,6 +162,8 @@ class Reference:
         (the DFL controller needs k = 5) [rad, rad/s, ...].
     thrust_ff : float or None
         Nominal total thrust f_R from the planner [N].
+    feedforward : Feedforward or None
+        Nominal angular velocity, thrust and tension of a planned tethered trajectory.
     terminate : bool
         True when the supervisor has finished; the runner stops after this tick.
     """
@@ -151,6 +175,7 @@ class Reference:
     yaw: float = 0.0
     output: FloatArray | None = None
     thrust_ff: float | None = None
+    feedforward: Feedforward | None = None
     terminate: bool = False
 
 
@@ -269,6 +294,7 @@ __all__ = [
     "Estimator",
     "EventRecord",
     "EventSource",
+    "Feedforward",
     "ImuSample",
     "MocapSample",
     "Reference",

@@ -7,7 +7,7 @@
 """
 
 from tetherland.config.base import Section, Vec3
-from tetherland.config.control import ControllerConfig, FreeFlightGains
+from tetherland.config.control import ControllerConfig, FreeFlightGains, TetheredGains
 from tetherland.config.loader import (
     ScenarioInfo,
     apply_overrides,
@@ -43,6 +43,7 @@ __all__ = [
     "SimConfig",
     "SurfaceConfig",
     "TetherConfig",
+    "TetheredGains",
     "Vec3",
     "VehicleConfig",
     "apply_overrides",

@@ -33,6 +33,29 @@ class FreeFlightGains(Section):
     """Largest commanded tilt of the thrust axis from vertical in free flight [deg]."""
 
 
+class TetheredGains(Section):
+    """Tethered controllers: hierarchical Gamma_HC^b and DFL Gamma_DFL^b (DESIGN.md section 7)."""
+
+    link_frequency: float = Field(3.0, gt=0, le=50)
+    """Hierarchical outer loop: natural frequency of the phi and delta errors [rad/s]."""
+    link_damping: float = Field(1.0, gt=0, le=5)
+    """Hierarchical outer loop: damping ratio of the phi and delta errors [-]."""
+    attitude_frequency: float = Field(14.0, gt=0, le=200)
+    """Inner attitude loop: natural frequency (roll/pitch) [rad/s]."""
+    attitude_damping: float = Field(0.9, gt=0, le=5)
+    """Inner attitude loop: damping ratio (roll/pitch) [-]."""
+    yaw_frequency: float = Field(5.0, gt=0, le=200)
+    """Inner attitude loop: natural frequency about z_B [rad/s]."""
+    yaw_damping: float = Field(1.0, gt=0, le=5)
+    """Inner attitude loop: damping ratio about z_B [-]."""
+    dfl_link_pole: float = Field(3.0, gt=0, le=50)
+    """DFL: repeated pole of the 4th-order phi and delta error dynamics, (s + p)^4 [rad/s]."""
+    dfl_attitude_pole: float = Field(8.0, gt=0, le=100)
+    """DFL: repeated pole of the 2nd-order theta_A and psi error dynamics, (s + p)^2 [rad/s]."""
+    offset_compensation: bool = True
+    """Cancel the torque of the cable attachment offset with the estimated tension (6.6.5)."""
+
+
 class ControllerConfig(Section):
     """Which tethered controller runs, its rate and the gains."""
 
@@ -42,3 +65,5 @@ class ControllerConfig(Section):
     """Control rate (rotor-speed commands to the ESCs, section 6.6.4) [Hz]."""
     free_flight: FreeFlightGains = FreeFlightGains()
     """Free-flight gains."""
+    tethered: TetheredGains = TetheredGains()
+    """Tethered-controller gains."""

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tetherland.config.control import FreeFlightGains
+from tetherland.config.control import FreeFlightGains, TetheredGains
 from tetherland.geometry import FloatArray
 
 
@@ -26,7 +26,8 @@ class AttitudeGains:
     k_w: FloatArray
 
     @classmethod
-    def from_config(cls, gains: FreeFlightGains) -> AttitudeGains:
+    def from_config(cls, gains: FreeFlightGains | TetheredGains) -> AttitudeGains:
+        """Gains from natural frequencies and damping ratios of a gains section."""
         w, z = gains.attitude_frequency, gains.attitude_damping
         wy, zy = gains.yaw_frequency, gains.yaw_damping
         return cls(

@@ -134,7 +134,9 @@ class TensionEstimator:
 class MotorLagThrust:
     """Predicts the rotors' actual thrust from commanded speeds through the first-order lag.
 
-    w' = (w_cmd - w)/tau_m, f_i = c_f w_i^2; the same model the plant uses.
+    w' = (w_cmd - w)/tau_m, f_i = c_f w_i^2; the same model the plant uses. Unlike
+    :class:`tetherland.models.RotorModel` (the controllers' model, which limits commands
+    to [w_min, w_max]) a zero command here means motors off, as on the real ESCs.
     """
 
     def __init__(self, thrust_coefficient: float, time_constant: float, w0: ArrayLike):

@@ -107,3 +107,39 @@ def tension_coordinate_free(
     d_dot = np.asarray(d_dot, dtype=float)
     gravity = np.array([0.0, 0.0, -mass * g])
     return float(d @ (np.asarray(thrust, dtype=float) + gravity) + mass * length * d_dot @ d_dot)
+
+
+TETHERED_BODY_SIZE = 11
+"""[phi, delta, phi', delta', q_WB (4), omega_B (3)]."""
+
+
+def tethered_body_rhs(
+    x: ArrayLike,
+    f_R: float,
+    tau_B: ArrayLike,
+    mass: float,
+    length: float,
+    inertia: ArrayLike,
+    R_WA: ArrayLike,
+    g: float = GRAVITY,
+) -> FloatArray:
+    """Taut tethered quadrotor (cable at the centre of mass): link angles and attitude.
+
+    x = [phi, delta, phi', delta', q_WB (w, x, y, z), omega_B]; the thrust f_R z_B drives
+    the link (:func:`link_dynamics`), the torque tau_B the attitude (6.2),
+    J w' = -w x J w + tau_B, q' = q * (0, w)/2.
+    """
+    x = np.asarray(x, dtype=float)
+    q = x[4:8]
+    w = x[8:11]
+    from tetherland.rotations import quat_multiply, quat_to_rotmat
+
+    z_B_A = np.asarray(R_WA, dtype=float).T @ quat_to_rotmat(q)[:, 2]
+    acc = link_dynamics(
+        x[0], x[1], x[2], x[3], thrust_in_link_frame(f_R * z_B_A, x[0], x[1]), mass, length, g
+    )
+    J = np.asarray(inertia, dtype=float)
+    J = np.diag(J) if J.shape == (3,) else J
+    w_dot = np.linalg.solve(J, np.asarray(tau_B, dtype=float) - np.cross(w, J @ w))
+    q_dot = 0.5 * quat_multiply(q, np.concatenate(([0.0], w)))
+    return np.concatenate(([x[2], x[3], acc.phi_ddot, acc.delta_ddot], q_dot, w_dot))

@@ -1,0 +1,102 @@
+"""Switching between free-flight, tethered and motors-off control (chapter 6.6.3).
+
+The supervisor makes the transfer bumpless by starting the next controller's reference at
+the current output (by flatness, the same output means the same nominal input); this
+controller dispatches on ``Reference.mode``, resets the controller it switches to
+(the DFL thrust extension starts at the last commanded thrust) and records the command
+jump of every switch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tetherland.config import Scenario
+from tetherland.control.dfl import DflController
+from tetherland.control.free_flight import FreeFlightController
+from tetherland.control.hierarchical import HierarchicalController
+from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
+
+
+@dataclass(frozen=True)
+class SwitchRecord:
+    """One controller switch: when, from what to what, and the command jump.
+
+    Attributes
+    ----------
+    t : float
+        Time of the first command of the new controller [s].
+    from_mode, to_mode : ControlMode
+    thrust_jump : float
+        |f_R(new) - f_R(old)| [N].
+    rotor_speed_jump : float
+        max_i |w_i(new) - w_i(old)| [rad/s].
+    """
+
+    t: float
+    from_mode: ControlMode
+    to_mode: ControlMode
+    thrust_jump: float
+    rotor_speed_jump: float
+
+
+def make_tethered_controller(scenario: Scenario, kind: str | None = None):
+    """The tethered controller named by ``kind`` (default ``scenario.controller.kind``)."""
+    kind = kind or scenario.controller.kind
+    if kind == "hierarchical":
+        return HierarchicalController(scenario)
+    if kind == "dfl":
+        return DflController(scenario)
+    raise ValueError(f"unknown tethered controller {kind!r} (allowed: hierarchical, dfl)")
+
+
+class SwitchingController:
+    """Dispatches to the free-flight or tethered controller by ``Reference.mode``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Believed scenario.
+    tethered : str, optional
+        ``"hierarchical"`` or ``"dfl"`` (default: ``scenario.controller.kind``).
+    """
+
+    def __init__(self, scenario: Scenario, tethered: str | None = None):
+        self.free_flight = FreeFlightController(scenario)
+        self.tethered = make_tethered_controller(scenario, tethered)
+        self.mode: ControlMode | None = None
+        self.last: Command | None = None
+        self.switches: list[SwitchRecord] = []
+
+    def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
+        mode = reference.mode
+        if mode != self.mode and self.mode is not None:
+            if mode == ControlMode.TETHERED:
+                if isinstance(self.tethered, DflController):
+                    thrust = self.last.thrust if self.last is not None else None
+                    self.tethered.reset(thrust)
+                else:
+                    self.tethered.reset()
+        if mode == ControlMode.MOTORS_OFF:
+            cmd = Command.motors_off()
+        elif mode == ControlMode.TETHERED:
+            cmd = self.tethered.update(t, estimate, reference)
+        else:
+            cmd = self.free_flight.update(t, estimate, reference)
+        if mode != self.mode and self.mode is not None and self.last is not None:
+            self.switches.append(
+                SwitchRecord(
+                    t=t,
+                    from_mode=self.mode,
+                    to_mode=mode,
+                    thrust_jump=abs((cmd.thrust or 0.0) - (self.last.thrust or 0.0)),
+                    rotor_speed_jump=float(
+                        np.max(np.abs(cmd.rotor_speeds - self.last.rotor_speeds))
+                    ),
+                )
+            )
+        self.mode = mode
+        self.last = cmd
+        return cmd

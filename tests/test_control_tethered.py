@@ -1,0 +1,152 @@
+"""Tethered controllers on the analytic taut-link model (issue 5, 'on the analytic model')."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tetherland.config import load_scenario
+from tetherland.control import (
+    DflController,
+    FreeFlightController,
+    HierarchicalController,
+    SwitchingController,
+)
+from tetherland.geometry import LandingGeometry, theta_A_from_z_B
+from tetherland.interfaces import Controller, ControlMode, Feedforward, Reference
+from tetherland.planning import Planner
+from tetherland.planning.tracking import TrajectoryTrack
+from tetherland.rotations import exp_so3, quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.analytic import estimate_of, simulate_tethered
+
+CENTRED = ["vehicle.cable_attachment=[0, 0, 0]"]  # the chapter's model: cable at the CoM
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_scenario("slope50", CENTRED)
+
+
+@pytest.fixture(scope="module")
+def plans(scenario):
+    planner = Planner()
+    return {m: planner.plan(scenario, m).require() for m in ("landing", "takeoff")}
+
+
+def start_state(traj, d_phi: float = 0.0, d_theta: float = 0.0) -> np.ndarray:
+    nom, out = traj.nominal(0.0), traj.output(0.0)
+    R = nom.R_WB @ exp_so3([0.0, d_theta, 0.0])
+    return np.concatenate(([out.phi[0] + d_phi, 0.0, out.phi[1], 0.0], rotmat_to_quat(R), nom.omega_B))
+
+
+def tracking_errors(scenario, run, track):
+    geo = LandingGeometry.from_scenario(scenario)
+    ref = np.array([track.reference(t).output[0] for t in run.t])
+    theta = np.array(
+        [theta_A_from_z_B(geo.R_WA.T @ quat_to_rotmat(x[4:8])[:, 2], x[0], x[1]) for x in run.x]
+    )
+    return np.degrees(run.x[:, 0] - ref[:, 0]), np.degrees(theta - ref[:, 2]), np.degrees(run.x[:, 1])
+
+
+@pytest.mark.parametrize("maneuver", ["landing", "takeoff"])
+def test_hierarchical_tracks_the_plan(scenario, plans, maneuver):
+    traj = plans[maneuver]
+    track = TrajectoryTrack(traj, 0.0, 500.0)
+    run = simulate_tethered(scenario, HierarchicalController(scenario), track.reference,
+                            start_state(traj), traj.duration + 0.5)  # fmt: skip
+    e_phi, e_theta, delta = tracking_errors(scenario, run, track)
+    assert abs(e_phi[-1]) < 1.0 and abs(e_theta[-1]) < 1.0  # the issue's bound
+    assert np.abs(e_phi).max() < 0.05 and np.abs(e_theta).max() < 0.05  # what it reaches
+    assert np.abs(delta).max() < 1e-6
+
+
+def test_hierarchical_recovers_from_an_initial_offset(scenario, plans):
+    traj = plans["landing"]
+    track = TrajectoryTrack(traj, 0.0, 500.0)
+    x0 = start_state(traj, d_phi=math.radians(3.0), d_theta=math.radians(-4.0))
+    run = simulate_tethered(scenario, HierarchicalController(scenario), track.reference, x0,
+                            traj.duration + 1.0)  # fmt: skip
+    e_phi, e_theta, _ = tracking_errors(scenario, run, track)
+    assert abs(e_phi[0]) == pytest.approx(3.0, abs=1e-6)
+    assert abs(e_phi[-1]) < 0.05 and abs(e_theta[-1]) < 0.05
+
+
+def test_dfl_is_exact_up_to_integration_error(scenario, plans):
+    """The tracking error is the discretisation error: it halves with the control period."""
+    traj = plans["landing"]
+    errors = []
+    for control_dt in (4e-3, 2e-3):
+        track = TrajectoryTrack(traj, 0.0, 1.0 / control_dt)
+        ctrl = DflController(scenario, control_dt=control_dt)
+        nom = traj.nominal(0.0)
+        ctrl.reset(nom.f_R, nom.f_R_dot)
+        run = simulate_tethered(scenario, ctrl, track.reference, start_state(traj), traj.duration,
+                                control_dt=control_dt)  # fmt: skip
+        e_phi, e_theta, _ = tracking_errors(scenario, run, track)
+        errors.append(max(np.abs(e_phi).max(), np.abs(e_theta).max()))
+    assert errors[1] < 0.01
+    assert errors[0] / errors[1] == pytest.approx(2.0, rel=0.25)
+
+
+def test_dfl_error_dynamics_are_stable(scenario, plans):
+    traj = plans["landing"]
+    track = TrajectoryTrack(traj, 0.0, 500.0)
+    ctrl = DflController(scenario)
+    run = simulate_tethered(scenario, ctrl, track.reference,
+                            start_state(traj, d_phi=math.radians(2.0)), traj.duration + 1.0)  # fmt: skip
+    e_phi, e_theta, _ = tracking_errors(scenario, run, track)
+    assert abs(e_phi[-1]) < 0.02 and abs(e_theta[-1]) < 0.05
+
+
+def test_singular_reference_is_reported_not_divided(scenario, plans):
+    traj = plans["landing"]
+    x0 = start_state(traj)
+    geo = LandingGeometry.from_scenario(scenario)
+    est = estimate_of(x0, 0.0, geo, scenario.tether.length)
+    out = np.zeros((5, 4))
+    out[0] = [x0[0], 0.0, math.pi / 2 - x0[0], 0.0]  # thrust axis along the link
+    ref = Reference(t=0.0, mode=ControlMode.TETHERED, output=out,
+                    feedforward=Feedforward(np.zeros(3), np.zeros(3), 9.81))  # fmt: skip
+    ctrl = HierarchicalController(scenario)
+    cmd = ctrl.update(0.0, est, ref)
+    assert cmd.diagnostics["singular"] == 1.0
+    assert np.all(np.isfinite(cmd.rotor_speeds))
+
+
+def test_offset_torque_is_compensated():
+    """At inclined hover with the offset, the commanded torque cancels r_att x (-f_L d)."""
+    sc = load_scenario("slope50")  # cable 3 cm below the centre of mass
+    traj = Planner().plan(load_scenario("slope50", CENTRED), "landing").require()
+    geo = LandingGeometry.from_scenario(sc)
+    x = start_state(traj)
+    est = estimate_of(x, 0.0, geo, sc.tether.length)
+    tension = 2.0
+    est = type(est)(t=0.0, body=est.body, link=est.link, tension=tension)
+    ref = TrajectoryTrack(traj, 0.0, 500.0).reference(0.0)
+    with_offset = HierarchicalController(sc).update(0.0, est, ref)
+    no_comp = HierarchicalController(
+        load_scenario("slope50", ["controller.tethered.offset_compensation=false"])
+    ).update(0.0, est, ref)
+    R = quat_to_rotmat(x[4:8])
+    d_B = R.T @ (geo.R_WA @ np.array([math.cos(x[0]), 0.0, math.sin(x[0])]))
+    tau_L = np.cross(np.array(sc.vehicle.cable_attachment), -tension * d_B)
+    np.testing.assert_allclose(with_offset.torque_B - no_comp.torque_B, -tau_L, atol=1e-9)
+    assert abs(tau_L[1]) > 0.01  # a real pitch torque
+
+
+@pytest.mark.parametrize("factory", [FreeFlightController, HierarchicalController, DflController,
+                                     SwitchingController])  # fmt: skip
+def test_every_controller_implements_the_role(scenario, plans, factory):
+    ctrl = factory(scenario)
+    assert isinstance(ctrl, Controller)
+    traj = plans["landing"]
+    x0 = start_state(traj)
+    est = estimate_of(x0, 0.0, LandingGeometry.from_scenario(scenario), scenario.tether.length)
+    ref = TrajectoryTrack(traj, 0.0, 500.0).reference(0.0)
+    if factory is FreeFlightController:
+        ref = Reference(t=0.0, p_W=np.array([est.body.p_W, np.zeros(3), np.zeros(3)]))
+    cmd = ctrl.update(0.0, est, ref)
+    assert cmd.rotor_speeds.shape == (4,) and np.all(np.isfinite(cmd.rotor_speeds))
+    assert cmd.thrust is not None and cmd.thrust > 0 and cmd.torque_B.shape == (3,)
