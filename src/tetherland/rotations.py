@@ -17,6 +17,13 @@ from tetherland.geometry import FloatArray
 _SMALL = 1e-8
 
 
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """a x b for two 3-vectors (several times faster than ``np.cross`` on small arrays)."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def hat(v: ArrayLike) -> FloatArray:
     """Skew-symmetric matrix with ``hat(a) @ b == cross(a, b)``."""
     x, y, z = np.asarray(v, dtype=float)
@@ -139,12 +146,12 @@ def rotation_from_z_and_yaw(z_B: ArrayLike, psi: float) -> FloatArray:
     z = np.asarray(z_B, dtype=float)
     z = z / np.linalg.norm(z)
     x_C = np.array([math.cos(psi), math.sin(psi), 0.0])
-    y = np.cross(z, x_C)
-    n = float(np.linalg.norm(y))
+    y = cross3(z, x_C)
+    n = math.sqrt(float(y @ y))
     if n < 1e-9:
         raise SingularityError("thrust axis is aligned with the desired heading: yaw undefined")
     y /= n
-    return np.column_stack((np.cross(y, z), y, z))
+    return np.column_stack((cross3(y, z), y, z))
 
 
 def to_scipy_quat(q: ArrayLike) -> FloatArray:

@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from tetherland.geometry import FloatArray
 from tetherland.rotations import quat_to_rotmat
@@ -69,6 +70,62 @@ class LinkState:
         return np.array([self.phi, self.delta, self.phi_dot, self.delta_dot])
 
 
+@njit(cache=True)
+def link_kernel(
+    x: FloatArray, r_att_B: FloatArray, p_A: FloatArray, R_WA: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Compiled core of :func:`link_state_of`.
+
+    Returns ([phi, delta, phi', delta'], d_B): the link state (NaN where undefined) and
+    the unit direction anchor -> attachment point in F_B (zeros at the anchor).
+    """
+    px, py, pz = x[0], x[1], x[2]
+    w, qx, qy, qz = x[3], x[4], x[5], x[6]
+    vx, vy, vz = x[7], x[8], x[9]
+    ox, oy, oz = x[10], x[11], x[12]
+    ax, ay, az = r_att_B[0], r_att_B[1], r_att_B[2]
+    R = np.empty((3, 3))
+    R[0, 0] = 1 - 2 * (qy * qy + qz * qz)
+    R[0, 1] = 2 * (qx * qy - w * qz)
+    R[0, 2] = 2 * (qx * qz + w * qy)
+    R[1, 0] = 2 * (qx * qy + w * qz)
+    R[1, 1] = 1 - 2 * (qx * qx + qz * qz)
+    R[1, 2] = 2 * (qy * qz - w * qx)
+    R[2, 0] = 2 * (qx * qz - w * qy)
+    R[2, 1] = 2 * (qy * qz + w * qx)
+    R[2, 2] = 1 - 2 * (qx * qx + qy * qy)
+    cx, cy, cz = oy * az - oz * ay, oz * ax - ox * az, ox * ay - oy * ax  # omega x r_att
+    r = np.empty(3)
+    rd = np.empty(3)
+    for i in range(3):
+        r[i] = (px, py, pz)[i] - p_A[i] + R[i, 0] * ax + R[i, 1] * ay + R[i, 2] * az
+        rd[i] = (vx, vy, vz)[i] + R[i, 0] * cx + R[i, 1] * cy + R[i, 2] * cz
+    out = np.full(4, np.nan)
+    d_B = np.zeros(3)
+    dist = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+    if dist < 1e-12:
+        return out, d_B
+    for i in range(3):
+        d_B[i] = (R[0, i] * r[0] + R[1, i] * r[1] + R[2, i] * r[2]) / dist
+    d = np.empty(3)
+    dd = np.empty(3)
+    for i in range(3):  # F_A components: columns of R_WA dotted with r
+        d[i] = R_WA[0, i] * r[0] + R_WA[1, i] * r[1] + R_WA[2, i] * r[2]
+        dd[i] = R_WA[0, i] * rd[0] + R_WA[1, i] * rd[1] + R_WA[2, i] * rd[2]
+    radial = (d[0] * dd[0] + d[1] * dd[1] + d[2] * dd[2]) / dist
+    u = d / dist
+    ud = (dd - u * radial) / dist
+    h = math.hypot(u[0], u[2])
+    out[1] = math.atan2(-u[1], h)
+    if h < 1e-12:
+        return out, d_B
+    h_dot = (u[0] * ud[0] + u[2] * ud[2]) / h
+    out[0] = math.atan2(u[2], u[0])
+    out[2] = (u[0] * ud[2] - u[2] * ud[0]) / (h * h)
+    out[3] = -ud[1] * h + u[1] * h_dot
+    return out, d_B
+
+
 def link_state_of(
     x: FloatArray, r_att_B: FloatArray, p_A: FloatArray, R_WA: FloatArray
 ) -> LinkState:
@@ -87,45 +144,8 @@ def link_state_of(
     R_WA : (3, 3) array
         Anchor frame.
 
-    The angles are those of the attachment point whether or not the cable is taut.
-    Scalar arithmetic: this runs at the control rate.
+    The angles are those of the attachment point whether or not the cable is taut; NaN
+    where undefined (attachment point at the anchor, or phi at |delta| = 90 deg).
     """
-    px, py, pz, w, qx, qy, qz, vx, vy, vz, ox, oy, oz = x.tolist()
-    ax, ay, az = r_att_B.tolist()
-    # R_WB r_att and R_WB (omega_B x r_att)
-    cx, cy, cz = oy * az - oz * ay, oz * ax - ox * az, ox * ay - oy * ax
-    R = (
-        (1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - w * qz), 2 * (qx * qz + w * qy)),
-        (2 * (qx * qy + w * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - w * qx)),
-        (2 * (qx * qz - w * qy), 2 * (qy * qz + w * qx), 1 - 2 * (qx * qx + qy * qy)),
-    )
-    p0, p1, p2 = p_A.tolist()
-    r = [
-        px - p0 + R[0][0] * ax + R[0][1] * ay + R[0][2] * az,
-        py - p1 + R[1][0] * ax + R[1][1] * ay + R[1][2] * az,
-        pz - p2 + R[2][0] * ax + R[2][1] * ay + R[2][2] * az,
-    ]
-    rd = [
-        vx + R[0][0] * cx + R[0][1] * cy + R[0][2] * cz,
-        vy + R[1][0] * cx + R[1][1] * cy + R[1][2] * cz,
-        vz + R[2][0] * cx + R[2][1] * cy + R[2][2] * cz,
-    ]
-    A = R_WA.tolist()  # rows of R_WA; F_A components are columns . r
-    d = [A[0][i] * r[0] + A[1][i] * r[1] + A[2][i] * r[2] for i in range(3)]
-    dd = [A[0][i] * rd[0] + A[1][i] * rd[1] + A[2][i] * rd[2] for i in range(3)]
-    dist = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    if dist < 1e-12:
-        return LinkState(math.nan, math.nan, math.nan, math.nan)
-    radial = (d[0] * dd[0] + d[1] * dd[1] + d[2] * dd[2]) / dist
-    u = [c / dist for c in d]  # unit link direction
-    ud = [(dd[i] - u[i] * radial) / dist for i in range(3)]  # its rate
-    h = math.hypot(u[0], u[2])
-    if h < 1e-12:
-        return LinkState(math.nan, math.atan2(-u[1], h), math.nan, math.nan)
-    h_dot = (u[0] * ud[0] + u[2] * ud[2]) / h
-    return LinkState(
-        phi=math.atan2(u[2], u[0]),
-        delta=math.atan2(-u[1], h),
-        phi_dot=(u[0] * ud[2] - u[2] * ud[0]) / (h * h),
-        delta_dot=-ud[1] * h + u[1] * h_dot,
-    )
+    out, _ = link_kernel(x, r_att_B, p_A, R_WA)
+    return LinkState(float(out[0]), float(out[1]), float(out[2]), float(out[3]))

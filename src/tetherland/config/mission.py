@@ -8,7 +8,7 @@ from tetherland.config.base import Section
 
 
 class MissionConfig(Section):
-    """Supervisor thresholds and timing."""
+    """Supervisor thresholds, speeds, timing and fault limits of the full mission."""
 
     tension_threshold: float = Field(1.0, gt=0, le=1000)
     """Estimated tension that ends cable stretching (switch to tethered control) [N]."""
@@ -16,3 +16,43 @@ class MissionConfig(Section):
     """Time the estimated tension must stay above the threshold [s]."""
     deploy_time: float = Field(2.0, ge=0, le=600)
     """Time on the surface with motors off, t_T - t_G [s]."""
+    takeoff_height: float = Field(1.0, gt=0, le=50)
+    """Climb above the start pad before the approach [m]."""
+    cruise_speed: float = Field(0.8, gt=0, le=10)
+    """Peak speed of free-flight transfers [m/s]."""
+    cruise_accel: float = Field(1.0, gt=0, le=20)
+    """Peak acceleration of free-flight transfers [m/s^2]."""
+    hook_speed: float = Field(0.25, gt=0, le=5)
+    """Peak speed through the anchoring mechanism (hooking and unhooking) [m/s]."""
+    approach_distance: float = Field(0.3, gt=0, le=5)
+    """Hook-point distance before the capture disk where the straight hooking pass starts [m]."""
+    hook_overshoot: float = Field(0.12, gt=0, le=5)
+    """Hook-point distance beyond the capture disk where the hooking pass ends [m]."""
+    stretch_margin: float = Field(0.1, ge=0, le=5)
+    """Extra pull distance beyond what the planned start tension needs (stretching) [m]."""
+    stretch_timeout: float = Field(2.0, gt=0, le=60)
+    """Time after the stretch target is reached without tension before the hook counts
+    as missed [s]."""
+    max_hook_attempts: int = Field(3, ge=1, le=10)
+    """Hooking attempts before the mission aborts [-]."""
+    blend_time: float = Field(1.0, gt=0, le=10)
+    """Bumpless transfer: time over which the reference moves from the current output onto
+    the planned trajectory [s]."""
+    settle_time: float = Field(0.5, ge=0, le=10)
+    """Hold after a planned tethered maneuver or a transfer before the next phase [s]."""
+    spinup_time: float = Field(0.5, ge=0, le=10)
+    """Motors back on, holding the landed output, before the tethered takeoff [s]."""
+    release_slack: float = Field(0.25, gt=0, le=5)
+    """How far inside the cable length the vehicle moves to release the tension [m]."""
+    abort_time: float | None = Field(None, ge=0, le=3600)
+    """Operator abort at this mission time (None: no abort) [s]."""
+    safe_hover_time: float = Field(2.0, gt=0, le=60)
+    """Time the safe hover is held after an abort before the run ends [s]."""
+    fault_min_tension: float = Field(0.1, ge=0, le=100)
+    """Tethered phases: estimated tension below this counts as a slack cable [N]."""
+    fault_slack_time: float = Field(0.3, gt=0, le=10)
+    """How long the cable may look slack in a tethered phase before a fault [s]."""
+    fault_tracking_deg: float = Field(15.0, gt=0, le=90)
+    """Tethered phases: link-angle tracking error that counts as a fault [deg]."""
+    max_duration: float = Field(180.0, gt=0, le=3600)
+    """The run ends (failed) if the mission has not finished by then [s]."""

@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 
 from tetherland.config.control import FreeFlightGains, TetheredGains
 from tetherland.geometry import FloatArray
+from tetherland.rotations import cross3
 
 
 @dataclass(frozen=True)
@@ -74,14 +75,14 @@ class AttitudeController:
         J = self.J
         e_R = attitude_error(R, R_d)
         Jw = J * omega_B
-        tau = np.cross(omega_B, Jw)
+        tau = cross3(omega_B, Jw)
         if omega_d is None:
             e_w = omega_B
         else:
             Rt_Rd = R.T @ R_d
             w_d_B = Rt_Rd @ omega_d
             e_w = omega_B - w_d_B
-            ff = np.cross(omega_B, w_d_B)
+            ff = cross3(omega_B, w_d_B)
             if omega_dot_d is not None:
                 ff = ff - Rt_Rd @ omega_dot_d
             tau = tau - J * ff

@@ -17,6 +17,7 @@ from tetherland.config import VehicleConfig
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command
 from tetherland.models.quadrotor import RotorLayout, RotorModel, Saturation
+from tetherland.rotations import cross3
 
 _EMPTY: Mapping[str, float] = MappingProxyType({})
 _SATURATION_LEVEL = {s: i for i, s in enumerate(Saturation)}  # 0 none ... 3 thrust clipped
@@ -56,7 +57,7 @@ def heading_of(R_AB: FloatArray) -> float:
 def cable_torque(r_att_B: FloatArray, tension: float, d_B: FloatArray) -> FloatArray:
     """tau_L = r_att x (-f_L d_B): torque of the cable about the centre of mass, F_B [N m]
     (section 6.6.5); d_B is the unit link direction (anchor -> robot) in F_B."""
-    return np.cross(r_att_B, -tension * d_B)
+    return cross3(r_att_B, -tension * d_B)
 
 
 class Mixer:

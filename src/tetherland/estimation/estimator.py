@@ -20,8 +20,10 @@ from tetherland.estimation.tension import MotorLagThrust, TensionEstimate, Tensi
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.interfaces import Command, ImuSample, MocapSample, StateEstimate
-from tetherland.rotations import quat_to_rotmat
-from tetherland.state import RigidBodyState, link_state_of
+from tetherland.state import LinkState, RigidBodyState, link_kernel
+
+_BUFFER = 16
+"""IMU samples buffered at most between two integrations."""
 
 
 class UkfEstimator:
@@ -79,9 +81,10 @@ class UkfEstimator:
         self.motors = MotorLagThrust(v.thrust_coefficient, v.motor_time_constant, w0)
         self._motor_t = t0
         self._w_cmd = w0.copy()
-        self._buf_t: list[float] = []
-        self._buf_f: list[FloatArray] = []
-        self._buf_w: list[FloatArray] = []
+        self._buf_t = np.empty(_BUFFER)
+        self._buf_f = np.empty((_BUFFER, 3))
+        self._buf_w = np.empty((_BUFFER, 3))
+        self._n = 0
         self._f_mean = np.array([0.0, 0.0, 9.81])
         self.dropouts = 0
         """Invalid (dropped) motion-capture samples received."""
@@ -94,9 +97,15 @@ class UkfEstimator:
     # ------------------------------------------------------------------ Estimator protocol
     def predict(self, imu: ImuSample) -> None:
         """Buffer one IMU sample; it is integrated before the next estimate or update."""
-        self._buf_t.append(imu.t)
-        self._buf_f.append(imu.specific_force_B)
-        self._buf_w.append(imu.omega_B)
+        if imu.t <= self.ukf.t:
+            return  # a sample at the estimate's own time spans no interval
+        if self._n == _BUFFER:
+            self._flush()
+        n = self._n
+        self._buf_t[n] = imu.t
+        self._buf_f[n] = imu.specific_force_B
+        self._buf_w[n] = imu.omega_B
+        self._n = n + 1
         self._cached = None
 
     def update(self, mocap: MocapSample) -> None:
@@ -114,27 +123,23 @@ class UkfEstimator:
             return self._cached
         self._flush()
         ukf = self.ukf
-        x = ukf.state
+        x = ukf.x
         t = ukf.t
+        p_W, v_W, q_WB, b_g, b_a = x[0:3], x[3:6], x[6:10], x[10:13], x[13:16]
         omega = ukf.omega_B
-        body = RigidBodyState(x.p_W, x.v_W, x.q_WB, omega)
-        link = link_state_of(
-            np.concatenate((x.p_W, x.q_WB, x.v_W, omega)), self._r_att, self._p_A, self._R_WA
+        lk, d_B = link_kernel(
+            np.concatenate((p_W, q_WB, v_W, omega)), self._r_att, self._p_A, self._R_WA
         )
+        link = LinkState(float(lk[0]), float(lk[1]), float(lk[2]), float(lk[3]))
         # tension: thrust (motor lag) and the specific force projected on the link
         thrust = float(np.sum(self._thrust_at(t)))
-        R_WB = quat_to_rotmat(x.q_WB)
-        p_att = x.p_W + R_WB @ self._r_att
-        r = p_att - self._p_A
-        dist = float(np.linalg.norm(r))
-        d_B = R_WB.T @ (r / dist) if dist > 1e-9 else None
-        tension = self.tension.update(t, thrust, self._f_mean - x.b_a, d_B)
+        tension = self.tension.update(t, thrust, self._f_mean - b_a, d_B if d_B.any() else None)
         self.last_tension = tension
         self._cached = StateEstimate(
             t=t,
-            body=body,
-            gyro_bias_B=x.b_g,
-            accel_bias_B=x.b_a,
+            body=RigidBodyState(p_W, v_W, q_WB, omega),
+            gyro_bias_B=b_g,
+            accel_bias_B=b_a,
             covariance=ukf.covariance,
             link=link,
             tension=tension.filtered,
@@ -157,17 +162,9 @@ class UkfEstimator:
         return self.motors.c_f * self.motors.w * self.motors.w
 
     def _flush(self) -> None:
-        if not self._buf_t:
+        n = self._n
+        if n == 0:
             return
-        ts = np.asarray(self._buf_t)
-        fs = np.asarray(self._buf_f)
-        ws = np.asarray(self._buf_w)
-        newer = ts > self.ukf.t  # a sample at the estimate's own time spans no interval
-        if not newer.all():
-            ts, fs, ws = ts[newer], fs[newer], ws[newer]
-        if ts.size:
-            self.ukf.predict_many(ts, fs, ws)
-            self._f_mean = fs.mean(axis=0)
-        self._buf_t.clear()
-        self._buf_f.clear()
-        self._buf_w.clear()
+        self.ukf.predict_many(self._buf_t[:n], self._buf_f[:n], self._buf_w[:n])
+        self._f_mean = self._buf_f[:n].mean(axis=0) if n > 1 else self._buf_f[0].copy()
+        self._n = 0

@@ -33,18 +33,12 @@ from numpy.typing import ArrayLike
 
 from tetherland import GRAVITY
 from tetherland.config import SensorsConfig
+from tetherland.estimation import ukf_kernels as kernels
 from tetherland.geometry import FloatArray
-from tetherland.rotations_batch import (
-    quat_multiply_batch,
-    quat_to_rotvec_batch,
-    rotation_matrices_batch,
-    rotvec_to_quat_batch,
-)
 
 N_ERR = 15
 _G_W = np.array([0.0, 0.0, -GRAVITY])
 _NOISE_FLOOR = 1e-9
-_CONJ = np.array([1.0, -1.0, -1.0, -1.0])
 
 
 @dataclass(frozen=True)
@@ -154,9 +148,11 @@ class Ukf:
         wm[0] = lam / (n + lam)
         wc[0] = lam / (n + lam) + (1.0 - alpha * alpha + beta)
         self._wm, self._wc = wm, wc
-        self._R_pose = np.diag([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
-        self._Q_cache: dict[float, FloatArray] = {}
-        self._D = np.zeros((2 * n + 1, n))
+        self._R_diag = np.array([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
+        self._noise = np.array(
+            [noise.accel_noise, noise.gyro_noise, noise.gyro_bias_walk, noise.accel_bias_walk,
+             _NOISE_FLOOR]
+        )  # fmt: skip
         q0 = np.asarray(x0.q_WB, dtype=float)
         self._x = np.concatenate((x0.p_W, x0.v_W, q0 / np.linalg.norm(q0), x0.b_g, x0.b_a)).astype(
             float
@@ -187,6 +183,12 @@ class Ukf:
         return self._P
 
     @property
+    def x(self) -> FloatArray:
+        """The state vector [p_W, v_W, q_WB, b_g, b_a] (16,); replaced, never mutated, by
+        each step, so a reference to it stays valid."""
+        return self._x
+
+    @property
     def state(self) -> NavState:
         x = self._x
         return NavState(
@@ -202,46 +204,6 @@ class Ukf:
     def specific_force_B(self) -> FloatArray:
         """Bias-corrected specific force of the last IMU sample [m/s^2]."""
         return self._last_f - self._x[13:16]
-
-    # ---------------------------------------------------------------- core maths
-    def _sigma_points(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Sigma points: errors D (31, 15), vectors X (31, 12) = [p, v, b_g, b_a], quats (31, 4)."""
-        P = self._P
-        try:
-            S = np.linalg.cholesky(P)
-        except np.linalg.LinAlgError:
-            w, V = np.linalg.eigh(0.5 * (P + P.T))
-            S = V * np.sqrt(np.maximum(w, 1e-15))
-        D = self._D
-        S = self._gamma * S.T
-        D[1 : N_ERR + 1] = S
-        D[N_ERR + 1 :] = -S
-        x = self._x
-        X = np.empty((2 * N_ERR + 1, 12))
-        X[:, 0:6] = x[0:6] + D[:, 0:6]
-        X[:, 6:12] = x[10:16] + D[:, 9:15]
-        Q = quat_multiply_batch(x[6:10], rotvec_to_quat_batch(D[:, 6:9]))
-        return D, X, Q
-
-    def _process_noise(self, dt: float) -> FloatArray:
-        dt = round(dt, 12)  # cache key robust to float noise in time differences
-        Q = self._Q_cache.get(dt)
-        if Q is None:
-            nz = self.noise
-            # white noise per sample integrates to sigma*dt per step; bias walks to sigma*sqrt(dt)
-            var_v = (nz.accel_noise * dt) ** 2
-            var_th = (nz.gyro_noise * dt) ** 2
-            q = np.array(
-                [0.25 * var_v * dt * dt] * 3
-                + [var_v] * 3
-                + [var_th] * 3
-                + [nz.gyro_bias_walk**2 * dt] * 3
-                + [nz.accel_bias_walk**2 * dt] * 3
-            )
-            Q = np.diag(np.maximum(q, _NOISE_FLOOR**2))
-            if len(self._Q_cache) < 64:
-                self._Q_cache[dt] = Q
-        return Q
 
     # ---------------------------------------------------------------- public steps
     def predict(self, t: float, f_B: ArrayLike, omega_B: ArrayLike) -> None:
@@ -259,53 +221,24 @@ class Ukf:
         """Integrate several IMU samples in one unscented transform.
 
         Every sigma point is carried through every sample (rows of ``f_B``, ``omega_B``,
-        times ``ts``), then mean and covariance are formed once. Cheaper per sample than
-        :meth:`predict` and identical for one sample.
+        times ``ts``), then mean and covariance are formed once; the process noise of each
+        sample is added. Identical to :meth:`predict` for one sample.
         """
-        ts = np.asarray(ts, dtype=float)
-        fs = np.asarray(f_B, dtype=float)
-        ws = np.asarray(omega_B, dtype=float)
-        t_prev = self._t
-        if ts[0] <= t_prev or np.any(np.diff(ts) <= 0.0):
-            raise ValueError(f"IMU times must increase beyond t = {t_prev}: got {ts}")
-        _, X, Q = self._sigma_points()
-        lin = np.empty((2 * N_ERR + 1, 12))
-        lin[:, 6:12] = X[:, 6:12]
-        p, v = X[:, 0:3], X[:, 3:6]
-        f_bias, w_bias = X[:, 9:12], X[:, 6:9]
+        ts = np.ascontiguousarray(ts, dtype=float)
+        fs = np.ascontiguousarray(f_B, dtype=float)
+        ws = np.ascontiguousarray(omega_B, dtype=float)
+        if ts[0] <= self._t or (ts.shape[0] > 1 and not np.all(ts[1:] > ts[:-1])):
+            raise ValueError(f"IMU times must increase beyond t = {self._t}: got {ts}")
+        x, P, hist_p, hist_q = kernels.predict(
+            self._x, self._P, self._t, ts, fs, ws, self._wm, self._wc, self._gamma, self._noise
+        )
         hist = self._hist
-        Q_sum = np.zeros((N_ERR, N_ERR))
-        for k in range(ts.shape[0]):
-            dt = ts[k] - t_prev
-            Q_sum += self._process_noise(dt)  # white noise per sample: variances add up
-            acc = np.einsum("nij,nj->ni", rotation_matrices_batch(Q), fs[k] - f_bias) + _G_W
-            p = p + v * dt + (0.5 * dt * dt) * acc
-            v = v + acc * dt
-            Q = quat_multiply_batch(Q, rotvec_to_quat_batch((ws[k] - w_bias) * dt))
-            t_prev = ts[k]
-            hist.append((t_prev, p[0].copy(), Q[0].copy()))  # centre point: the mean history
-        lin[:, 0:3] = p
-        lin[:, 3:6] = v
-        # mean on the manifold, relative to the propagated centre point
-        q_ref = Q[0]
-        dth = quat_to_rotvec_batch(quat_multiply_batch(q_ref * _CONJ, Q))
-        wm = self._wm
-        dth_mean = wm @ dth
-        lin_mean = wm @ lin
-        dev = np.empty((2 * N_ERR + 1, N_ERR))
-        dev[:, 0:6] = lin[:, 0:6] - lin_mean[0:6]
-        dev[:, 6:9] = dth - dth_mean
-        dev[:, 9:15] = lin[:, 6:12] - lin_mean[6:12]
-        P = (dev.T * self._wc) @ dev + Q_sum
-        q = quat_multiply_batch(q_ref, rotvec_to_quat_batch(dth_mean[None, :]))[0]
-        x = self._x
-        x[0:6] = lin_mean[0:6]
-        x[6:10] = q / math.sqrt(q @ q)
-        x[10:16] = lin_mean[6:12]
-        self._P = 0.5 * (P + P.T)
+        for j in range(ts.shape[0] - 1):
+            hist.append((float(ts[j]), hist_p[j], hist_q[j]))
+        self._x, self._P = x, P
         self._t = float(ts[-1])
         self._last_f, self._last_omega = fs[-1].copy(), ws[-1].copy()
-        hist[-1] = (self._t, x[0:3].copy(), x[6:10].copy())
+        hist.append((self._t, x[0:3].copy(), x[6:10].copy()))
 
     def update_pose(self, t_meas: float, p_W: ArrayLike, q_WB: ArrayLike) -> float:
         """Fuse a motion-capture pose measured at ``t_meas`` (possibly in the past).
@@ -326,38 +259,17 @@ class Ukf:
         while k > 0 and hist[k][0] > t_meas + 1e-9:
             k -= 1
         _, p_then, q_then = hist[k]
-        r_att = quat_to_rotvec_batch(
-            quat_multiply_batch(q_then * _CONJ, np.asarray(q_WB, dtype=float)[None, :])
-        )[0]
-        innov = np.concatenate((np.asarray(p_W, dtype=float) - p_then, r_att))
-        D, X, _ = self._sigma_points()
-        # h(sigma) = [position, attitude error in the chart at the estimate]
-        Z = np.concatenate((X[:, 0:3], D[:, 6:9]), axis=1)
-        wm, wc = self._wm, self._wc
-        z_mean = wm @ Z
-        dZ = Z - z_mean
-        dD = D - wm @ D
-        S = (dZ.T * wc) @ dZ + self._R_pose
-        Pxz = (dD.T * wc) @ dZ
-        # the sigma points are centred on the estimate: remove their mean offset
-        innov = innov - (z_mean - np.concatenate((self._x[0:3], np.zeros(3))))
-        K = np.linalg.solve(S, Pxz.T).T
-        dx = K @ innov
-        x = self._x
-        x[0:6] += dx[0:6]
-        q = quat_multiply_batch(x[6:10], rotvec_to_quat_batch(dx[None, 6:9]))[0]
-        x[6:10] = q / math.sqrt(q @ q)
-        x[10:16] += dx[9:15]
-        P = self._P - K @ S @ K.T
-        self._P = 0.5 * (P + P.T)
-        return float(innov @ np.linalg.solve(S, innov))
+        self._x, self._P, nis = kernels.update_pose(
+            self._x, self._P, p_then, q_then,
+            np.asarray(p_W, dtype=float), np.asarray(q_WB, dtype=float),
+            self._wm, self._wc, self._gamma, self._R_diag,
+        )  # fmt: skip
+        return nis
 
     def error(self, truth: NavState) -> FloatArray:
         """Error-state vector truth - estimate, in the filter's chart (for NEES)."""
         x = self._x
-        dth = quat_to_rotvec_batch(
-            quat_multiply_batch(x[6:10] * _CONJ, np.asarray(truth.q_WB, float)[None, :])
-        )[0]
+        dth = kernels.qlog(kernels.qmul(kernels.qconj(x[6:10]), np.asarray(truth.q_WB, float)))
         return np.concatenate(
             (
                 truth.p_W - x[0:3],

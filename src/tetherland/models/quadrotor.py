@@ -12,6 +12,7 @@ total thrust and the roll/pitch torques are kept, the yaw torque is given up fir
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass
 
@@ -117,17 +118,21 @@ class RotorLayout:
             f_max=vehicle.f_max,
         )
 
-    @property
+    @functools.cached_property
     def allocation(self) -> FloatArray:
-        """Gamma (4x4): rotor thrusts -> [f_R, tau_B] [N, N m]."""
+        """Gamma (4x4): rotor thrusts -> [f_R, tau_B] [N, N m] (computed once; read-only)."""
         e3 = np.array([0.0, 0.0, 1.0])
         torque_rows = np.cross(self.positions_B, e3).T  # (3, 4): r_i x e3
-        return np.vstack((np.ones(4), torque_rows[:2], self.spins * self.drag_coefficient))
+        G = np.vstack((np.ones(4), torque_rows[:2], self.spins * self.drag_coefficient))
+        G.setflags(write=False)
+        return G
 
-    @property
+    @functools.cached_property
     def allocation_inverse(self) -> FloatArray:
-        """Gamma^-1 (4x4): [f_R, tau_B] -> rotor thrusts, without limits [N]."""
-        return np.linalg.inv(self.allocation)
+        """Gamma^-1 (4x4): [f_R, tau_B] -> rotor thrusts, without limits [N] (read-only)."""
+        Gi = np.linalg.inv(self.allocation)
+        Gi.setflags(write=False)
+        return Gi
 
     def wrench(self, thrusts: ArrayLike) -> FloatArray:
         """[f_R, tau_x, tau_y, tau_z] = Gamma f for rotor thrusts ``f`` (last axis 4) [N, N m]."""

@@ -18,6 +18,27 @@ from tetherland.geometry import FloatArray
 _S = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 126.0, -420.0, 540.0, -315.0, 70.0])
 
 
+_S_DERIVATIVES = [_S]
+for _ in range(8):
+    _S_DERIVATIVES.append(np.polynomial.polynomial.polyder(_S_DERIVATIVES[-1]))
+
+
+_S_LISTS = [list(c[::-1]) for c in _S_DERIVATIVES]  # highest power first, for Horner
+
+
+def smoothstep9_scalar(tau: float, order: int = 4) -> list[float]:
+    """:func:`smoothstep9` for one scalar ``tau`` (plain floats, for the control loop)."""
+    if tau <= 0.0 or tau >= 1.0:
+        return [0.0 if tau <= 0.0 else 1.0] + [0.0] * order
+    out = []
+    for k in range(order + 1):
+        acc = 0.0
+        for c in _S_LISTS[k]:
+            acc = acc * tau + c
+        out.append(acc)
+    return out
+
+
 def smoothstep9(tau: ArrayLike, order: int = 4) -> FloatArray:
     """s(tau) and its derivatives d^k s/dtau^k for k = 0..order, shape (order+1, *tau.shape).
 
@@ -27,12 +48,10 @@ def smoothstep9(tau: ArrayLike, order: int = 4) -> FloatArray:
     inside = (tau >= 0.0) & (tau <= 1.0)
     tc = np.clip(tau, 0.0, 1.0)
     out = np.empty((order + 1, *tau.shape))
-    coeffs = _S.copy()
     for k in range(order + 1):
-        out[k] = np.polynomial.polynomial.polyval(tc, coeffs)
+        out[k] = np.polynomial.polynomial.polyval(tc, _S_DERIVATIVES[k])
         if k > 0:
             out[k] = np.where(inside, out[k], 0.0)
-        coeffs = np.polynomial.polynomial.polyder(coeffs)
     return out
 
 

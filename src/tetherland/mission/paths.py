@@ -1,0 +1,105 @@
+"""Free-flight reference paths: chains of rest-to-rest straight segments.
+
+Each segment moves from p0 to p1 along a straight line with the 9th-order smoothstep of
+:func:`tetherland.planning.spline.smoothstep9` (zero velocity, acceleration, jerk and snap
+at both ends), so every chain is C^4 and starts and ends at rest.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland.geometry import FloatArray
+from tetherland.planning.spline import smoothstep9, smoothstep9_scalar
+
+_tau = np.linspace(0.0, 1.0, 2001)
+_ds = smoothstep9(_tau, 2)
+PEAK_SPEED_FACTOR = float(np.max(np.abs(_ds[1])))
+"""max s'(tau): the peak speed of a segment is this times distance/duration."""
+PEAK_ACCEL_FACTOR = float(np.max(np.abs(_ds[2])))
+"""max s''(tau): the peak acceleration is this times distance/duration^2."""
+
+
+def segment_duration(distance: float, speed: float, accel: float, minimum: float = 0.5) -> float:
+    """Shortest duration [s] of a segment of ``distance`` [m] within peak speed and accel."""
+    return max(
+        minimum,
+        PEAK_SPEED_FACTOR * distance / speed,
+        math.sqrt(PEAK_ACCEL_FACTOR * distance / accel),
+    )
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A straight rest-to-rest move from ``p0`` to ``p1``, from ``t0`` for ``duration``."""
+
+    t0: float
+    duration: float
+    p0: FloatArray
+    p1: FloatArray
+
+    @property
+    def t_end(self) -> float:
+        return self.t0 + self.duration
+
+
+class Path:
+    """A chain of segments, each starting where and when the previous one ends.
+
+    Parameters
+    ----------
+    t0 : float
+        Start time [s].
+    start : (3,) array
+        Start position [m].
+    speed, accel : float
+        Peak speed [m/s] and acceleration [m/s^2] used to size the segments.
+    """
+
+    def __init__(self, t0: float, start: ArrayLike, speed: float, accel: float):
+        self.t0 = float(t0)
+        self.start = np.asarray(start, dtype=float).copy()
+        self.speed = speed
+        self.accel = accel
+        self.segments: list[Segment] = []
+
+    @property
+    def end(self) -> FloatArray:
+        return self.segments[-1].p1 if self.segments else self.start
+
+    @property
+    def t_end(self) -> float:
+        return self.segments[-1].t_end if self.segments else self.t0
+
+    def to(self, p: ArrayLike, speed: float | None = None, pause: float = 0.0) -> Path:
+        """Append a move to ``p`` (optionally slower), then an optional pause; returns self."""
+        p = np.asarray(p, dtype=float)
+        d = float(np.linalg.norm(p - self.end))
+        T = segment_duration(d, speed or self.speed, self.accel)
+        self.segments.append(Segment(self.t_end, T, self.end.copy(), p.copy()))
+        if pause > 0.0:
+            self.segments.append(Segment(self.t_end, pause, p.copy(), p.copy()))
+        return self
+
+    def sample(self, t: float) -> FloatArray:
+        """Rows (p, v, a) at time ``t`` [m, m/s, m/s^2]; held at the ends."""
+        out = np.zeros((3, 3))
+        if not self.segments or t <= self.t0:
+            out[0] = self.start
+            return out
+        seg = self.segments[-1]
+        for s in self.segments:
+            if t < s.t_end:
+                seg = s
+                break
+        tau = (t - seg.t0) / seg.duration
+        ds = smoothstep9_scalar(tau, 2)
+        delta = seg.p1 - seg.p0
+        out[0] = seg.p0 + ds[0] * delta
+        out[1] = ds[1] / seg.duration * delta
+        out[2] = ds[2] / seg.duration**2 * delta
+        return out

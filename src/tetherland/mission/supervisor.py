@@ -1,0 +1,420 @@
+"""The mission supervisor: an explicit state machine over the phases of chapter 6.6.
+
+It implements :class:`~tetherland.interfaces.ReferenceSource` (one reference per control
+tick, with the control mode) and :class:`~tetherland.interfaces.EventSource` (every
+transition with its reason). It sees only the estimate, never the plant's truth:
+
+- a hook is taken as caught when the estimated tension passes the threshold for the dwell
+  time while stretching; without tension the hook counts as missed and is retried;
+- switches are bumpless (6.6.3): a tethered reference starts at the current output and
+  blends onto the plan; a free-flight reference after tethered flight starts where the
+  position error reproduces the cable pull (p + f_L d / (m k_x)), as in stretching;
+- an operator abort (``mission.abort_time``) or a fault (slack cable or large tracking error
+  in a tethered phase, a non-finite estimate) moves to a safe state from any phase: hover
+  in free flight, or stay put when the motors are already off on the surface.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tetherland.config import Scenario
+from tetherland.control.common import heading_of
+from tetherland.errors import TetherlandError
+from tetherland.estimation import ThresholdDwell
+from tetherland.geometry import LandingGeometry, link_direction, theta_A_from_z_B
+from tetherland.interfaces import ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.mission.paths import Path
+from tetherland.mission.phases import Phase, PhaseRecord
+from tetherland.planning import Planner
+from tetherland.planning.spline import smoothstep9_scalar
+from tetherland.planning.tracking import TrajectoryTrack
+from tetherland.rotations import quat_to_rotmat
+from tetherland.state import RigidBodyState
+
+_Z = np.array([0.0, 0.0, 1.0])
+
+
+class MissionError(TetherlandError):
+    """The mission cannot start (e.g. no feasible landing or takeoff plan)."""
+
+
+class BlendedTrack:
+    """A planned tethered track whose start is moved onto the current output (bumpless).
+
+    y_d(t) = y_plan(t) + (1 - s((t - t_b)/T)) (y_now - y_plan(t_b)), s the 9th-order
+    smoothstep: at t_b the reference equals the current output with zero derivatives of
+    the offset, and after t_b + T it is the plan.
+    """
+
+    def __init__(self, track: TrajectoryTrack, y_now: np.ndarray, t_b: float, duration: float):
+        self.track = track
+        self.t_b = t_b
+        self.duration = duration
+        y0 = track.reference(t_b).output[0]
+        delta = np.asarray(y_now, dtype=float) - y0
+        delta[3] = math.remainder(delta[3], 2.0 * math.pi)
+        self.delta = delta
+
+    def reference(self, t: float, phase: Phase) -> Reference:
+        ref = self.track.reference(t)
+        tau = (t - self.t_b) / self.duration
+        if tau >= 1.0:
+            if ref.phase == int(phase):
+                return ref
+            return Reference(
+                t=t, mode=ref.mode, phase=int(phase), output=ref.output,
+                thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+            )  # fmt: skip
+        s = smoothstep9_scalar(tau, 4)
+        scale = np.array([1.0 - s[0]] + [-s[k] / self.duration**k for k in range(1, 5)])
+        out = ref.output + np.outer(scale, self.delta)
+        return Reference(
+            t=t, mode=ControlMode.TETHERED, phase=int(phase), output=out,
+            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+        )  # fmt: skip
+
+
+class MissionSupervisor:
+    """Runs the mission of section 6.6 on the believed scenario.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The believed scenario (geometry, vehicle, planner, mission settings).
+    start : RigidBodyState
+        The vehicle on the start pad.
+    planner : Planner, optional
+        A planner to reuse (its compiled solvers are cached).
+    controller_kind : str
+        Logged only (the controller is chosen by the mission runner).
+    """
+
+    def __init__(self, scenario: Scenario, start: RigidBodyState, planner: Planner | None = None):
+        self.scenario = scenario
+        cfg = scenario.mission
+        self.cfg = cfg
+        v = scenario.vehicle
+        self.geo = LandingGeometry.from_scenario(scenario)
+        self.mass = v.mass
+        self.length = scenario.tether.length
+        self.rate_hz = scenario.controller.rate_hz
+        wn = scenario.controller.free_flight.position_frequency
+        self.k_x = wn * wn
+        R_WA = self.geo.R_WA
+        self.yaw = math.atan2(R_WA[1, 0], R_WA[0, 0])
+        planner = planner or Planner()
+        self.landing_plan = planner.plan(scenario, "landing")
+        self.takeoff_plan = planner.plan(scenario, "takeoff")
+        for plan in (self.landing_plan, self.takeoff_plan):
+            if plan.trajectory is None or plan.status.value != "solved":
+                raise MissionError(f"no {plan.maneuver.value} plan: {plan.message}")
+        self.landing_traj = self.landing_plan.require()
+        self.takeoff_traj = self.takeoff_plan.require()
+        # key points (centre of mass, level flight with heading yaw)
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        R_level = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        self._att_offset = R_level @ np.asarray(v.cable_attachment, dtype=float)
+        n = R_WA @ np.asarray(scenario.tether.approach_direction, dtype=float)
+        n /= np.linalg.norm(n)
+        p_A = self.geo.p_A
+        self.p_start = np.asarray(start.p_W, dtype=float).copy()
+        self.p_pre = self._com_for_hook(p_A - cfg.approach_distance * n)
+        self.p_hook = self._com_for_hook(p_A + cfg.hook_overshoot * n)
+        phi0 = float(self.landing_traj.output(0.0).phi[0])
+        d0 = R_WA @ link_direction(phi0, 0.0)
+        pull = scenario.planner.start_tension / (self.mass * self.k_x) + cfg.stretch_margin
+        self.p_stretch = p_A + (self.length + pull) * d0 - self._att_offset
+        self.z_safe = max(self.p_pre[2], self.p_start[2] + cfg.takeoff_height) + 0.3
+        # state
+        self.phase = Phase.TAKEOFF
+        self._phase_start = 0.0
+        self.records: list[PhaseRecord] = []
+        self.events: list[EventRecord] = []
+        self.times: dict[str, float] = {}
+        self.hook_attempts = 0
+        self.abort_reason: str | None = None
+        self._terminate_at: float | None = None
+        self._final_mode = ControlMode.MOTORS_OFF
+        self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
+        self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)
+        self._path = Path(0.0, self.p_start, cfg.cruise_speed, cfg.cruise_accel).to(
+            self.p_start + cfg.takeoff_height * _Z, pause=cfg.settle_time
+        )
+        self._track: BlendedTrack | None = None
+        self._hold: Reference | None = None
+        self._event(0.0, "phase", f"start: {self.phase.name.lower()}")
+
+    # ------------------------------------------------------------------ helpers
+    def _com_for_hook(self, hook_point: np.ndarray) -> np.ndarray:
+        """Centre of mass that puts the hook point at ``hook_point`` in level flight."""
+        attachment = hook_point + self.scenario.tether.hook_drop * _Z
+        return attachment - self._att_offset
+
+    def _event(self, t: float, kind: str, message: str) -> None:
+        self.events.append(EventRecord(t=t, source="mission", kind=kind, message=message))
+
+    def _enter(self, phase: Phase, t: float, reason: str) -> None:
+        self.records.append(PhaseRecord(self.phase, self._phase_start, t, reason))
+        self._event(t, "phase", f"{self.phase.name.lower()} -> {phase.name.lower()}: {reason}")
+        self.phase = phase
+        self._phase_start = t
+
+    def _free(self, t: float) -> Reference:
+        return Reference(
+            t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=self._path.sample(t),
+            yaw=self.yaw,
+        )  # fmt: skip
+
+    def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
+        return Path(t, start, speed or self.cfg.cruise_speed, self.cfg.cruise_accel)
+
+    def _output_now(self, est: StateEstimate) -> np.ndarray:
+        """Estimated y^b = [phi, delta, theta_A, psi]."""
+        link = est.link
+        assert link is not None
+        R_AB = self.geo.R_WA.T @ quat_to_rotmat(est.body.q_WB)
+        theta = theta_A_from_z_B(R_AB[:, 2], link.phi, link.delta)
+        return np.array([link.phi, link.delta, theta, heading_of(R_AB)])
+
+    def _pull_point(self, est: StateEstimate) -> np.ndarray:
+        """Free-flight reference whose position error reproduces the cable pull."""
+        d = est.body.p_W - self.geo.p_A
+        d /= max(float(np.linalg.norm(d)), 1e-9)
+        tension = max(est.tension or 0.0, 0.0)
+        return est.body.p_W + tension / (self.mass * self.k_x) * d
+
+    def _close(self, est: StateEstimate, p: np.ndarray, tol: float) -> bool:
+        return float(np.linalg.norm(est.body.p_W - p)) <= tol
+
+    # ------------------------------------------------------------------ abort and faults
+    def abort(self, t: float, est: StateEstimate, reason: str) -> None:
+        """Go to the safe state from the current phase and log ``reason``."""
+        if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
+            return
+        self.abort_reason = reason
+        self._event(t, "abort", reason)
+        if self.phase == Phase.MOTORS_OFF:
+            self._enter(Phase.ABORTED, t, f"abort while landed, motors stay off: {reason}")
+            self._terminate_at = t
+            return
+        start = self._pull_point(est) if self.phase.tethered else est.body.p_W
+        self._path = self._new_path(t, start).to(start, pause=self.cfg.safe_hover_time)
+        self._enter(Phase.SAFE_HOVER, t, f"abort: {reason}")
+
+    def _check_faults(self, t: float, est: StateEstimate, ref: Reference) -> None:
+        body = est.body
+        if not (np.all(np.isfinite(body.p_W)) and np.all(np.isfinite(body.q_WB))):
+            self.abort(t, est, "fault: the state estimate is not finite")
+            return
+        active = self.phase == Phase.TETHERED_LANDING or (
+            self.phase == Phase.TETHERED_TAKEOFF and self._track is not None
+            and t > self._track.track.t0 + 0.5
+        )  # fmt: skip
+        if not active or est.link is None or self._track is None:
+            self._slack.reset()
+            return
+        if self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
+            self.abort(
+                t, est, f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)"
+            )
+            return
+        if ref.output is None:
+            return
+        err = math.degrees(abs(ref.output[0, 0] - est.link.phi))
+        if err > self.cfg.fault_tracking_deg:
+            self.abort(t, est, f"fault: link tracking error {err:.1f} deg")
+
+    # ------------------------------------------------------------------ ReferenceSource
+    def reference(self, t: float, estimate: StateEstimate) -> Reference:
+        """Advance the state machine and return the reference for time ``t``."""
+        if self._terminate_at is not None and t >= self._terminate_at:
+            if self._final_mode == ControlMode.FREE_FLIGHT:
+                ref = self._free(t)
+                return Reference(
+                    t=t, mode=ref.mode, phase=ref.phase, p_W=ref.p_W, yaw=ref.yaw, terminate=True
+                )
+            return Reference(
+                t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase), terminate=True
+            )
+        abort_time = self.cfg.abort_time
+        if abort_time is not None and t >= abort_time and self.abort_reason is None:
+            self.abort(t, estimate, f"operator abort at t = {abort_time:g} s")
+        ref = getattr(self, f"_phase_{self.phase.name.lower()}")(t, estimate)
+        phase = self.phase
+        self._check_faults(t, estimate, ref)
+        if self.phase != phase:  # a fault moved to the safe state: its reference instead
+            ref = getattr(self, f"_phase_{self.phase.name.lower()}")(t, estimate)
+        return ref
+
+    # ------------------------------------------------------------------ phases
+    def _phase_takeoff(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end and self._close(est, self._path.end, 0.1):
+            up = np.array([*self._path.end[:2], self.z_safe])
+            above = np.array([*self.p_pre[:2], self.z_safe])
+            self._path = (
+                self._new_path(t, self._path.end)
+                .to(up)
+                .to(above)
+                .to(self.p_pre, pause=self.cfg.settle_time)
+            )
+            self._enter(Phase.APPROACH, t, "takeoff height reached")
+        elif t > self._path.t_end + 5.0:
+            self.abort(t, est, "fault: takeoff height not reached")
+        return self._free(t)
+
+    def _phase_approach(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end and self._close(est, self.p_pre, 0.05):
+            self._path = self._new_path(t, self.p_pre, self.cfg.hook_speed).to(
+                self.p_hook, pause=self.cfg.settle_time
+            )
+            self.hook_attempts += 1
+            self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
+        elif t > self._path.t_end + 5.0:
+            self.abort(t, est, "fault: hooking start not reached")
+        return self._free(t)
+
+    _phase_retry = _phase_approach
+
+    def _phase_hooking(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end:
+            self._path = self._new_path(t, self.p_hook, 0.5 * self.cfg.cruise_speed).to(
+                self.p_stretch
+            )
+            self._taut.reset()
+            self._enter(Phase.STRETCH, t, "hooking pass done")
+        return self._free(t)
+
+    def _phase_stretch(self, t: float, est: StateEstimate) -> Reference:
+        if self._taut.update(t, est.tension or 0.0) and est.link is not None:
+            self.times["t_tethered"] = t
+            track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
+            self._track = BlendedTrack(track, self._output_now(est), t, self.cfg.blend_time)
+            self._enter(
+                Phase.TETHERED_LANDING, t,
+                f"estimated tension {est.tension:.2f} N above {self.cfg.tension_threshold} N "
+                f"for {self.cfg.tension_dwell} s: cable taut, tethered control",
+            )  # fmt: skip
+            return self._track.reference(t, self.phase)
+        if t > self._path.t_end + self.cfg.stretch_timeout:
+            self._event(t, "hook", f"missed hook (attempt {self.hook_attempts}): no tension")
+            if self.hook_attempts >= self.cfg.max_hook_attempts:
+                self.abort(t, est, f"hook missed {self.hook_attempts} times")
+                return self._free(t)
+            above = np.array([*self.p_pre[:2], self.z_safe])
+            self._path = (
+                self._new_path(t, est.body.p_W).to(above).to(self.p_pre, pause=self.cfg.settle_time)
+            )
+            self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
+        return self._free(t)
+
+    def _phase_tethered_landing(self, t: float, est: StateEstimate) -> Reference:
+        assert self._track is not None
+        if t >= self._track.track.t_end:
+            self.times["t_L"] = t
+            self._enter(Phase.TOUCHDOWN, t, "landing trajectory completed (t_L)")
+        return self._track.reference(t, self.phase)
+
+    def _phase_touchdown(self, t: float, est: StateEstimate) -> Reference:
+        assert self._track is not None
+        if t >= self.times["t_L"] + self.cfg.settle_time:
+            self.times["t_G"] = t
+            self._enter(Phase.MOTORS_OFF, t, "landed: motors off (t_G)")
+            return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
+        return self._track.reference(t, self.phase)
+
+    def _phase_motors_off(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self.times["t_G"] + self.cfg.deploy_time and est.link is not None:
+            self.times["t_T"] = t
+            t0 = t + self.cfg.spinup_time
+            track = TrajectoryTrack(
+                self.takeoff_traj, t0, self.rate_hz, int(Phase.TETHERED_TAKEOFF)
+            )
+            self._track = BlendedTrack(
+                track, self._output_now(est), t, self.cfg.spinup_time + self.cfg.blend_time
+            )
+            self._enter(Phase.SPIN_UP, t, "deployment time over: motors on (t_T)")
+            return self._track.reference(t, self.phase)
+        return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
+
+    def _phase_spin_up(self, t: float, est: StateEstimate) -> Reference:
+        assert self._track is not None
+        if t >= self._track.track.t0:
+            self._enter(Phase.TETHERED_TAKEOFF, t, "motors up to speed")
+        return self._track.reference(t, self.phase)
+
+    def _phase_tethered_takeoff(self, t: float, est: StateEstimate) -> Reference:
+        assert self._track is not None
+        if t >= self._track.track.t_end + self.cfg.settle_time:
+            self.times["t_released"] = t
+            start = self._pull_point(est)
+            d = est.body.p_W - self.geo.p_A
+            d /= np.linalg.norm(d)
+            slack = self.geo.p_A + (self.length - self.cfg.release_slack) * d - self._att_offset
+            self._path = self._new_path(t, start, self.cfg.hook_speed).to(
+                slack, pause=self.cfg.settle_time
+            )
+            self._track = None
+            self._enter(
+                Phase.RELEASE, t, "takeoff trajectory completed: free flight, releasing tension"
+            )
+            return self._free(t)
+        return self._track.reference(t, self.phase)
+
+    def _phase_release(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end:
+            self._path = (
+                self._new_path(t, self._path.end, self.cfg.hook_speed)
+                .to(self.p_hook).to(self.p_pre, pause=self.cfg.settle_time)
+            )  # fmt: skip
+            self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
+        return self._free(t)
+
+    def _phase_unhook(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end:
+            up = np.array([*self.p_pre[:2], self.z_safe])
+            home_high = np.array([*self.p_start[:2], self.z_safe])
+            home = self.p_start + self.cfg.takeoff_height * _Z
+            self._path = (
+                self._new_path(t, self.p_pre)
+                .to(up)
+                .to(home_high)
+                .to(home, pause=self.cfg.settle_time)
+            )
+            self._enter(Phase.RETURN, t, "hook released: returning")
+        return self._free(t)
+
+    def _phase_return(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end:
+            self._path = self._new_path(t, self._path.end, self.cfg.hook_speed).to(
+                self.p_start - 0.02 * _Z, pause=self.cfg.settle_time
+            )
+            self._enter(Phase.LAND, t, "above the start pad")
+        return self._free(t)
+
+    def _phase_land(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end:
+            self.times["t_done"] = t
+            self._enter(Phase.DONE, t, "landed on the start pad: motors off")
+            self._terminate_at = t + 0.5
+            return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
+        return self._free(t)
+
+    def _phase_done(self, t: float, est: StateEstimate) -> Reference:
+        return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
+
+    def _phase_safe_hover(self, t: float, est: StateEstimate) -> Reference:
+        if t >= self._path.t_end:
+            self._enter(Phase.ABORTED, t, "safe hover held: run ended")
+            self._final_mode = ControlMode.FREE_FLIGHT
+            self._terminate_at = t
+        return self._free(t)
+
+    def _phase_aborted(self, t: float, est: StateEstimate) -> Reference:
+        return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
+
+    def finish(self, t: float) -> None:
+        """Close the record of the last phase at the end of the run."""
+        self.records.append(PhaseRecord(self.phase, self._phase_start, t, "end of run"))
