@@ -196,15 +196,38 @@ def test_flat_ground_both_methods_feasible():
     assert a.tethered.hover_tension == pytest.approx(0.0, abs=1e-12)
 
 
-def test_tethered_slope_limit_is_the_rotor_limit(slope50):
-    a = analyze(slope50)
+def test_tethered_slope_limit_with_the_cable_at_the_centre_of_mass():
+    a = analyze(load_scenario("slope50", ["vehicle.cable_attachment=[0, 0, 0]"]))
     lim = a.limits
     gamma = a.geometry.gamma
-    # f_R(beta) = m g cos(beta - gamma)/cos(gamma) = n (f_min + margin) solved for beta
+    # no cable torque: equal rotor thrusts, f_R(beta) = m g cos(beta - gamma)/cos(gamma)
+    # = n (f_min + margin) solved for beta
     expected = gamma + math.acos(lim.min_controllable_thrust * math.cos(gamma) / (lim.mass * g))
     assert a.tethered.max_slope_rad == pytest.approx(min(expected, math.pi / 2), abs=1e-8)
-    below = analyze(load_scenario("slope50", [f"surface.slope_deg={math.degrees(expected) - 0.2}"]))
-    above = analyze(load_scenario("slope50", [f"surface.slope_deg={math.degrees(expected) + 0.2}"]))
+    np.testing.assert_allclose(a.tethered.hover_rotor_thrusts, a.tethered.hover_thrust / 4)
+
+
+def test_cable_offset_torque_lowers_the_slope_limit(slope50):
+    """With the 3 cm attachment offset the rotors must cancel r_att x f_L d (6.6.5): at the
+    limit the smallest rotor thrust of the landed hover is exactly f_min + margin."""
+    a = analyze(slope50)
+    limit = a.tethered.max_slope_rad
+    centred = analyze(load_scenario("slope50", ["vehicle.cable_attachment=[0, 0, 0]"]))
+    assert limit < centred.tethered.max_slope_rad - math.radians(5)
+    at = analyze(load_scenario("slope50", [f"surface.slope_deg={math.degrees(limit)}"]))
+    lim = at.limits
+    assert at.tethered.hover_rotor_thrusts.min() == pytest.approx(lim.f_min + lim.margin, abs=1e-6)
+    # the allocated thrusts produce the hover thrust and cancel the cable torque
+    from tetherland.models.quadrotor import RotorLayout
+
+    wrench = RotorLayout.from_config(slope50.vehicle).wrench(at.tethered.hover_rotor_thrusts)
+    assert wrench[0] == pytest.approx(at.tethered.hover_thrust)
+    c = at.geometry.c
+    d_B = np.array([math.sqrt(1 - c * c), 0.0, c])
+    tau_L = np.cross(np.array(slope50.vehicle.cable_attachment), -at.tethered.hover_tension * d_B)
+    np.testing.assert_allclose(wrench[1:] + tau_L, 0.0, atol=1e-9)
+    below = analyze(load_scenario("slope50", [f"surface.slope_deg={math.degrees(limit) - 0.2}"]))
+    above = analyze(load_scenario("slope50", [f"surface.slope_deg={math.degrees(limit) + 0.2}"]))
     assert below.tethered.feasible and not above.tethered.feasible
     assert any("too steep" in r for r in above.tethered.reasons)
 
@@ -224,10 +247,10 @@ def test_weak_rotors_are_reported():
     assert any("f_max too low" in r for r in a.tethered.reasons)
 
 
-def test_steep80_is_feasible_and_below_the_limit():
-    a = analyze(load_scenario("steep80"))
+def test_steep70_is_feasible_and_near_the_limit():
+    a = analyze(load_scenario("steep70"))
     assert a.tethered.feasible
-    assert math.radians(80) < a.tethered.max_slope_rad < math.radians(89)
+    assert math.radians(70) < a.tethered.max_slope_rad < math.radians(75)
 
 
 def test_table_is_generated_from_the_numbers(slope50):

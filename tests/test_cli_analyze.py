@@ -73,7 +73,7 @@ def test_analyze_table_output(capsys):
 def test_scenarios_lists_builtins(capsys):
     code, out, _ = run(capsys, "scenarios")
     assert code == 0
-    for name in ("flat", "slope50", "pipe60", "steep80"):
+    for name in ("flat", "slope50", "pipe60", "steep70"):
         assert name in out
 
 

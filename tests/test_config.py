@@ -19,7 +19,7 @@ from tetherland.config import (
 )
 from tetherland.errors import ConfigError
 
-BUILTINS = {"flat", "slope50", "pipe60", "steep80"}
+BUILTINS = {"flat", "slope50", "pipe60", "steep70"}
 
 
 def test_builtins_are_listed_and_load():

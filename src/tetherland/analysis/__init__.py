@@ -21,6 +21,7 @@ from tetherland.analysis.feasibility import (
     VehicleLimits,
     analyze_free_flight,
     analyze_tethered,
+    landed_hover_rotor_reason,
     max_feasible_slope,
 )
 from tetherland.analysis.report import LandingAnalysis, TableRow, analyze
@@ -61,6 +62,7 @@ __all__ = [
     "free_flight_max_touchdown_thrust",
     "hover_tilt_for_tension",
     "inclined_hover",
+    "landed_hover_rotor_reason",
     "landing_hover",
     "max_feasible_slope",
     "tethered_max_touchdown_thrust",

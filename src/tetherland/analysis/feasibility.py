@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import brentq
@@ -32,13 +32,14 @@ from tetherland.geometry import (
     normal_from_slope,
     surface_frame,
 )
+from tetherland.models.quadrotor import RotorLayout
 
 _TOL = 1e-9
 
 
 @dataclass(frozen=True)
 class VehicleLimits:
-    """Mass and rotor limits that decide feasibility.
+    """Mass, rotor limits and geometry that decide feasibility.
 
     Attributes
     ----------
@@ -49,6 +50,13 @@ class VehicleLimits:
     margin : float
         Per-rotor thrust kept free for attitude control on both sides [N].
     n_rotors : int
+    allocation_inverse : (n, 4) array or None
+        Gamma^-1 (6.19); None treats the thrust as shared equally (no torque).
+    r_att_B : (3,) array
+        Cable attachment offset in F_B [m]; its torque must be cancelled by the rotors
+        (6.6.5), which shifts the rotor thrusts at the landing hover.
+    heading : float
+        psi of the landed vehicle, rotation of x_B from x_S about z_S [rad].
     """
 
     mass: float
@@ -56,11 +64,22 @@ class VehicleLimits:
     f_max: float
     margin: float
     n_rotors: int = 4
+    allocation_inverse: FloatArray | None = None
+    r_att_B: FloatArray = field(default_factory=lambda: np.zeros(3))
+    heading: float = 0.0
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> VehicleLimits:
         v = scenario.vehicle
-        return cls(v.mass, v.f_min, v.f_max, v.control_margin)
+        return cls(
+            v.mass,
+            v.f_min,
+            v.f_max,
+            v.control_margin,
+            allocation_inverse=RotorLayout.from_config(v).allocation_inverse,
+            r_att_B=np.asarray(v.cable_attachment, dtype=float),
+            heading=math.radians(scenario.planner.heading_deg),
+        )
 
     @property
     def min_controllable_thrust(self) -> float:
@@ -71,6 +90,20 @@ class VehicleLimits:
     def max_controllable_thrust(self) -> float:
         """n (f_max - margin) [N]."""
         return self.n_rotors * (self.f_max - self.margin)
+
+    def landed_hover_rotor_thrusts(self, c: float, f_R: float, f_L: float) -> FloatArray:
+        """Rotor thrusts of inclined hovering at p~_L, cancelling the cable-offset torque.
+
+        With z_B = z_S and x_B turned by ``heading`` from x_S, d~ in F_B is
+        R_z(-psi) [sqrt(1 - c^2), 0, c]; the rotors must add tau = r_att x (f_L d_B).
+        """
+        if self.allocation_inverse is None:
+            return np.full(self.n_rotors, f_R / self.n_rotors)
+        ch, sh = math.cos(self.heading), math.sin(self.heading)
+        s = math.sqrt(1.0 - c * c)
+        d_B = np.array([ch * s, -sh * s, c])
+        tau = np.cross(self.r_att_B, f_L * d_B)
+        return self.allocation_inverse @ np.array([f_R, *tau])
 
 
 @dataclass(frozen=True)
@@ -87,6 +120,8 @@ class TetheredAnalysis:
         Final output: link elevation and robot tilt at landing [rad].
     hover_thrust, hover_tension : float
         Inclined hovering at p~_L: f_R and f_L [N].
+    hover_rotor_thrusts : (n,) array
+        Rotor thrusts of that hover, cancelling the cable-offset torque [N].
     max_touchdown_thrust : float
         fbar_R of (6.15), corrected [N].
     rest_tension, rest_normal_force : float
@@ -114,6 +149,7 @@ class TetheredAnalysis:
     theta_A_star: float
     hover_thrust: float
     hover_tension: float
+    hover_rotor_thrusts: FloatArray
     max_touchdown_thrust: float
     rest_tension: float
     rest_normal_force: float
@@ -183,9 +219,10 @@ def _tethered_margins(
         d,
         g,
     )
+    rotors = limits.landed_hover_rotor_thrusts(c, f_R, f_L)
     return {
-        "rotor_low": f_R - limits.min_controllable_thrust,
-        "rotor_high": limits.max_controllable_thrust - f_R,
+        "rotor_low": float(rotors.min()) - (limits.f_min + limits.margin),
+        "rotor_high": (limits.f_max - limits.margin) - float(rotors.max()),
         "tension": f_L,
         "normal": rest.f_N - surface.f_N_min,
         "friction": rest.friction_margin,
@@ -195,6 +232,31 @@ def _tethered_margins(
 def _free_flight_margin(surface: Surface, limits: VehicleLimits, g: float) -> float:
     bound = free_flight_max_touchdown_thrust(surface, limits.mass, g)
     return -math.inf if bound is None else bound - limits.min_controllable_thrust
+
+
+def landed_hover_rotor_reason(scenario: Scenario, g: float = GRAVITY) -> str | None:
+    """Why the rotors cannot hold the landed inclined hover (cable torque included), or None.
+
+    The same check as :func:`analyze_tethered`, without the slope search: used by the
+    planner so that planning and analysis agree on what is feasible.
+    """
+    geometry = LandingGeometry.from_scenario(scenario)
+    limits = VehicleLimits.from_scenario(scenario)
+    f_R, f_L = landing_hover(geometry.surface.slope, geometry.c, limits.mass, g)
+    rotors = limits.landed_hover_rotor_thrusts(geometry.c, f_R, f_L)
+    if rotors.min() < limits.f_min + limits.margin - _TOL:
+        return (
+            f"the landed inclined hover needs a rotor thrust of {rotors.min():.3f} N (thrust "
+            f"{f_R:.2f} N, cable-offset torque cancelled) < vehicle.f_min + control_margin = "
+            f"{limits.f_min + limits.margin:.3f} N: slope too steep for this vehicle"
+        )
+    if rotors.max() > limits.f_max - limits.margin + _TOL:
+        return (
+            f"the landed inclined hover needs a rotor thrust of {rotors.max():.3f} N > "
+            f"vehicle.f_max - control_margin = {limits.f_max - limits.margin:.3f} N: "
+            "rotor f_max too low for this slope"
+        )
+    return None
 
 
 def max_feasible_slope(margin: Callable[[float], float], samples: int = 181) -> float | None:
@@ -228,16 +290,18 @@ def analyze_tethered(
     rest = contact_forces(surface, limits.mass, 0.0, surface.z_S, rest_tension, d, g)
     margins = _tethered_margins(surface, geometry.c, limits, g)
     reasons = []
-    per_rotor = f_R / limits.n_rotors
+    rotors = limits.landed_hover_rotor_thrusts(geometry.c, f_R, f_L)
     if margins["rotor_low"] < -_TOL:
         reasons.append(
-            f"inclined-hover thrust {per_rotor:.3f} N per rotor is below f_min + control_margin"
+            f"inclined hovering at the landing point needs a rotor thrust of {rotors.min():.3f} N"
+            f" (thrust {f_R:.2f} N, cable-offset torque cancelled), below f_min + control_margin"
             f" = {limits.f_min + limits.margin:.3f} N: slope too steep for this vehicle"
         )
     if margins["rotor_high"] < -_TOL:
         reasons.append(
-            f"inclined-hover thrust {per_rotor:.3f} N per rotor exceeds f_max - control_margin"
-            f" = {limits.f_max - limits.margin:.3f} N: rotor f_max too low"
+            f"inclined hovering at the landing point needs a rotor thrust of {rotors.max():.3f} N,"
+            f" above f_max - control_margin = {limits.f_max - limits.margin:.3f} N:"
+            " rotor f_max too low"
         )
     if f_L < -_TOL:
         reasons.append("inclined hovering needs a negative cable tension")
@@ -258,6 +322,7 @@ def analyze_tethered(
         theta_A_star=geometry.theta_A_star,
         hover_thrust=f_R,
         hover_tension=f_L,
+        hover_rotor_thrusts=rotors,
         max_touchdown_thrust=tethered_max_touchdown_thrust(surface, d, limits.mass, g),
         rest_tension=rest_tension,
         rest_normal_force=rest.f_N,

@@ -114,6 +114,7 @@ class LandingAnalysis:
                 "theta_A_star": t.theta_A_star,
                 "hover_thrust": t.hover_thrust,
                 "hover_rotor_thrust": t.hover_thrust / self.limits.n_rotors,
+                "hover_rotor_thrusts": t.hover_rotor_thrusts,
                 "hover_tension": t.hover_tension,
                 "max_touchdown_thrust": t.max_touchdown_thrust,
                 "rest_tension": t.rest_tension,

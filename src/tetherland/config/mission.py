@@ -18,11 +18,11 @@ class MissionConfig(Section):
     """Time on the surface with motors off, t_T - t_G [s]."""
     takeoff_height: float = Field(1.0, gt=0, le=50)
     """Climb above the start pad before the approach [m]."""
-    cruise_speed: float = Field(0.8, gt=0, le=10)
+    cruise_speed: float = Field(1.5, gt=0, le=10)
     """Peak speed of free-flight transfers [m/s]."""
-    cruise_accel: float = Field(1.0, gt=0, le=20)
+    cruise_accel: float = Field(1.5, gt=0, le=20)
     """Peak acceleration of free-flight transfers [m/s^2]."""
-    hook_speed: float = Field(0.25, gt=0, le=5)
+    hook_speed: float = Field(0.3, gt=0, le=5)
     """Peak speed through the anchoring mechanism (hooking and unhooking) [m/s]."""
     approach_distance: float = Field(0.3, gt=0, le=5)
     """Hook-point distance before the capture disk where the straight hooking pass starts [m]."""

@@ -205,7 +205,12 @@ class DflController:
         if self.compensate_offset and tension > 0.0:
             d_B = R.T @ (self.R_WA @ link_frame(link.phi, link.delta)[:, 0])
             tau = tau - cable_torque(self.r_att_B, tension, d_B)
-        diag = {**errors, "singular": float(singular), "decoupling_cond": float(min(cond, 1e12))}
+        diag = {
+            **errors,
+            "singular": float(singular),
+            "decoupling_cond": float(min(cond, 1e12)),
+            "ff_tension": ff.tension if ff is not None else math.nan,
+        }
         # the rotors hold the command for one period: send the mean of the thrust polynomial
         # over it, f + f' h/2 + f'' h^2/6, so the hold adds no first-order error
         h = self.control_dt

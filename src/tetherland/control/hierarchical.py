@@ -126,5 +126,6 @@ class HierarchicalController:
             "e_psi": math.remainder(yd[3] - psi, 2.0 * math.pi),
             "singular": float(singular),
             "singularity_margin": margin,
+            "ff_tension": ff.tension if ff is not None else math.nan,
         }
         return self.mixer.command(max(f_R, 0.0), tau, diag)

@@ -16,6 +16,7 @@ from tetherland.sim import Plant, Runner, SimLog
 
 DIAGNOSTICS = (
     "e_phi", "e_delta", "e_theta_A", "e_psi", "singular", "saturation", "e_x", "e_y", "e_z",
+    "ff_tension",
 )  # fmt: skip
 """Controller diagnostics recorded as ``diag.<key>`` log columns."""
 

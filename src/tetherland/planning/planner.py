@@ -22,6 +22,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tetherland.analysis.feasibility import landed_hover_rotor_reason
 from tetherland.config import PlannerConfig, Scenario
 from tetherland.errors import TetherlandError
 from tetherland.geometry import LandingGeometry
@@ -312,6 +313,9 @@ class Planner:
             trajectory=None, verification=None, solution=None, spec=spec,
         )  # fmt: skip
         reasons = precheck(spec)
+        landed = landed_hover_rotor_reason(scenario)
+        if landed is not None and not reasons:
+            reasons.append(landed)
         if reasons:
             return replace(base, status=PlanStatus.INFEASIBLE, message="; ".join(reasons))
         if method == "spline":
