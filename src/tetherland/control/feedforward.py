@@ -21,6 +21,7 @@ import numpy as np
 
 from tetherland.errors import SingularityError
 from tetherland.geometry import FloatArray
+from tetherland.rotations import vee
 
 _EPS = 1e-9
 
@@ -37,10 +38,6 @@ def _normalised(
     ddr = float(dn @ dv + n @ ddv)
     ddn = (ddv - 2.0 * dn * dr - n * ddr) / r
     return n, dn, ddn
-
-
-def _vee(S: FloatArray) -> FloatArray:
-    return np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]]) * 0.5
 
 
 def attitude_feedforward(
@@ -80,6 +77,6 @@ def attitude_feedforward(
     dR = np.column_stack((dx, dy, dz))
     ddR = np.column_stack((ddx, ddy, ddz))
     W = R.T @ dR
-    omega = _vee(W)
-    omega_dot = _vee(R.T @ ddR - W @ W)
+    omega = vee(W)
+    omega_dot = vee(R.T @ ddR - W @ W)
     return R, omega, omega_dot

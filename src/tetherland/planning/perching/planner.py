@@ -154,7 +154,8 @@ def precheck(spec: PerchSpec) -> list[str]:
     reasons = []
     mg = spec.mass * spec.gravity
     per_rotor = spec.G @ np.array([mg, 0.0])
-    if per_rotor.max() > spec.f_hi + 1e-9:
+    cannot_hover = bool(per_rotor.max() > spec.f_hi + 1e-9)
+    if cannot_hover:
         reasons.append(
             f"infeasible: the rotors cannot hover: m g = {mg:.2f} N needs {per_rotor.max():.2f} N "
             f"per rotor > f_max - control_margin = {spec.f_hi:g} N"
@@ -175,7 +176,10 @@ def precheck(spec: PerchSpec) -> list[str]:
     if abs(start[2]) > spec.max_pitch:
         reasons.append("infeasible: the start pitch exceeds perching.max_pitch_deg")
     f0 = spec.rotor_thrusts(start)[0]
-    if f0.min() < spec.f_lo - 1e-9 or f0.max() > spec.f_hi + 1e-9:
+    hover_start = np.allclose(start[6:], [mg, 0.0, 0.0, 0.0])
+    if (f0.min() < spec.f_lo - 1e-9 or f0.max() > spec.f_hi + 1e-9) and not (
+        hover_start and cannot_hover
+    ):
         reasons.append(
             f"infeasible: the start rotor thrusts {f0.min():.2f}..{f0.max():.2f} N leave "
             f"[{spec.f_lo:g}, {spec.f_hi:g}] N"
