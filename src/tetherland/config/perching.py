@@ -67,6 +67,9 @@ class PerchingConfig(Section):
     """Hover at the start point before the maneuver starts (closed-loop run) [s]."""
     rest_time: float = Field(1.0, gt=0, le=60)
     """Simulated time with the motors off after touchdown (closed-loop run) [s]."""
+    contact_grace: float = Field(0.1, ge=0, le=5)
+    """Longest flight past the planned touchdown time, holding the touchdown thrust and
+    attitude, while waiting for (estimated) contact; then the motors go off anyway [s]."""
     settle_time: float = Field(0.3, ge=0, le=10)
     """Time after the motors go off before slip is measured (rotors spin down, contact
     transient) [s]."""

@@ -3,7 +3,8 @@
 The planner and the controller see ``scenario_belief`` (the estimated model); the plant
 is ``scenario_plant`` (the truth). The vehicle starts at rest, level, at the planned start
 point with the rotors at hover speed, hovers ``perching.hover_time``, flies the maneuver,
-switches the motors off at touchdown and rests ``perching.rest_time``.
+switches the motors off at touchdown (estimated contact, or ``perching.contact_grace``
+after the planned t_L) and rests ``perching.rest_time``.
 """
 
 from __future__ import annotations
@@ -45,7 +46,10 @@ def build_run(
         scenario_belief.vehicle.lander_half_width, effective_h_R(scenario_belief),
         geo.surface.z_S, geo.p_L,
     )  # fmt: skip
-    reference = PerchingReference(traj, landers, t_start=cfg.hover_time, rest_time=cfg.rest_time)
+    reference = PerchingReference(
+        traj, landers, t_start=cfg.hover_time, rest_time=cfg.rest_time,
+        contact_grace=cfg.contact_grace,
+    )  # fmt: skip
     tilt = max(cfg.max_pitch_deg, scenario_belief.controller.free_flight.max_tilt_deg)
     controller = FreeFlightTracker(
         scenario_belief, lag_compensation=cfg.lag_compensation, max_tilt_deg=tilt
@@ -53,7 +57,7 @@ def build_run(
     p0 = traj.flat_outputs(0.0)[0]
     R0 = rotation_from_z_and_yaw(np.array([0.0, 0.0, 1.0]), traj.meta.heading)
     initial = RigidBodyState.at_rest(p0, rotmat_to_quat(R0))
-    duration = cfg.hover_time + traj.duration + cfg.rest_time + MARGIN_TIME
+    duration = cfg.hover_time + traj.duration + cfg.contact_grace + cfg.rest_time + MARGIN_TIME
     return controller, reference, initial, controller.hover_speeds, duration
 
 
