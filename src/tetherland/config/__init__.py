@@ -19,6 +19,7 @@ from tetherland.config.loader import (
     scenario_to_toml,
 )
 from tetherland.config.mission import MissionConfig
+from tetherland.config.perching import PerchingConfig, PerchingWeights
 from tetherland.config.perturbation import PerturbationConfig
 from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
 from tetherland.config.planning import PlannerConfig, PlannerWeights
@@ -33,6 +34,8 @@ __all__ = [
     "ImuConfig",
     "MissionConfig",
     "MocapConfig",
+    "PerchingConfig",
+    "PerchingWeights",
     "PerturbationConfig",
     "PlannerConfig",
     "PlannerWeights",

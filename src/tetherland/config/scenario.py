@@ -7,6 +7,7 @@ from pydantic import Field, model_validator
 from tetherland.config.base import Section
 from tetherland.config.control import ControllerConfig
 from tetherland.config.mission import MissionConfig
+from tetherland.config.perching import PerchingConfig
 from tetherland.config.perturbation import PerturbationConfig
 from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
 from tetherland.config.planning import PlannerConfig
@@ -35,6 +36,7 @@ class Scenario(Section):
     mission: MissionConfig = MissionConfig()
     sim: SimConfig = SimConfig()
     perturbation: PerturbationConfig = PerturbationConfig()
+    perching: PerchingConfig = PerchingConfig()
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:

@@ -3,6 +3,10 @@
     F_d = m (a_d - k_x e_x - k_v e_v) - m g_W,   f_R = F_d . z_B,
     z_B,d = F_d/||F_d||,  R_d from (z_B,d, psi_d),  tau from :mod:`attitude`.
 
+Optional feed-forward: with the reference's jerk (and snap), the desired body rate (and
+angular acceleration) of the nominal attitude of the flat outputs enter the attitude law
+(:mod:`tetherland.control.feedforward`).
+
 The commanded tilt is limited (``max_tilt_deg``) and the vertical thrust kept positive, so
 z_B,d never becomes horizontal or undefined (the singularity of R_d is avoided, not hit).
 """
@@ -17,6 +21,7 @@ import numpy as np
 from tetherland import GRAVITY
 from tetherland.config.control import FreeFlightGains
 from tetherland.control.attitude import AttitudeController, AttitudeGains
+from tetherland.control.feedforward import attitude_feedforward
 from tetherland.geometry import FloatArray
 from tetherland.rotations import rotation_from_z_and_yaw
 from tetherland.state import RigidBodyState
@@ -33,13 +38,34 @@ class PositionReference:
     p_W, v_W, a_W : (3,) arrays
         Desired position [m], velocity [m/s], acceleration [m/s^2] of the centre of mass.
     yaw : float
-        Desired heading psi [rad].
+        Desired heading psi [rad] (held constant by the feed-forward).
+    j_W, s_W : (3,) arrays or None
+        Desired jerk [m/s^3] and snap [m/s^4]. When ``j_W`` is given, the controller adds
+        the desired body rate (and, with ``s_W``, angular acceleration) of the flat outputs
+        as attitude feed-forward (:mod:`tetherland.control.feedforward`); None: no
+        feed-forward (the default behaviour).
     """
 
     p_W: FloatArray
     v_W: FloatArray = field(default_factory=lambda: _ZERO3.copy())
     a_W: FloatArray = field(default_factory=lambda: _ZERO3.copy())
     yaw: float = 0.0
+    j_W: FloatArray | None = None
+    s_W: FloatArray | None = None
+
+    @classmethod
+    def from_rows(cls, rows: FloatArray, yaw: float = 0.0) -> PositionReference:
+        """From ``Reference.p_W``: rows p, v, a, jerk, snap (the first k given) [F_W]."""
+        r = np.asarray(rows, dtype=float).reshape(-1, 3)
+        k = len(r)
+        return cls(
+            p_W=r[0],
+            v_W=r[1] if k > 1 else _ZERO3.copy(),
+            a_W=r[2] if k > 2 else _ZERO3.copy(),
+            yaw=float(yaw),
+            j_W=r[3] if k > 3 else None,
+            s_W=r[4] if k > 4 else None,
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -120,5 +146,19 @@ class PositionController:
         R = state.R_WB
         R_d = rotation_from_z_and_yaw(F, ref.yaw)
         thrust = float(F @ R[:, 2])
-        tau = self.attitude.torque(R, state.omega_B, R_d)
+        omega_d = omega_dot_d = None
+        if ref.j_W is not None:
+            omega_d, omega_dot_d = self.feedforward_rates(ref)
+        tau = self.attitude.torque(R, state.omega_B, R_d, omega_d, omega_dot_d)
         return WrenchCommand(thrust=thrust, torque_B=tau, R_d=R_d, limited=limited)
+
+    def feedforward_rates(self, ref: PositionReference) -> tuple[FloatArray, FloatArray]:
+        """Body rate and angular acceleration of the reference's flat outputs (F_B of the
+        desired attitude) [rad/s, rad/s^2]; zero snap when ``s_W`` is None."""
+        m = self.mass
+        F_n = m * np.asarray(ref.a_W, dtype=float)
+        F_n[2] += m * self.g
+        dF = m * np.asarray(ref.j_W, dtype=float)
+        ddF = _ZERO3 if ref.s_W is None else m * np.asarray(ref.s_W, dtype=float)
+        _, omega_d, omega_dot_d = attitude_feedforward(F_n, dF, ddF, ref.yaw)
+        return omega_d, omega_dot_d

@@ -1,0 +1,427 @@
+"""The planned perching maneuver as a free-flight trajectory, with CSV files.
+
+A :class:`FreeFlightTrajectory` holds the node states X (N+1, 10) and the inputs
+U (N, 2) = [f_R'', tau''] (held on each interval) of the planar model of :mod:`.model`.
+Between nodes the model is integrated with the input held (RK4 steps of at most
+:data:`DENSE_STEP`), so every sample is the model's own motion: p is C^3, its snap jumps
+with f_R''. :meth:`FreeFlightTrajectory.simulate` builds one by integrating through all
+intervals from the initial state: that re-simulation, not the solver's nodes, is what the
+planner checks and hands out.
+
+Samples (:class:`FreeFlightSamples`) give, in F_W, the flat outputs p(t) with derivatives
+up to the snap and the yaw, and the nominal attitude R_WB, body rate and angular
+acceleration, total thrust, body torque and rotor thrusts with their rates. Before 0 and
+after T the end values are held with zero derivatives.
+
+CSV: ``#`` header lines (format, kind, scenario, version, a JSON ``meta`` line with the
+model constants), then one row per node: t, the 10 states and the 2 inputs (the last
+row's inputs are zero). :func:`load_free_flight_trajectory` rebuilds the same trajectory.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tetherland import GRAVITY, __version__
+from tetherland.errors import ConfigError
+from tetherland.geometry import FloatArray
+from tetherland.io import atomic_write_text
+from tetherland.planning.perching.model import (
+    CASADI,
+    NU,
+    NUMPY,
+    NX,
+    STATE_NAMES,
+    PerchSpec,
+    flat_derivatives,
+    rhs,
+)
+
+FORMAT_VERSION = 1
+KIND = "free-flight"
+DENSE_STEP = 2e-3
+"""Largest RK4 step between the nodes [s]."""
+_COLUMNS = ["t", *STATE_NAMES, "f_R_ddot", "tau_ddot"]
+
+
+@dataclass(frozen=True)
+class FreeFlightMeta:
+    """Model constants and frame of a free-flight trajectory.
+
+    Attributes
+    ----------
+    scenario : str
+    mass, inertia, gravity : float
+        m [kg], J_y about y_B [kg m^2], g [m/s^2].
+    G : (4, 2) array
+        [f_R, tau] -> rotor thrusts.
+    R_WA : (3, 3) array
+        Plane frame (x_A horizontal downhill, y_A, z_W).
+    p_L : (3,) array
+        Landing point, origin of the plane coordinates, F_W [m].
+    beta : float
+        Slope angle [rad].
+    h_R : float
+        Centre of mass to landers plane [m].
+    approach_speed : float
+        Planned touchdown speed along -z_S [m/s].
+    version : str
+    """
+
+    scenario: str
+    mass: float
+    inertia: float
+    G: FloatArray
+    R_WA: FloatArray
+    p_L: FloatArray
+    beta: float
+    h_R: float
+    approach_speed: float = 0.0
+    gravity: float = GRAVITY
+    version: str = field(default=__version__)
+
+    @classmethod
+    def from_spec(cls, spec: PerchSpec) -> FreeFlightMeta:
+        return cls(
+            scenario=spec.scenario_name, mass=spec.mass, inertia=spec.inertia, G=spec.G,
+            R_WA=spec.R_WA, p_L=spec.p_L, beta=spec.beta, h_R=spec.h_R,
+            approach_speed=spec.approach_speed, gravity=spec.gravity,
+        )  # fmt: skip
+
+    @property
+    def heading(self) -> float:
+        """Yaw psi of x_A in F_W [rad]."""
+        return math.atan2(float(self.R_WA[1, 0]), float(self.R_WA[0, 0]))
+
+    @property
+    def z_S(self) -> FloatArray:
+        """Surface normal in F_W."""
+        b = self.beta
+        return self.R_WA[:, 0] * math.sin(b) + self.R_WA[:, 2] * math.cos(b)
+
+    @property
+    def p_landed(self) -> FloatArray:
+        """Landed centre of mass p*_L + h_R z_S in F_W [m]."""
+        return self.p_L + self.h_R * self.z_S
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "scenario": self.scenario, "mass": self.mass, "inertia": self.inertia,
+            "G": np.asarray(self.G).tolist(), "R_WA": np.asarray(self.R_WA).tolist(),
+            "p_L": np.asarray(self.p_L).tolist(), "beta": self.beta, "h_R": self.h_R,
+            "approach_speed": self.approach_speed, "gravity": self.gravity,
+            "version": self.version,
+        }  # fmt: skip
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any]) -> FreeFlightMeta:
+        arrays = {k: np.asarray(d[k], dtype=float) for k in ("G", "R_WA", "p_L")}
+        scalars = {k: d[k] for k in ("scenario", "mass", "inertia", "beta", "h_R",
+                                     "approach_speed", "gravity", "version")}  # fmt: skip
+        return cls(**scalars, **arrays)
+
+
+@dataclass(frozen=True)
+class FreeFlightSamples:
+    """A free-flight trajectory sampled at times ``t`` (leading axis n), F_W.
+
+    Attributes
+    ----------
+    t : (n,) array [s]
+    p_W : (n, 5, 3) array
+        Centre of mass position and derivatives 1..4 (velocity, acceleration, jerk,
+        snap) [m, m/s, m/s^2, m/s^3, m/s^4].
+    yaw : (n,) array
+        Reference heading psi [rad] (x_B in the fall-line plane).
+    R_WB : (n, 3, 3) array
+        Nominal attitude.
+    omega_B, omega_dot_B : (n, 3) arrays
+        Nominal body rate [rad/s] and angular acceleration [rad/s^2], F_B.
+    thrust, thrust_rate : (n,) arrays
+        f_R [N], f_R' [N/s].
+    torque_B : (n, 3) array
+        Nominal body torque [N m].
+    rotor_thrusts, rotor_thrust_rates : (n, 4) arrays
+        f_i [N], f_i' [N/s].
+    states : (n, 10) array
+        Planar extended states (plane coordinates relative to p*_L).
+    """
+
+    t: FloatArray
+    p_W: FloatArray
+    yaw: FloatArray
+    R_WB: FloatArray
+    omega_B: FloatArray
+    omega_dot_B: FloatArray
+    thrust: FloatArray
+    thrust_rate: FloatArray
+    torque_B: FloatArray
+    rotor_thrusts: FloatArray
+    rotor_thrust_rates: FloatArray
+    states: FloatArray
+
+    @property
+    def z_B(self) -> FloatArray:
+        """(n, 3) nominal thrust axes."""
+        return self.R_WB[:, :, 2]
+
+
+_STEP_CACHE: dict[str, ca.Function] = {}
+
+
+def _rk4_function() -> ca.Function:
+    """``step(x[10], u[2], h, c[3]) -> x(t + h)`` with c = [m, J_y, g]."""
+    if "step" not in _STEP_CACHE:
+        x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", 3)
+
+        def f(z: ca.SX) -> ca.SX:
+            return rhs(z, u, c[0], c[1], c[2], CASADI)
+
+        k1 = f(x)
+        k2 = f(x + 0.5 * h * k1)
+        k3 = f(x + 0.5 * h * k2)
+        k4 = f(x + h * k3)
+        x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        _STEP_CACHE["step"] = ca.Function("perch_rk4", [x, u, h, c], [x_next])
+    return _STEP_CACHE["step"]
+
+
+def _chain(n: int, restart: int | None = None) -> ca.Function:
+    key = f"chain{n}" if restart is None else f"restart{n}x{restart}"
+    if key not in _STEP_CACHE:
+        chain = _rk4_function().mapaccum(n)
+        _STEP_CACHE[key] = chain if restart is None else chain.map(restart)
+    return _STEP_CACHE[key]
+
+
+def _substeps(interval: float) -> int:
+    return max(1, math.ceil(interval / DENSE_STEP - 1e-9))
+
+
+class FreeFlightTrajectory:
+    """A planned free-flight (perching) maneuver on [0, T]; see the module docstring.
+
+    Parameters
+    ----------
+    meta : FreeFlightMeta
+    times : (N+1,) array
+        Node times, increasing [s] (shifted to start at 0).
+    X : (N+1, 10) array
+        Node states.
+    U : (N, 2) array
+        Inputs held on each interval.
+    substeps : int, optional
+        RK4 steps per interval of the dense table (default: steps of <= DENSE_STEP).
+    """
+
+    kind = KIND
+
+    def __init__(
+        self,
+        meta: FreeFlightMeta,
+        times: ArrayLike,
+        X: ArrayLike,
+        U: ArrayLike,
+        substeps: int | None = None,
+        _table: FloatArray | None = None,
+    ) -> None:
+        times = np.asarray(times, dtype=float)
+        self.meta = meta
+        self.times = times - times[0]
+        self.X = np.asarray(X, dtype=float)
+        self.U = np.asarray(U, dtype=float)
+        N = len(self.times) - 1
+        if N < 1 or self.X.shape != (N + 1, NX) or self.U.shape != (N, NU):
+            raise ValueError(
+                f"need X (N+1, {NX}) and U (N, {NU}) for {N + 1} times, "
+                f"got {self.X.shape}, {self.U.shape}"
+            )
+        if np.any(np.diff(self.times) <= 0):
+            raise ValueError("node times must increase")
+        self.duration = float(self.times[-1])
+        self._c = np.array([meta.mass, meta.inertia, meta.gravity])
+        self._sub = substeps or _substeps(float(np.max(np.diff(self.times))))
+        if _table is None:
+            h = np.repeat(np.diff(self.times) / self._sub, self._sub)[None, :]
+            ends = _chain(self._sub, N)(self.X[:-1].T, np.repeat(self.U.T, self._sub, axis=1),
+                                        h, self._c)  # fmt: skip
+            ends = np.asarray(ends).T.reshape(N, self._sub, NX)
+            _table = np.concatenate((self.X[:-1, None, :], ends[:, :-1, :]), axis=1)
+        self._table = _table
+
+    @classmethod
+    def simulate(
+        cls, meta: FreeFlightMeta, times: ArrayLike, x0: ArrayLike, U: ArrayLike
+    ) -> FreeFlightTrajectory:
+        """Integrate the model from ``x0`` with ``U`` held on each interval (RK4 steps of
+        at most :data:`DENSE_STEP`) through all intervals; keep the continuous nodes."""
+        times = np.asarray(times, dtype=float)
+        U = np.asarray(U, dtype=float)
+        N = len(times) - 1
+        sub = _substeps(float(np.max(np.diff(times))))
+        h = np.repeat(np.diff(times) / sub, sub)[None, :]
+        c = np.array([meta.mass, meta.inertia, meta.gravity])
+        ends = _chain(N * sub)(np.asarray(x0, dtype=float), np.repeat(U.T, sub, axis=1), h, c)
+        ends = np.asarray(ends).T.reshape(N, sub, NX)
+        X = np.vstack((np.asarray(x0, dtype=float)[None, :], ends[:, -1, :]))
+        table = np.concatenate((X[:-1, None, :], ends[:, :-1, :]), axis=1)
+        return cls(meta, times, X, U, sub, _table=table)
+
+    # -- evaluation --------------------------------------------------------------------
+    def _rk4(self, x: FloatArray, u: FloatArray, h: FloatArray) -> FloatArray:
+        m, J, g = self._c
+
+        def f(z: FloatArray) -> FloatArray:
+            return rhs(z, u, m, J, g, NUMPY)
+
+        k1 = f(x)
+        k2 = f(x + 0.5 * h * k1)
+        k3 = f(x + 0.5 * h * k2)
+        k4 = f(x + h * k3)
+        return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+    def states(self, times: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Planar states (n, 10) and inputs (n, 2) at ``times`` clipped to [0, T]."""
+        t = np.clip(np.atleast_1d(np.asarray(times, dtype=float)), 0.0, self.duration)
+        N = len(self.times) - 1
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, N - 1)
+        h_sub = (self.times[k + 1] - self.times[k]) / self._sub
+        j = np.clip(np.floor((t - self.times[k]) / h_sub).astype(int), 0, self._sub - 1)
+        u = self.U[k].T
+        x = self._rk4(self._table[k, j].T, u, t - (self.times[k] + j * h_sub))
+        return x.T.copy(), u.T.copy()
+
+    def sample(self, times: ArrayLike) -> FreeFlightSamples:
+        """Everything at ``times`` [s] (see :class:`FreeFlightSamples`)."""
+        meta = self.meta
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        x, u = self.states(t)
+        outside = (t < 0.0) | (t > self.duration)
+        x[outside, 3:6] = 0.0
+        x[outside, 7:10] = 0.0
+        u[outside] = 0.0
+        n = len(t)
+        d = flat_derivatives(x.T, u.T, meta.mass, meta.inertia, meta.gravity)
+        plane = np.stack(
+            (x[:, 0:2].T, x[:, 3:5].T, d["acc"], d["jerk"], d["snap"]), axis=1
+        )  # (2, 5, n)
+        plane[:, 2:, outside] = 0.0
+        A = meta.R_WA[:, [0, 2]]
+        p_W = np.einsum("ij,jkn->nki", A, plane)
+        p_W[:, 0, :] += meta.p_L
+        th = x[:, 2]
+        c, s = np.cos(th), np.sin(th)
+        R_y = np.zeros((n, 3, 3))
+        R_y[:, 0, 0], R_y[:, 0, 2], R_y[:, 1, 1] = c, s, 1.0
+        R_y[:, 2, 0], R_y[:, 2, 2] = -s, c
+        R_WB = meta.R_WA[None, :, :] @ R_y
+        zeros = np.zeros(n)
+        omega_dot = np.where(outside, 0.0, d["omega_dot"])
+        wrench, wrench_dot = x[:, 6:8], x[:, 8:10]
+        return FreeFlightSamples(
+            t=t,
+            p_W=p_W,
+            yaw=np.full(n, meta.heading),
+            R_WB=R_WB,
+            omega_B=np.column_stack((zeros, x[:, 5], zeros)),
+            omega_dot_B=np.column_stack((zeros, omega_dot, zeros)),
+            thrust=x[:, 6].copy(),
+            thrust_rate=x[:, 8].copy(),
+            torque_B=np.column_stack((zeros, x[:, 7], zeros)),
+            rotor_thrusts=wrench @ meta.G.T,
+            rotor_thrust_rates=wrench_dot @ meta.G.T,
+            states=x,
+        )
+
+    def flat_outputs(self, t: float) -> FloatArray:
+        """(5, 3) rows [p, v, a, jerk, snap] at ``t`` in F_W: ``Reference.p_W``."""
+        return self.sample([t]).p_W[0]
+
+    def continuation(self, s: float) -> FloatArray:
+        """(5, 3) flat-output rows ``s`` seconds after t_L with the touchdown thrust and
+        attitude held (constant acceleration): the free flight that goes on towards the
+        surface until contact when the vehicle is late [F_W]."""
+        end = self.flat_outputs(self.duration)
+        s = max(0.0, float(s))
+        rows = np.zeros((5, 3))
+        rows[0] = end[0] + end[1] * s + 0.5 * end[2] * s * s
+        rows[1] = end[1] + end[2] * s
+        rows[2] = end[2]
+        return rows
+
+    @property
+    def start_state(self) -> FloatArray:
+        return self.X[0].copy()
+
+    @property
+    def final_state(self) -> FloatArray:
+        return self.states([self.duration])[0][0]
+
+    # -- files -------------------------------------------------------------------------
+    def to_csv(self) -> str:
+        """CSV text: header lines, column names, one row per node."""
+        U = np.vstack((self.U, np.zeros((1, NU))))
+        data = np.column_stack((self.times, self.X, U))
+        meta = {**self.meta.to_json(), "duration": self.duration, "substeps": self._sub}
+        head = [
+            "# tetherland trajectory",
+            f"# format: {FORMAT_VERSION}",
+            f"# kind: {self.kind}",
+            f"# scenario: {self.meta.scenario}",
+            "# maneuver: perching",
+            f"# version: {self.meta.version}",
+            f"# meta: {json.dumps(meta)}",
+            ",".join(_COLUMNS),
+        ]
+        body = "\n".join(",".join(format(v, ".17g") for v in row) for row in data)
+        return "\n".join(head) + "\n" + body + "\n"
+
+    def save_csv(self, path: str | Path) -> Path:
+        """Write :meth:`to_csv` to ``path`` atomically."""
+        return atomic_write_text(path, self.to_csv())
+
+
+def free_flight_trajectory_from_csv(text: str) -> FreeFlightTrajectory:
+    """Rebuild a trajectory from :meth:`FreeFlightTrajectory.to_csv` text."""
+    header: dict[str, str] = {}
+    lines = text.splitlines()
+    i = 0
+    while i < len(lines) and lines[i].startswith("#"):
+        key, sep, value = lines[i][1:].partition(":")
+        if sep:
+            header[key.strip()] = value.strip()
+        i += 1
+    if header.get("kind") != KIND:
+        raise ConfigError(f"trajectory CSV: kind {header.get('kind')!r} is not {KIND!r}")
+    if header.get("format") != str(FORMAT_VERSION):
+        raise ConfigError(f"trajectory CSV: unsupported format {header.get('format')!r}")
+    if i >= len(lines) or lines[i].split(",") != _COLUMNS:
+        raise ConfigError("trajectory CSV: missing or unexpected column header")
+    try:
+        meta_json = json.loads(header["meta"])
+        meta = FreeFlightMeta.from_json(meta_json)
+    except (KeyError, json.JSONDecodeError) as err:
+        raise ConfigError(f"trajectory CSV: bad meta header ({err})") from None
+    data = np.loadtxt(io.StringIO("\n".join(lines[i + 1 :])), delimiter=",", ndmin=2)
+    return FreeFlightTrajectory(
+        meta, data[:, 0], data[:, 1 : 1 + NX], data[:-1, 1 + NX :],
+        substeps=int(meta_json["substeps"]),
+    )  # fmt: skip
+
+
+def load_free_flight_trajectory(path: str | Path) -> FreeFlightTrajectory:
+    """Read a trajectory CSV written by :meth:`FreeFlightTrajectory.save_csv`."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as err:
+        raise ConfigError(f"cannot read trajectory file '{path}': {err}") from None
+    return free_flight_trajectory_from_csv(text)
