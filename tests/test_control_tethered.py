@@ -38,7 +38,9 @@ def plans(scenario):
 def start_state(traj, d_phi: float = 0.0, d_theta: float = 0.0) -> np.ndarray:
     nom, out = traj.nominal(0.0), traj.output(0.0)
     R = nom.R_WB @ exp_so3([0.0, d_theta, 0.0])
-    return np.concatenate(([out.phi[0] + d_phi, 0.0, out.phi[1], 0.0], rotmat_to_quat(R), nom.omega_B))
+    return np.concatenate(
+        ([out.phi[0] + d_phi, 0.0, out.phi[1], 0.0], rotmat_to_quat(R), nom.omega_B)
+    )
 
 
 def tracking_errors(scenario, run, track):
@@ -47,15 +49,24 @@ def tracking_errors(scenario, run, track):
     theta = np.array(
         [theta_A_from_z_B(geo.R_WA.T @ quat_to_rotmat(x[4:8])[:, 2], x[0], x[1]) for x in run.x]
     )
-    return np.degrees(run.x[:, 0] - ref[:, 0]), np.degrees(theta - ref[:, 2]), np.degrees(run.x[:, 1])
+    return (
+        np.degrees(run.x[:, 0] - ref[:, 0]),
+        np.degrees(theta - ref[:, 2]),
+        np.degrees(run.x[:, 1]),
+    )
 
 
 @pytest.mark.parametrize("maneuver", ["landing", "takeoff"])
 def test_hierarchical_tracks_the_plan(scenario, plans, maneuver):
     traj = plans[maneuver]
     track = TrajectoryTrack(traj, 0.0, 500.0)
-    run = simulate_tethered(scenario, HierarchicalController(scenario), track.reference,
-                            start_state(traj), traj.duration + 0.5)  # fmt: skip
+    run = simulate_tethered(
+        scenario,
+        HierarchicalController(scenario),
+        track.reference,
+        start_state(traj),
+        traj.duration + 0.5,
+    )
     e_phi, e_theta, delta = tracking_errors(scenario, run, track)
     assert abs(e_phi[-1]) < 1.0 and abs(e_theta[-1]) < 1.0  # the bound
     assert np.abs(e_phi).max() < 0.05 and np.abs(e_theta).max() < 0.05  # what it reaches
@@ -66,8 +77,9 @@ def test_hierarchical_recovers_from_an_initial_offset(scenario, plans):
     traj = plans["landing"]
     track = TrajectoryTrack(traj, 0.0, 500.0)
     x0 = start_state(traj, d_phi=math.radians(3.0), d_theta=math.radians(-4.0))
-    run = simulate_tethered(scenario, HierarchicalController(scenario), track.reference, x0,
-                            traj.duration + 1.0)  # fmt: skip
+    run = simulate_tethered(
+        scenario, HierarchicalController(scenario), track.reference, x0, traj.duration + 1.0
+    )
     e_phi, e_theta, _ = tracking_errors(scenario, run, track)
     assert abs(e_phi[0]) == pytest.approx(3.0, abs=1e-6)
     assert abs(e_phi[-1]) < 0.05 and abs(e_theta[-1]) < 0.05
@@ -82,8 +94,9 @@ def test_dfl_is_exact_up_to_integration_error(scenario, plans):
         ctrl = DflController(scenario, control_dt=control_dt)
         nom = traj.nominal(0.0)
         ctrl.reset(nom.f_R, nom.f_R_dot)
-        run = simulate_tethered(scenario, ctrl, track.reference, start_state(traj), traj.duration,
-                                control_dt=control_dt)  # fmt: skip
+        run = simulate_tethered(
+            scenario, ctrl, track.reference, start_state(traj), traj.duration, control_dt=control_dt
+        )
         e_phi, e_theta, _ = tracking_errors(scenario, run, track)
         errors.append(max(np.abs(e_phi).max(), np.abs(e_theta).max()))
     assert errors[1] < 0.01
@@ -94,8 +107,13 @@ def test_dfl_error_dynamics_are_stable(scenario, plans):
     traj = plans["landing"]
     track = TrajectoryTrack(traj, 0.0, 500.0)
     ctrl = DflController(scenario)
-    run = simulate_tethered(scenario, ctrl, track.reference,
-                            start_state(traj, d_phi=math.radians(2.0)), traj.duration + 1.0)  # fmt: skip
+    run = simulate_tethered(
+        scenario,
+        ctrl,
+        track.reference,
+        start_state(traj, d_phi=math.radians(2.0)),
+        traj.duration + 1.0,
+    )
     e_phi, e_theta, _ = tracking_errors(scenario, run, track)
     assert abs(e_phi[-1]) < 0.02 and abs(e_theta[-1]) < 0.05
 
@@ -107,8 +125,12 @@ def test_singular_reference_is_reported_not_divided(scenario, plans):
     est = estimate_of(x0, 0.0, geo, scenario.tether.length)
     out = np.zeros((5, 4))
     out[0] = [x0[0], 0.0, math.pi / 2 - x0[0], 0.0]  # thrust axis along the link
-    ref = Reference(t=0.0, mode=ControlMode.TETHERED, output=out,
-                    feedforward=Feedforward(np.zeros(3), np.zeros(3), 9.81))  # fmt: skip
+    ref = Reference(
+        t=0.0,
+        mode=ControlMode.TETHERED,
+        output=out,
+        feedforward=Feedforward(np.zeros(3), np.zeros(3), 9.81),
+    )
     ctrl = HierarchicalController(scenario)
     cmd = ctrl.update(0.0, est, ref)
     assert cmd.diagnostics["singular"] == 1.0
@@ -136,8 +158,9 @@ def test_offset_torque_is_compensated():
     assert abs(tau_L[1]) > 0.01  # a real pitch torque
 
 
-@pytest.mark.parametrize("factory", [FreeFlightController, HierarchicalController, DflController,
-                                     SwitchingController])  # fmt: skip
+@pytest.mark.parametrize(
+    "factory", [FreeFlightController, HierarchicalController, DflController, SwitchingController]
+)
 def test_every_controller_implements_the_role(scenario, plans, factory):
     ctrl = factory(scenario)
     assert isinstance(ctrl, Controller)

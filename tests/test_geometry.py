@@ -186,7 +186,9 @@ def test_hover_cosine_rejects_long_offsets():
 
 
 def test_pipe_sag():
-    assert pipe_sag(0.25, 0.15) == pytest.approx(0.05)
+    assert pipe_sag(0.25, 0.15) == pytest.approx(0.05)  # point tips: 0.25 - 0.20
+    # spherical tips of radius 1 cm: centres at R + r from the axis
+    assert pipe_sag(0.25, 0.15, 0.01) == pytest.approx(0.26 - math.sqrt(0.26**2 - 0.15**2))
     with pytest.raises(SingularityError):
         pipe_sag(0.1, 0.15)
 
@@ -211,6 +213,7 @@ def test_pipe_geometry_uses_sag(pipe60):
     from tetherland.geometry import LandingGeometry
 
     geo = LandingGeometry.from_scenario(pipe60)
-    assert geo.h_R == pytest.approx(0.10 - 0.05)
-    assert geo.h_att == pytest.approx(0.10 - 0.05 - 0.03)
+    sag = 0.26 - math.sqrt(0.26**2 - 0.15**2)
+    assert geo.h_R == pytest.approx(0.10 - sag)
+    assert geo.h_att == pytest.approx(0.10 - sag - 0.03)
     assert geo.surface.slope == pytest.approx(math.radians(60))

@@ -133,18 +133,21 @@ def lander_point(p_R: ArrayLike, z_B: ArrayLike, h_R: float) -> FloatArray:
     return np.asarray(p_R, dtype=float) - h_R * np.asarray(z_B, dtype=float)
 
 
-def pipe_sag(pipe_radius: float, lander_half_width: float) -> float:
+def pipe_sag(pipe_radius: float, lander_half_width: float, lander_radius: float = 0.0) -> float:
     """How far the lander tips sit below the top line of a pipe [m].
 
-    Tips at lateral offset w on a cylinder of radius r touch it at r - sqrt(r^2 - w^2)
-    below the tangent plane P_S, so the effective h_R on a pipe is h_R minus this sag.
+    Spherical tips of radius r at lateral offset w rest on a cylinder of radius R with
+    their centres at R + r from the axis, so their lowest points (the landers plane) are
+    R + r - sqrt((R + r)^2 - w^2) below the tangent plane P_S; the effective h_R on a
+    pipe is h_R minus this sag.
     """
     if lander_half_width >= pipe_radius:
         raise SingularityError(
             f"landers (half-width {lander_half_width} m) do not fit on a pipe of radius "
             f"{pipe_radius} m"
         )
-    return pipe_radius - math.sqrt(pipe_radius**2 - lander_half_width**2)
+    reach = pipe_radius + lander_radius
+    return reach - math.sqrt(reach**2 - lander_half_width**2)
 
 
 def hover_cosine(h_R: float, h_A: float, length: float) -> float:
@@ -393,9 +396,10 @@ def surface_from_config(scenario: Scenario) -> Surface:
 
 def effective_h_R(scenario: Scenario) -> float:
     """h_R of the landed vehicle above P_S: the vehicle's h_R, less the sag on a pipe [m]."""
-    h_R = scenario.vehicle.h_R
+    v = scenario.vehicle
+    h_R = v.h_R
     if scenario.surface.kind == "pipe":
-        h_R -= pipe_sag(scenario.surface.pipe_radius, scenario.vehicle.lander_half_width)
+        h_R -= pipe_sag(scenario.surface.pipe_radius, v.lander_half_width, v.lander_radius)
     return h_R
 
 

@@ -48,6 +48,14 @@ def quat_to_rotmat(q: ArrayLike) -> FloatArray:
     )
 
 
+def quat_to_rotmat_many(q: ArrayLike) -> FloatArray:
+    """Rotation matrices (n, 3, 3) of n unit quaternions (w, x, y, z) (vectorised, scipy)."""
+    from scipy.spatial.transform import Rotation
+
+    q = np.asarray(q, dtype=float).reshape(-1, 4)
+    return Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_matrix()
+
+
 def rotmat_to_quat(R: ArrayLike) -> FloatArray:
     """Unit quaternion (w, x, y, z) with w >= 0 of a rotation matrix (Shepperd's method)."""
     R = np.asarray(R, dtype=float)
@@ -143,15 +151,17 @@ def rotation_from_z_and_yaw(z_B: ArrayLike, psi: float) -> FloatArray:
     """
     from tetherland.errors import SingularityError
 
-    z = np.asarray(z_B, dtype=float)
-    z = z / np.linalg.norm(z)
-    x_C = np.array([math.cos(psi), math.sin(psi), 0.0])
-    y = cross3(z, x_C)
-    n = math.sqrt(float(y @ y))
+    zx, zy, zz = (float(v) for v in z_B)
+    n = math.sqrt(zx * zx + zy * zy + zz * zz)
+    zx, zy, zz = zx / n, zy / n, zz / n
+    cx, cy = math.cos(psi), math.sin(psi)  # x_C = [cx, cy, 0]
+    yx, yy, yz = -zz * cy, zz * cx, zx * cy - zy * cx  # z x x_C
+    n = math.sqrt(yx * yx + yy * yy + yz * yz)
     if n < 1e-9:
         raise SingularityError("thrust axis is aligned with the desired heading: yaw undefined")
-    y /= n
-    return np.column_stack((cross3(y, z), y, z))
+    yx, yy, yz = yx / n, yy / n, yz / n
+    xx, xy, xz = yy * zz - yz * zy, yz * zx - yx * zz, yx * zy - yy * zx  # y x z
+    return np.array([[xx, yx, zx], [xy, yy, zy], [xz, yz, zz]])
 
 
 def to_scipy_quat(q: ArrayLike) -> FloatArray:

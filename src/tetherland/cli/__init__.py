@@ -6,7 +6,13 @@ on stderr with exit code 2 and no traceback.
 
 from __future__ import annotations
 
+import os
 import sys
+
+# Offscreen rendering (``--video``) on a machine without a display: MuJoCo picks its GL
+# backend at import, so choose EGL before anything imports it.
+if not os.environ.get("DISPLAY"):
+    os.environ.setdefault("MUJOCO_GL", "egl")
 
 import typer
 from typer.exceptions import TyperException
@@ -14,6 +20,7 @@ from typer.exceptions import TyperException
 from tetherland import __version__
 from tetherland.cli.analyze import analyze
 from tetherland.cli.campaign import campaign
+from tetherland.cli.mission import mission
 from tetherland.cli.plan import plan
 from tetherland.cli.scenarios import scenarios, show
 from tetherland.errors import TetherlandError
@@ -47,6 +54,7 @@ app.command()(scenarios)
 app.command()(show)
 app.command()(analyze)
 app.command()(campaign)
+app.command()(mission)
 app.command()(plan)
 
 

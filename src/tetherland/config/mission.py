@@ -28,6 +28,8 @@ class MissionConfig(Section):
     """Hook-point distance before the capture disk where the straight hooking pass starts [m]."""
     hook_overshoot: float = Field(0.12, gt=0, le=5)
     """Hook-point distance beyond the capture disk where the hooking pass ends [m]."""
+    stretch_speed: float = Field(0.15, gt=0, le=5)
+    """Peak speed of the final pull that takes up the cable (gentle, no snap) [m/s]."""
     stretch_margin: float = Field(0.1, ge=0, le=5)
     """Extra pull distance beyond what the planned start tension needs (stretching) [m]."""
     stretch_timeout: float = Field(2.0, gt=0, le=60)

@@ -51,7 +51,7 @@ class Scenario(Section):
                     f"surface.pipe_radius = {s.pipe_radius} m must be > "
                     f"vehicle.lander_half_width = {v.lander_half_width} m (landers must fit)"
                 )
-            h_R -= geo.pipe_sag(s.pipe_radius, v.lander_half_width)
+            h_R -= geo.pipe_sag(s.pipe_radius, v.lander_half_width, v.lander_radius)
         h_att = h_R + v.cable_attachment[2]
         if h_att <= 0:
             raise ValueError(

@@ -18,9 +18,9 @@ derivatives are derived symbolically with CasADi once per vehicle and compiled.
 
 The extension states f_R, f_R' live in the controller and are integrated at the control
 rate; :meth:`DflController.reset` starts them at a given thrust (bumpless switching).
-Singular where A is (nearly) singular — the hierarchical controller's singularities plus
-roll = 90 deg: detected, reported in the diagnostics and handled by holding f_R'' = 0
-and the last torque.
+Singular where A is (nearly) singular, i.e. its Hadamard ratio is below HADAMARD_MIN (the
+hierarchical controller's singularities plus roll = 90 deg): detected, reported in the
+diagnostics and handled by holding f_R'' = 0 and the last torque.
 """
 
 from __future__ import annotations
@@ -38,8 +38,11 @@ from tetherland.geometry import LandingGeometry, link_frame
 from tetherland.interfaces import Command, Reference, StateEstimate
 
 _RELATIVE_DEGREES = (4, 4, 2, 2)
-COND_MAX = 1e8
-"""Condition number of the decoupling matrix above which the law counts as singular."""
+_SLICES = ((0, 4), (4, 4), (8, 2), (10, 2))  # (start, r) of each output's derivatives
+_ERROR_NAMES = ("e_phi", "e_delta", "e_theta_A", "e_psi")
+HADAMARD_MIN = 1e-9
+"""|det A| / prod(||row_i||) below which the decoupling matrix counts as singular (the ratio
+is 1 for orthogonal rows and 0 for dependent ones; cheaper than a condition number)."""
 
 
 @lru_cache(maxsize=8)
@@ -84,12 +87,10 @@ def _dfl_function(
             e = ca.jtimes(e, x, drift)
         rows_A.append(ca.jacobian(last, x) @ G)
         b.append(e)
+    # one packed output [y (12), A (16, row-major), b (4)]: one conversion per call
+    A = ca.vertcat(*rows_A)
     return ca.Function(
-        "dfl",
-        [x],
-        [ca.vertcat(*derivs), ca.vertcat(*rows_A), ca.vertcat(*b)],
-        ["x"],
-        ["y", "A", "b"],
+        "dfl", [x], [ca.vertcat(*derivs, ca.reshape(A.T, 16, 1), *b)], ["x"], ["yAb"]
     )
 
 
@@ -167,38 +168,32 @@ class DflController:
         self._t_last = t
         R = estimate.body.R_WB
         R_AB = self.R_WA.T @ R
-        z = R_AB[:, 2]
-        theta_e = math.atan2(z[0], z[2])
-        roll = math.atan2(-z[1], math.hypot(z[0], z[2]))
+        zx, zy, zz = R_AB[0, 2], R_AB[1, 2], R_AB[2, 2]
+        ax, ay, az = R_AB[0, 0], R_AB[1, 0], R_AB[2, 0]
+        theta_e = math.atan2(zx, zz)
+        roll = math.atan2(-zy, math.hypot(zx, zz))
         c_t, s_t, c_r, s_r = math.cos(theta_e), math.sin(theta_e), math.cos(roll), math.sin(roll)
-        M = np.array([[c_t, s_t * s_r, s_t * c_r], [0.0, c_r, -s_r], [-s_t, c_t * s_r, c_t * c_r]])
-        Rz = M.T @ R_AB
-        psi = math.atan2(Rz[1, 0], Rz[0, 0])
+        # psi from R_AB = M R_z(psi), M = R_y(theta_e) R_x(roll): columns 0, 1 of M dotted with
+        # the first column of R_AB
+        psi = math.atan2(s_t * s_r * ax + c_r * ay + c_t * s_r * az, c_t * ax - s_t * az)
+        w = estimate.body.omega_B
         x = np.array(
             [link.phi, link.delta, link.phi_dot, link.delta_dot, theta_e, roll, psi,
-             *estimate.body.omega_B, self._f, self._fd]
+             w[0], w[1], w[2], self._f, self._fd]
         )  # fmt: skip
-        y_all, A, b = (np.asarray(v) for v in self._fn(x))
-        y_all = y_all.reshape(-1)
-        b = b.reshape(-1)
+        packed = self._fn(x).full().ravel()
+        y_all, A, b = packed[:12], packed[12:28].reshape(4, 4), packed[28:32]
         v = np.empty(4)
-        i = 0
         errors = {}
-        for j, r in enumerate(_RELATIVE_DEGREES):
-            y = y_all[i : i + r]
-            yd = Y[: r + 1, j]
-            e = yd[:r] - y
+        for j, (i, r) in enumerate(_SLICES):
+            e = Y[:r, j] - y_all[i : i + r]
             if j == 3:
                 e[0] = math.remainder(e[0], 2 * math.pi)
-            v[j] = yd[r] + self._k[j] @ e
-            errors[("e_phi", "e_delta", "e_theta_A", "e_psi")[j]] = float(e[0])
-            i += r
-        cond = np.linalg.cond(A)
-        singular = not np.isfinite(cond) or cond > COND_MAX
-        if singular:
-            u = np.array([0.0, *self._last_u[1:]])
-        else:
-            u = np.linalg.solve(A, v - b)
+            v[j] = Y[r, j] + self._k[j] @ e
+            errors[_ERROR_NAMES[j]] = float(e[0])
+        ratio = abs(np.linalg.det(A)) / float(np.prod(np.sqrt((A * A).sum(axis=1))))
+        singular = not ratio >= HADAMARD_MIN
+        u = np.array([0.0, *self._last_u[1:]]) if singular else np.linalg.solve(A, v - b)
         self._last_u = u
         tau = u[1:4].copy()
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
@@ -208,7 +203,7 @@ class DflController:
         diag = {
             **errors,
             "singular": float(singular),
-            "decoupling_cond": float(min(cond, 1e12)),
+            "decoupling_ratio": float(ratio),
             "ff_tension": ff.tension if ff is not None else math.nan,
         }
         # the rotors hold the command for one period: send the mean of the thrust polynomial

@@ -143,6 +143,8 @@ class MotorLagThrust:
         self.c_f = thrust_coefficient
         self.tau = time_constant
         self.w: FloatArray = np.asarray(w0, dtype=float).copy()
+        self._dt = -1.0
+        self._decay = 0.0
 
     def step(self, w_cmd: ArrayLike, dt: float) -> FloatArray:
         """Advance by ``dt`` [s] with the commands held; return rotor thrusts [N]."""
@@ -150,5 +152,7 @@ class MotorLagThrust:
         if self.tau <= 0.0:
             self.w = w_cmd.copy()
         else:
-            self.w = w_cmd + (self.w - w_cmd) * math.exp(-dt / self.tau)
+            if dt != self._dt:  # the decay for the (usually constant) step, computed once
+                self._dt, self._decay = dt, math.exp(-dt / self.tau)
+            self.w = w_cmd + (self.w - w_cmd) * self._decay
         return self.c_f * self.w * self.w

@@ -87,19 +87,14 @@ class Path:
 
     def sample(self, t: float) -> FloatArray:
         """Rows (p, v, a) at time ``t`` [m, m/s, m/s^2]; held at the ends."""
-        out = np.zeros((3, 3))
         if not self.segments or t <= self.t0:
-            out[0] = self.start
-            return out
+            return np.vstack((self.start, np.zeros((2, 3))))
         seg = self.segments[-1]
         for s in self.segments:
             if t < s.t_end:
                 seg = s
                 break
-        tau = (t - seg.t0) / seg.duration
-        ds = smoothstep9_scalar(tau, 2)
+        T = seg.duration
+        s0, s1, s2 = smoothstep9_scalar((t - seg.t0) / T, 2)
         delta = seg.p1 - seg.p0
-        out[0] = seg.p0 + ds[0] * delta
-        out[1] = ds[1] / seg.duration * delta
-        out[2] = ds[2] / seg.duration**2 * delta
-        return out
+        return np.vstack((seg.p0 + s0 * delta, (s1 / T) * delta, (s2 / (T * T)) * delta))

@@ -127,6 +127,7 @@ class MissionSupervisor:
         d0 = R_WA @ link_direction(phi0, 0.0)
         pull = scenario.planner.start_tension / (self.mass * self.k_x) + cfg.stretch_margin
         self.p_stretch = p_A + (self.length + pull) * d0 - self._att_offset
+        self.p_slack_out = p_A + (self.length - 0.15) * d0 - self._att_offset
         self.z_safe = max(self.p_pre[2], self.p_start[2] + cfg.takeoff_height) + 0.3
         # state
         self.phase = Phase.TAKEOFF
@@ -206,7 +207,7 @@ class MissionSupervisor:
 
     def _check_faults(self, t: float, est: StateEstimate, ref: Reference) -> None:
         body = est.body
-        if not (np.all(np.isfinite(body.p_W)) and np.all(np.isfinite(body.q_WB))):
+        if not math.isfinite(float(body.p_W.sum() + body.q_WB.sum())):
             self.abort(t, est, "fault: the state estimate is not finite")
             return
         active = self.phase == Phase.TETHERED_LANDING or (
@@ -280,8 +281,10 @@ class MissionSupervisor:
 
     def _phase_hooking(self, t: float, est: StateEstimate) -> Reference:
         if t >= self._path.t_end:
-            self._path = self._new_path(t, self.p_hook, 0.5 * self.cfg.cruise_speed).to(
-                self.p_stretch
+            self._path = (
+                self._new_path(t, self.p_hook, 0.5 * self.cfg.cruise_speed)
+                .to(self.p_slack_out)
+                .to(self.p_stretch, speed=self.cfg.stretch_speed)
             )
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")

@@ -18,7 +18,7 @@ from tetherland.analysis.conditions import LandingTolerances, evaluate_landing
 from tetherland.geometry import LandingGeometry
 from tetherland.mission.phases import Phase
 from tetherland.provenance import provenance
-from tetherland.rotations import quat_to_rotmat
+from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
 
 if TYPE_CHECKING:
     from tetherland.mission.run import MissionResult
@@ -40,7 +40,7 @@ _TETHERED = (
 
 
 def _z_axes(q: np.ndarray) -> np.ndarray:
-    return np.array([quat_to_rotmat(qi)[:, 2] for qi in q])
+    return quat_to_rotmat_many(q)[:, :, 2]
 
 
 def _landing(result: MissionResult, geo: LandingGeometry, tol: LandingTolerances) -> dict[str, Any]:

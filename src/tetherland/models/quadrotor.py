@@ -160,8 +160,9 @@ class RotorLayout:
         Gi = self.allocation_inverse
         lo, hi = self.f_min, self.f_max
         f = Gi @ w
-        if np.all(f >= lo - _BOUND_TOL) and np.all(f <= hi + _BOUND_TOL):
-            return self._result(f, Saturation.NONE)
+        if f.min() >= lo - _BOUND_TOL and f.max() <= hi + _BOUND_TOL:  # the common case
+            return Allocation(thrusts=np.minimum(np.maximum(f, lo), hi), wrench=w.copy(),
+                              saturation=Saturation.NONE)  # fmt: skip
         # 1. keep f_R, tau_x, tau_y; scale tau_z by s in [0, 1].
         base = Gi @ np.array([w[0], w[1], w[2], 0.0])
         s = _feasible_interval(base, Gi[:, 3] * w[3], lo, hi)
@@ -263,11 +264,14 @@ class RotorModel:
         w_cmd = w + tau_m w', w' = f'/(2 c_f w) (exact inversion of the first-order lag
         along a differentiable thrust profile). The result is limited to [w_min, w_max].
         """
-        w = self.speed(f)
-        if f_dot is not None and self.time_constant > 0:
-            w_dot = np.asarray(f_dot, dtype=float) / (2.0 * self.thrust_coefficient * w)
-            w = w + self.time_constant * w_dot
-        return np.clip(w, self.w_min, self.w_max)
+        f = np.asarray(f, dtype=float)
+        w = np.sqrt(np.minimum(np.maximum(f, self.f_min), self.f_max) / self.thrust_coefficient)
+        if f_dot is None or self.time_constant <= 0:
+            return w  # already within [w_min, w_max]
+        w = w + self.time_constant * np.asarray(f_dot, dtype=float) / (
+            2.0 * self.thrust_coefficient * w
+        )
+        return np.minimum(np.maximum(w, self.w_min), self.w_max)
 
     def speed_rate(self, w: ArrayLike, w_cmd: ArrayLike) -> FloatArray:
         """w' = (w_cmd - w)/tau_m for a command limited to [w_min, w_max] [rad/s^2]."""

@@ -9,7 +9,7 @@ after the planned t_L) and rests ``perching.rest_time``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -69,6 +69,7 @@ def run_perching(
     *,
     planner: PerchingPlanner | None = None,
     plant: Plant | None = None,
+    observers: Sequence[Callable[[float, Plant], None]] = (),
 ) -> tuple[SimLog | None, PerchVerdict]:
     """Plan on the belief, fly in the plant, judge the landing.
 
@@ -86,6 +87,8 @@ def run_perching(
         Reuse compiled solvers across runs.
     plant : Plant, optional
         Reuse a plant built for ``scenario_plant``.
+    observers : sequence of callables
+        Runner observers ``observer(t, plant)`` (progress, wind, video).
 
     Returns
     -------
@@ -108,6 +111,7 @@ def run_perching(
         seed=seed,
         plant=plant,
         diagnostic_keys=FreeFlightTracker.diagnostic_keys,
+        observers=observers,
     )
     log = runner.run(duration, initial_state=initial, rotor_speeds=w0)
     verdict = evaluate_perch(log, scenario_plant)

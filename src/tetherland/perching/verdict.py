@@ -34,7 +34,7 @@ from tetherland.analysis.conditions import (
 from tetherland.config import Scenario
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import ControlMode
-from tetherland.rotations_batch import rotation_matrices_batch
+from tetherland.rotations import quat_to_rotmat_many
 from tetherland.sim.log import RunStatus, SimLog
 
 REQUIRED = (1, 2, 3, 5)
@@ -148,7 +148,7 @@ def evaluate_perch(
     geo = LandingGeometry.from_scenario(scenario)
     z_S = geo.surface.z_S
     t = log.t
-    R = rotation_matrices_batch(log["q_WB"])
+    R = quat_to_rotmat_many(log["q_WB"])
     z_B = R[:, :, 2]
     p_RL = log["p_W"] - geo.h_R * z_B
     v, w = log["v_W"], log["omega_B"]

@@ -24,7 +24,7 @@ from tetherland.geometry import FloatArray, LandingGeometry, theta_A_from_z_B
 from tetherland.io import atomic_write_with
 from tetherland.mission.phases import Phase
 from tetherland.models.flatness import FlatnessMap
-from tetherland.rotations import quat_to_rotmat
+from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
 
 if TYPE_CHECKING:
     from tetherland.mission.run import MissionResult
@@ -40,7 +40,7 @@ _PHASE_COLORS = {
 }
 
 
-def robot_angles(q_WB: FloatArray, R_WA: FloatArray, phi: FloatArray, delta: FloatArray):  # noqa: ANN201
+def robot_angles(q_WB: FloatArray, R_WA: FloatArray, phi: FloatArray, delta: FloatArray):
     """(roll, theta_A, psi) of each attitude, for R_AB = R_y(theta_e) R_x(roll) R_z(psi) [rad]."""
     n = len(q_WB)
     roll, theta, psi = np.empty(n), np.empty(n), np.empty(n)
@@ -89,7 +89,7 @@ def nominal_series(result: MissionResult, t: FloatArray) -> dict[str, FloatArray
     return out
 
 
-def _mark(ax, result: MissionResult, t0: float, t1: float) -> None:  # noqa: ANN001
+def _mark(ax, result: MissionResult, t0: float, t1: float) -> None:
     for r in result.supervisor.records:
         if r.phase in _PHASE_COLORS and r.end > t0 and r.start < t1:
             ax.axvspan(max(r.start, t0), min(r.end, t1), color=_PHASE_COLORS[r.phase], lw=0)
@@ -109,7 +109,9 @@ def figure_6_5(result: MissionResult) -> Figure:
     fig, axes = plt.subplots(4, 2, figsize=(11, 10), sharex=True)
     axes = axes.ravel()
     if not sel.any():
-        axes[0].text(0.5, 0.5, "no tethered flight in this run", ha="center", transform=axes[0].transAxes)
+        axes[0].text(
+            0.5, 0.5, "no tethered flight in this run", ha="center", transform=axes[0].transAxes
+        )
         return fig
     idx = np.flatnonzero(sel)
     k0, k1 = max(idx[0] - 100, 0), min(idx[-1] + 100, len(t) - 1)
@@ -151,7 +153,7 @@ def figure_6_5(result: MissionResult) -> Figure:
     ax.grid(alpha=0.3)
     ax = axes[7]
     _mark(ax, result, tt[0], tt[-1])
-    z_B = np.array([quat_to_rotmat(q)[:, 2] for q in log["q_WB"][k0 : k1 + 1]])
+    z_B = quat_to_rotmat_many(log["q_WB"][k0 : k1 + 1])[:, :, 2]
     p_RL = log["p_W"][k0 : k1 + 1] - geo.h_R * z_B
     ax.plot(tt, 100 * ((p_RL - geo.surface.origin) @ geo.surface.z_S), "C0-", lw=1.0)
     ax.set_ylabel("landers clearance [cm]")
