@@ -57,7 +57,7 @@ class UkfEstimator:
         rotor_speeds0: ArrayLike | None = None,
         P0: ArrayLike | None = None,
         noise_inflation: float = 1.0,
-        tension_time_constant: float = 0.05,
+        tension_time_constant: float = 0.02,
     ) -> None:
         v = scenario.vehicle
         self.mass = v.mass

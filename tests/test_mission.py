@@ -1,0 +1,104 @@
+"""The full mission closed loop (issue 6): success on slope50 and pipe60, abort, hook retry."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tetherland.config import load_scenario, scenario_from_dict
+from tetherland.geometry import LandingGeometry
+from tetherland.mission import Phase, run_mission, with_overrides
+
+pytestmark = pytest.mark.slow
+
+EXPECTED_PHASES = [
+    "takeoff", "approach", "hooking", "stretch", "tethered_landing", "touchdown", "motors_off",
+    "spin_up", "tethered_takeoff", "release", "unhook", "return", "land", "done",
+]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def slope50_run():
+    return run_mission(load_scenario("slope50"), seed=1)
+
+
+@pytest.fixture(scope="module")
+def pipe60_run():
+    return run_mission(load_scenario("pipe60"), seed=2)
+
+
+def check_success(result) -> None:
+    s = result.summary
+    assert s["success"], s
+    landing = s["landing"]
+    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    assert landing["position_error_m"] < 0.03
+    assert landing["attitude_error_rad"] < math.radians(3)
+    assert landing["touchdown_speed_mps"] < 0.1
+    assert landing["touchdown_angular_rate_rps"] < 0.3
+    assert landing["slip_m"] < 0.01
+    assert landing["min_tension_N"] > 0.0
+    assert [p["name"] for p in s["phases"]] == EXPECTED_PHASES
+    assert all(p["exit_reason"] for p in s["phases"])
+    assert [e["kind"] for e in s["hook"]["events"]][:2] == ["ENGAGED", "RELEASED"]
+    assert s["return"]["position_error_m"] < 0.05
+    assert not s["crashed"]
+
+
+def test_slope50_mission_succeeds(slope50_run):
+    check_success(slope50_run)
+
+
+def test_pipe60_mission_succeeds(pipe60_run):
+    check_success(pipe60_run)
+
+
+def test_controller_switches_are_bumpless(slope50_run):
+    """Free flight <-> tethered switches (6.6.3): no thrust jump above 1 N and no rotor
+    speed jump above 10 % of the hover speed (about 40 rad/s)."""
+    hover_speed = math.sqrt(9.81 / 4 / 1e-5)
+    pairs = {("free_flight", "tethered"), ("tethered", "free_flight")}
+    switches = [s for s in slope50_run.summary["switches"] if (s["from"], s["to"]) in pairs]
+    assert len(switches) == 2
+    for s in switches:
+        assert s["thrust_jump_N"] < 1.0, s
+        assert s["rotor_speed_jump_radps"] < 0.1 * hover_speed, s
+
+
+def test_abort_during_tethered_landing_ends_in_a_safe_state(slope50_run):
+    t_abort = slope50_run.supervisor.times["t_tethered"] + 1.5
+    sc = with_overrides(load_scenario("slope50"), [f"mission.abort_time={t_abort}"])
+    result = run_mission(sc, seed=1)  # same seed: same timeline up to the abort
+    s = result.summary
+    assert s["aborted"] and not s["success"]
+    assert s["abort_reason"] == f"operator abort at t = {t_abort:g} s"
+    names = [p["name"] for p in s["phases"]]
+    assert names[-3:] == ["tethered_landing", "safe_hover", "aborted"]
+    abort_record = next(p for p in s["phases"] if p["name"] == "tethered_landing")
+    assert "operator abort" in abort_record["exit_reason"]
+    assert any(e["kind"] == "abort" for e in result.log.metadata["events"])
+    log = result.log
+    assert not s["crashed"]
+    assert np.linalg.norm(log["v_W"][-1]) < 0.1  # hovering still at the end
+    assert log["frame_force"].max() == 0.0 and log["lander_forces"][-1].max() == 0.0
+
+
+def test_missed_hook_is_retried_then_aborted():
+    """A belief with the anchor 0.25 m off (capture radius 0.1 m): every pass misses, the
+    supervisor sees no tension when stretching, retries, and aborts after the attempts."""
+    truth = with_overrides(load_scenario("slope50"), ["mission.max_hook_attempts=2"])
+    geo = LandingGeometry.from_scenario(truth)
+    data = truth.model_dump(mode="python")
+    off = geo.p_A + 0.25 * geo.surface.y_S  # believed anchor, on the surface, 25 cm aside
+    data["anchor"] = {"position": tuple(off), "landing_point": None, "h_A": 0.0}
+    belief = scenario_from_dict(data, "slope50")
+    result = run_mission(truth, belief, seed=3)
+    s = result.summary
+    assert s["aborted"] and s["abort_reason"] == "hook missed 2 times"
+    assert s["hook"]["attempts"] == 2
+    assert [e["kind"] for e in s["hook"]["events"]] == ["MISSED", "MISSED"]
+    names = [p["name"] for p in s["phases"]]
+    assert "retry" in names and "tethered_landing" not in names
+    assert result.supervisor.phase == Phase.ABORTED
