@@ -91,3 +91,21 @@ def test_ukf_tension_estimate_within_10_percent_while_taut(tethered_landing):
     taut = (t > 0.3) & (t < traj.duration - 0.2) & (log["tension"] > 0.5)
     rel = np.abs(log["est_tension"][taut] - log["tension"][taut]) / log["tension"][taut]
     assert rel.max() < 0.10
+
+
+def test_integral_action_removes_the_thrust_model_error(slope50):
+    """The controller believes c_f 5 % too high (it under-spins the rotors): without
+    integral action the hover would sag by about 5 % m g / (m k_x) = 8 cm."""
+    from tetherland.mission import with_overrides
+
+    belief = with_overrides(slope50, [f"vehicle.thrust_coefficient={1.05e-5}"])
+    plant = Plant(slope50)
+    target = plant.start_state().p_W + np.array([0.0, 0.0, 1.5])
+    x0 = RigidBodyState.at_rest(target)
+    w0 = RotorModel.from_config(slope50.vehicle).speed(np.full(4, 9.81 / 4))
+    log = Runner(slope50, FreeFlightController(belief), reference=HoldPosition(target), seed=1,
+                 plant=plant).run(8.0, initial_state=x0, rotor_speeds=w0)  # fmt: skip
+    late = log["t"] > 6.0
+    assert np.linalg.norm(log["p_W"][late] - target, axis=1).max() < 0.01
+    early_sag = target[2] - log["p_W"][(log["t"] > 0.8) & (log["t"] < 1.2), 2].mean()
+    assert early_sag > 0.02  # the error is real: the integral needs time to cancel it

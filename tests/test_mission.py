@@ -102,3 +102,22 @@ def test_missed_hook_is_retried_then_aborted():
     names = [p["name"] for p in s["phases"]]
     assert "retry" in names and "tethered_landing" not in names
     assert result.supervisor.phase == Phase.ABORTED
+
+
+def test_landing_is_robust_to_belief_errors():
+    """The robot believes the slope 1.5 deg steeper, its mass 5 % higher and its thrust
+    coefficient 5 % lower than they are: the guarded touchdown finds the real surface and
+    the integral action removes the thrust bias, so all five conditions still hold."""
+    truth = load_scenario("slope50")
+    belief = with_overrides(
+        truth,
+        [
+            "surface.slope_deg=51.5",
+            f"vehicle.mass={1.05 * truth.vehicle.mass}",
+            f"vehicle.thrust_coefficient={0.95 * truth.vehicle.thrust_coefficient}",
+        ],
+    )
+    result = run_mission(truth, belief, seed=5)
+    s = result.summary
+    assert s["success"], s["landing"]
+    assert any(e["kind"] == "touchdown" for e in result.log.metadata["events"])

@@ -29,6 +29,10 @@ class FreeFlightGains(Section):
     """Natural frequency of the yaw error dynamics [rad/s]."""
     yaw_damping: float = Field(1.0, gt=0, le=5)
     """Damping ratio of the yaw error dynamics [-]."""
+    position_integral: float = Field(4.0, ge=0, le=1000)
+    """Integral gain k_i of the position loop (cancels thrust and mass model errors) [1/s^3]."""
+    integral_force_max: float = Field(0.2, ge=0, le=1)
+    """Largest integral force per axis as a fraction of m g (anti-windup clamp) [-]."""
     max_tilt_deg: float = Field(60.0, gt=0, lt=90)
     """Largest commanded tilt of the thrust axis from vertical in free flight [deg]."""
 
@@ -48,6 +52,10 @@ class TetheredGains(Section):
     """Inner attitude loop: natural frequency about z_B [rad/s]."""
     yaw_damping: float = Field(1.0, gt=0, le=5)
     """Inner attitude loop: damping ratio about z_B [-]."""
+    link_integral: float = Field(6.0, ge=0, le=1000)
+    """Hierarchical outer loop: integral gain on the phi and delta errors [1/s^3]."""
+    link_integral_max: float = Field(1.0, ge=0, le=100)
+    """Largest integral contribution to phi'' and delta'' (anti-windup clamp) [rad/s^2]."""
     dfl_link_pole: float = Field(3.0, gt=0, le=50)
     """DFL: repeated pole of the 4th-order phi and delta error dynamics, (s + p)^4 [rad/s]."""
     dfl_attitude_pole: float = Field(8.0, gt=0, le=100)

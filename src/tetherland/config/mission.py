@@ -42,6 +42,19 @@ class MissionConfig(Section):
     the planned trajectory [s]."""
     settle_time: float = Field(0.5, ge=0, le=10)
     """Hold after a planned tethered maneuver or a transfer before the next phase [s]."""
+    touchdown_rate_deg: float = Field(2.0, gt=0, le=45)
+    """Guarded touchdown: after the planned landing, the link elevation reference keeps
+    descending at this rate until contact is detected (surface closer or farther than
+    believed) [deg/s]."""
+    touchdown_search_deg: float = Field(6.0, gt=0, le=45)
+    """Guarded touchdown: how far beyond the planned phi* the search goes [deg]."""
+    contact_error_deg: float = Field(0.8, gt=0, le=45)
+    """Contact is detected when the estimated link elevation stays this far above the
+    descending reference (the surface stops the vehicle) [deg]."""
+    contact_dwell: float = Field(0.1, ge=0, le=5)
+    """... for this long [s]."""
+    contact_window: float = Field(0.25, ge=0, le=1)
+    """Fraction of the landing duration, at its end, in which early contact is detected [-]."""
     spinup_time: float = Field(0.5, ge=0, le=10)
     """Motors back on, holding the landed output, before the tethered takeoff [s]."""
     release_slack: float = Field(0.25, gt=0, le=5)

@@ -34,9 +34,12 @@ class FreeFlightController:
             min_thrust=4.0 * v.f_min,
         )
         self.mixer = Mixer(v)
+        self._t_last: float | None = None
 
     def reset(self) -> None:
-        """Stateless: nothing to reset (kept for the switching interface)."""
+        """Clear the position integral (the controller is taking over)."""
+        self.position.reset()
+        self._t_last = None
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         """Rotor commands tracking ``reference.p_W`` (rows p, v, a) with ``reference.yaw``."""
@@ -49,7 +52,9 @@ class FreeFlightController:
             a_W=P[2] if P.shape[0] > 2 else _ZERO3,
             yaw=reference.yaw,
         )
-        w = self.position.update(estimate.body, ref)
+        dt = None if self._t_last is None else t - self._t_last
+        self._t_last = t
+        w = self.position.update(estimate.body, ref, dt)
         e = estimate.body.p_W - ref.p_W
         diag = {
             "e_x": float(e[0]),

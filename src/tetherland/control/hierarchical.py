@@ -5,6 +5,9 @@ link angles (vectors in F_A, F_L components):
 
   v_phi   = phi_d''   + k_d (phi_d'   - phi')   + k_p (phi_d   - phi)
   v_delta = delta_d'' + k_d (delta_d' - delta') + k_p (delta_d - delta)
+
+plus a clamped integral k_i int(e) on each (for model errors: thrust coefficient, mass),
+
   u_z = m l (cos(delta) v_phi - 2 sin(delta) phi' delta') + m g cos(phi)
   u_y = m g sin(phi) sin(delta) - m l (v_delta + sin(2 delta) phi'^2 / 2)
   u_x = u_z tan(phi + theta_A,d) / cos(delta)
@@ -63,14 +66,20 @@ class HierarchicalController:
         wn, zeta = gains.link_frequency, gains.link_damping
         self.k_p = wn * wn
         self.k_d = 2.0 * zeta * wn
+        self.k_i = gains.link_integral
+        self.integral_max = gains.link_integral_max
+        self._integral = np.zeros(2)  # integral of the (phi, delta) errors [rad s]
+        self._t_last: float | None = None
         self.attitude = AttitudeController(v.inertia, AttitudeGains.from_config(gains))
         self.mixer = Mixer(v)
         self._last_R_d: np.ndarray | None = None
         self._last_F: float = self.mass * self.g
 
     def reset(self) -> None:
-        """Forget the last regular desired attitude (call when the controller is activated)."""
+        """Forget the last regular attitude and the link integral (on activation)."""
         self._last_R_d = None
+        self._integral[:] = 0.0
+        self._t_last = None
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         """Rotor commands tracking ``reference.output`` (rows y_d, y_d', y_d'', ...)."""
@@ -83,8 +92,15 @@ class HierarchicalController:
         yd1 = Y[1] if Y.shape[0] > 1 else np.zeros(4)
         yd2 = Y[2] if Y.shape[0] > 2 else np.zeros(4)
         m, l, g = self.mass, self.length, self.g
-        v_phi = yd2[0] + self.k_d * (yd1[0] - dphi) + self.k_p * (yd[0] - phi)
-        v_delta = yd2[1] + self.k_d * (yd1[1] - ddelta) + self.k_p * (yd[1] - delta)
+        if self._t_last is not None and self.k_i > 0.0:
+            bound = self.integral_max / self.k_i
+            dt = t - self._t_last
+            self._integral[0] = min(max(self._integral[0] + (yd[0] - phi) * dt, -bound), bound)
+            self._integral[1] = min(max(self._integral[1] + (yd[1] - delta) * dt, -bound), bound)
+        self._t_last = t
+        i_phi, i_delta = self.k_i * self._integral
+        v_phi = yd2[0] + self.k_d * (yd1[0] - dphi) + self.k_p * (yd[0] - phi) + i_phi
+        v_delta = yd2[1] + self.k_d * (yd1[1] - ddelta) + self.k_p * (yd[1] - delta) + i_delta
         cp, sp, cd, sd = math.cos(phi), math.sin(phi), math.cos(delta), math.sin(delta)
         u_z = m * l * (cd * v_phi - 2.0 * sd * dphi * ddelta) + m * g * cp
         u_y = m * g * sp * sd - m * l * (v_delta + 0.5 * math.sin(2.0 * delta) * dphi * dphi)

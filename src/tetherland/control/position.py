@@ -117,17 +117,33 @@ class PositionController:
         wn, zeta = gains.position_frequency, gains.position_damping
         self.k_x = wn * wn
         self.k_v = 2.0 * zeta * wn
+        self.k_i = gains.position_integral
+        self.integral_max = gains.integral_force_max * mass * g  # [N] per axis
+        self._integral = np.zeros(3)  # integral of the position error [m s]
         self.tan_max_tilt = math.tan(math.radians(gains.max_tilt_deg))
         self.min_vertical = max(min_thrust, 0.05 * mass * g)
         self.attitude = AttitudeController(inertia, AttitudeGains.from_config(gains))
 
+    def reset(self) -> None:
+        """Clear the integral of the position error (call when the controller takes over)."""
+        self._integral[:] = 0.0
+
+    @property
+    def integral_force(self) -> FloatArray:
+        """Current integral force -m k_i int(e) in F_W [N]."""
+        return -self.mass * self.k_i * self._integral
+
     def desired_force(
-        self, state: RigidBodyState, ref: PositionReference
+        self, state: RigidBodyState, ref: PositionReference, dt: float | None = None
     ) -> tuple[FloatArray, bool]:
-        """F_d in F_W [N] (after the tilt and vertical-thrust limits) and whether a limit acted."""
+        """F_d in F_W [N] (after the tilt and vertical-thrust limits) and whether a limit acted.
+
+        With ``dt`` [s] the position error is integrated (PID; the integral force is clamped
+        to ``integral_force_max`` m g per axis and frozen while a limit acts).
+        """
         e_x = state.p_W - ref.p_W
         e_v = state.v_W - ref.v_W
-        F = self.mass * (ref.a_W - self.k_x * e_x - self.k_v * e_v)
+        F = self.mass * (ref.a_W - self.k_x * e_x - self.k_v * e_v) + self.integral_force
         F[2] += self.mass * self.g
         limited = False
         if F[2] < self.min_vertical:
@@ -138,11 +154,16 @@ class PositionController:
         if horiz > max_horiz:
             F[0:2] *= max_horiz / horiz
             limited = True
+        if dt is not None and self.k_i > 0.0 and not limited:
+            bound = self.integral_max / (self.mass * self.k_i)
+            np.clip(self._integral + e_x * dt, -bound, bound, out=self._integral)
         return F, limited
 
-    def update(self, state: RigidBodyState, ref: PositionReference) -> WrenchCommand:
-        """Wrench tracking ``ref`` from ``state``."""
-        F, limited = self.desired_force(state, ref)
+    def update(
+        self, state: RigidBodyState, ref: PositionReference, dt: float | None = None
+    ) -> WrenchCommand:
+        """Wrench tracking ``ref`` from ``state`` (``dt`` [s] since the last call: integral)."""
+        F, limited = self.desired_force(state, ref, dt)
         R = state.R_WB
         R_d = rotation_from_z_and_yaw(F, ref.yaw)
         thrust = float(F @ R[:, 2])

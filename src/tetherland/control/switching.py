@@ -73,6 +73,8 @@ class SwitchingController:
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         mode = reference.mode
         if mode != self.mode and self.mode is not None:
+            if mode == ControlMode.FREE_FLIGHT:
+                self.free_flight.reset()
             if mode == ControlMode.TETHERED:
                 if isinstance(self.tethered, DflController):
                     thrust = self.last.thrust if self.last is not None else None

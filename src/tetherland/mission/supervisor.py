@@ -140,6 +140,8 @@ class MissionSupervisor:
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
+        self._contact_rule = ThresholdDwell(math.radians(cfg.contact_error_deg), cfg.contact_dwell)
+        self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)
         self._path = Path(0.0, self.p_start, cfg.cruise_speed, cfg.cruise_accel).to(
             self.p_start + cfg.takeoff_height * _Z, pause=cfg.settle_time
@@ -313,20 +315,77 @@ class MissionSupervisor:
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t)
 
+    def _contact(self, t: float, est: StateEstimate, ref: Reference, reason: str) -> Reference:
+        """Touchdown detected: hold the current link elevation until the motors go off."""
+        assert est.link is not None and ref.output is not None
+        self.times["t_L"] = t
+        out = np.zeros((5, 4))
+        out[0] = ref.output[0]
+        out[0, 0] = est.link.phi
+        self._hold = Reference(
+            t=t, mode=ControlMode.TETHERED, phase=int(Phase.TOUCHDOWN), output=out,
+            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+        )  # fmt: skip
+        self._event(t, "touchdown", reason)
+        if self.phase != Phase.TOUCHDOWN:
+            self._enter(Phase.TOUCHDOWN, t, reason)
+        return self._hold
+
+    def _touching(self, t: float, est: StateEstimate, ref: Reference) -> bool:
+        """The surface stops the link: phi stays above the descending reference."""
+        assert ref.output is not None
+        return est.link is not None and self._contact_rule.update(t, est.link.phi - ref.output[0, 0])
+
     def _phase_tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
-        if t >= self._track.track.t_end:
-            self.times["t_L"] = t
-            self._enter(Phase.TOUCHDOWN, t, "landing trajectory completed (t_L)")
-        return self._track.reference(t, self.phase)
+        track = self._track.track
+        ref = self._track.reference(t, self.phase)
+        if t > track.t0 + (1.0 - self.cfg.contact_window) * track.duration:
+            if self._touching(t, est, ref):
+                return self._contact(t, est, ref, "contact before the planned end (t_L)")
+        else:
+            self._contact_rule.reset()
+        if t >= track.t_end:
+            self.times["t_L_plan"] = t
+            self._search_start = t
+            self._hold = None
+            self._enter(Phase.TOUCHDOWN, t, "planned landing completed: guarded descent to contact")
+        return ref
+
+    def _search_reference(self, t: float) -> Reference:
+        """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
+        assert self._track is not None and self._search_start is not None
+        ref = self._track.reference(t, self.phase)
+        rate = math.radians(self.cfg.touchdown_rate_deg)
+        depth = math.radians(self.cfg.touchdown_search_deg)
+        s = min(rate * (t - self._search_start), depth)
+        out = ref.output.copy()
+        out[0, 0] -= s
+        out[1, 0] = -rate if s < depth else 0.0
+        return Reference(
+            t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=out,
+            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+        )  # fmt: skip
 
     def _phase_touchdown(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
+        if self._hold is None:  # searching for the surface
+            ref = self._search_reference(t)
+            if self._touching(t, est, ref):
+                return self._contact(t, est, ref, "contact during the guarded descent (t_L)")
+            limit = self.cfg.touchdown_search_deg / self.cfg.touchdown_rate_deg + 1.0
+            if t > self._search_start + limit:
+                self.abort(t, est, "fault: no contact within touchdown_search_deg beyond phi*")
+                return self._free(t)
+            return ref
         if t >= self.times["t_L"] + self.cfg.settle_time:
             self.times["t_G"] = t
             self._enter(Phase.MOTORS_OFF, t, "landed: motors off (t_G)")
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
-        return self._track.reference(t, self.phase)
+        return Reference(
+            t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=self._hold.output,
+            thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
+        )  # fmt: skip
 
     def _phase_motors_off(self, t: float, est: StateEstimate) -> Reference:
         if t >= self.times["t_G"] + self.cfg.deploy_time and est.link is not None:
