@@ -334,7 +334,9 @@ class MissionSupervisor:
     def _touching(self, t: float, est: StateEstimate, ref: Reference) -> bool:
         """The surface stops the link: phi stays above the descending reference."""
         assert ref.output is not None
-        return est.link is not None and self._contact_rule.update(t, est.link.phi - ref.output[0, 0])
+        if est.link is None:
+            return False
+        return self._contact_rule.update(t, est.link.phi - ref.output[0, 0])
 
     def _phase_tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
