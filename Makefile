@@ -4,13 +4,13 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 SCENARIO ?= slope50
-OUT    ?= out/$(SCENARIO)
+OUT    ?= out/$(SCENARIO)/mission
 JOBS   ?= 2
 
 .PHONY: demo test test-fast lint bench clean help
 
 help:
-	@echo "make demo   - run the main job: a full simulated mission on '$(SCENARIO)' (outputs in $(OUT))"
+	@echo "make demo   - the main job: the full simulated mission on '$(SCENARIO)' (outputs in $(OUT))"
 	@echo "make test   - run the whole test suite (slow closed-loop tests included)"
 	@echo "make test-fast - the suite without tests marked slow"
 	@echo "make bench  - print benchmark numbers"
@@ -23,7 +23,7 @@ $(STAMP): pyproject.toml
 	@touch $(STAMP)
 
 demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/tetherland analyze $(SCENARIO)
+	MPLBACKEND=Agg $(BIN)/tetherland mission $(SCENARIO) --out $(OUT)
 
 test: $(STAMP)
 	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS)

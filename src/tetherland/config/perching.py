@@ -63,7 +63,7 @@ class PerchingConfig(Section):
     """Largest |pitch| of the thrust axis from vertical along the plan [deg]."""
     clearance_margin: float = Field(0.0, ge=0, le=1)
     """Least clearance of the landers and rotor guards above the surface before t_L [m]."""
-    hover_time: float = Field(1.0, ge=0, le=60)
+    hover_time: float = Field(4.0, ge=0, le=60)
     """Hover at the start point before the maneuver starts (closed-loop run) [s]."""
     rest_time: float = Field(1.0, gt=0, le=60)
     """Simulated time with the motors off after touchdown (closed-loop run) [s]."""

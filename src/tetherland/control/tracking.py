@@ -66,6 +66,7 @@ class FreeFlightTracker:
         self._period = 1.0 / scenario.controller.rate_hz
 
         self._Gi = self.layout.allocation_inverse
+        self._t_int: float | None = None
         self._last: tuple[float, FloatArray] | None = None
 
     def reset(self) -> None:
@@ -87,6 +88,7 @@ class FreeFlightTracker:
         """Rotor speed commands for ``reference`` from ``estimate``."""
         if reference.mode is ControlMode.MOTORS_OFF:
             self._last = None
+            self._t_int = None
             return Command.motors_off()
         if reference.mode is not ControlMode.FREE_FLIGHT:
             raise TetherlandError(
@@ -96,7 +98,13 @@ class FreeFlightTracker:
             raise TetherlandError("FreeFlightTracker needs a position reference (p_W rows)")
         ref = PositionReference.from_rows(reference.p_W, reference.yaw)
         body = estimate.body
-        wrench = self.position.update(body, ref)
+        # integral action, learnt while hovering (reference at rest) and frozen during the
+        # maneuver: the bias of the thrust and mass model errors keeps being cancelled
+        dt = None if self._t_int is None else t - self._t_int
+        self._t_int = t
+        if float(np.linalg.norm(ref.v_W)) > 0.05:
+            dt = None
+        wrench = self.position.update(body, ref, dt)
         alloc = self.layout.allocate(np.concatenate(([wrench.thrust], wrench.torque_B)))
         f_dot = None
         if self.lag_compensation:

@@ -37,11 +37,14 @@ def run_for_campaign(
         landing = s.get("landing", {})
         return {
             "success": s["success"],
+            "reason": s["reason"],
             "aborted": s["aborted"],
             "abort_reason": s["abort_reason"],
             "crashed": s["crashed"],
             "landing": {k: landing.get(k) for k in (*_LANDING_KEYS, "min_tension_N")}
             | {"conditions": landing.get("conditions")},
+            "takeoff_completed": s["takeoff"].get("completed", False),
+            "return_completed": s["return"].get("completed", False),
             "sim_time_s": s["sim_time_s"],
             "real_time_factor": s["real_time_factor"],
         }
@@ -57,6 +60,7 @@ def run_for_campaign(
         v = verdict.to_dict()
         return {
             "success": v["success"],
+            "reason": v["reason"],
             "aborted": False,
             "abort_reason": None if v["success"] else v["reason"],
             "crashed": v["crashed"],

@@ -159,17 +159,28 @@ def evaluate(result: MissionResult, tol: LandingTolerances | None = None) -> dic
     sim_time = float(log["t"][-1]) if len(log) else 0.0
     done = sup.phase == Phase.DONE or any(r.phase == Phase.DONE for r in sup.records)
     tension_ok = landing.get("min_tension_N") is None or landing["min_tension_N"] > 0.0
-    success = bool(
-        done
-        and sup.abort_reason is None
-        and landing.get("all_conditions", False)
-        and takeoff.get("completed", False)
-        and ret.get("completed", False)
-        and tension_ok
-        and not crashed
-    )
+    reasons = []
+    if sup.abort_reason is not None:
+        reasons.append(f"aborted: {sup.abort_reason}")
+    if not landing.get("reached", False):
+        reasons.append("no touchdown in the landing phases")
+    elif not landing.get("all_conditions", False):
+        failed = [k for k, ok in landing["conditions"].items() if not ok]
+        reasons.append(f"landing condition(s) {', '.join(failed)} not met")
+    if not tension_ok:
+        reasons.append("cable went slack where the plan needs tension")
+    if landing.get("reached") and not takeoff.get("completed", False):
+        reasons.append("takeoff not completed")
+    if takeoff.get("completed") and not ret.get("completed", False):
+        reasons.append("return not completed")
+    if crashed:
+        reasons.append("the frame touched something (crash)")
+    if not done and not reasons:
+        reasons.append(f"mission did not finish ({log.metadata.get('status')})")
+    success = not reasons
     return {
         "success": success,
+        "reason": "ok" if success else "; ".join(reasons),
         "method": "tethered",
         "scenario": result.plant_scenario.name,
         "controller": result.controller,
