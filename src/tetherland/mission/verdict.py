@@ -85,9 +85,11 @@ def _landing(result: MissionResult, geo: LandingGeometry, tol: LandingTolerances
     )
     measures = {m.name: m.value for c in verdict.conditions for m in c.measures}
     tethered = np.isin(phase, _TETHERED)
-    # the cable must be taut wherever the plan needs tension (on flat ground the plan
-    # itself goes slack at touchdown, chapter footnote 3)
-    planned = tethered & (np.nan_to_num(log["diag.ff_tension"]) >= min_tension)
+    # the cable must be taut wherever the vehicle flies on a plan that needs tension: not
+    # while the landers carry it (on a gentle slope friction alone may hold it and the
+    # cable slackens), nor where the plan itself is slack (flat ground, footnote 3)
+    airborne = log["lander_forces"].max(axis=1) <= CONTACT_FORCE
+    planned = tethered & airborne & (np.nan_to_num(log["diag.ff_tension"]) >= min_tension)
     return {
         "reached": True,
         "t_L": float(t[k]),
