@@ -85,11 +85,13 @@ def _landing(result: MissionResult, geo: LandingGeometry, tol: LandingTolerances
     )
     measures = {m.name: m.value for c in verdict.conditions for m in c.measures}
     tethered = np.isin(phase, _TETHERED)
-    # the cable must be taut wherever the vehicle flies on a plan that needs tension: not
-    # while the landers carry it (on a gentle slope friction alone may hold it and the
-    # cable slackens), nor where the plan itself is slack (flat ground, footnote 3)
+    # the cable must be taut during the tethered landing and takeoff maneuvers wherever the
+    # vehicle flies on a plan that needs tension: not while the landers carry it (on a
+    # gentle slope friction alone may hold it and the cable slackens; spin-up), nor where
+    # the plan itself is slack (flat ground, footnote 3)
     airborne = log["lander_forces"].max(axis=1) <= CONTACT_FORCE
-    planned = tethered & airborne & (np.nan_to_num(log["diag.ff_tension"]) >= min_tension)
+    maneuvers = np.isin(phase, (int(Phase.TETHERED_LANDING), int(Phase.TETHERED_TAKEOFF)))
+    planned = maneuvers & airborne & (np.nan_to_num(log["diag.ff_tension"]) >= min_tension)
     return {
         "reached": True,
         "t_L": float(t[k]),
