@@ -26,6 +26,7 @@ from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
 from tetherland.geometry import LandingGeometry, link_direction, theta_A_from_z_B
 from tetherland.interfaces import ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.mission.clearance import hooking_clearance
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.planning import Planner
@@ -123,6 +124,17 @@ class MissionSupervisor:
         self.p_start = np.asarray(start.p_W, dtype=float).copy()
         self.p_pre = self._com_for_hook(p_A - cfg.approach_distance * n)
         self.p_hook = self._com_for_hook(p_A + cfg.hook_overshoot * n)
+        check = hooking_clearance(scenario, self.geo.surface, (self.p_pre, self.p_hook), self.yaw)
+        if not check.ok:
+            t = scenario.tether
+            raise MissionError(
+                f"tether.hook_drop = {t.hook_drop:g} m is too short for this "
+                f"{math.degrees(self.geo.surface.slope):.1f} deg surface: the frame would pass "
+                f"{check.clearance_m * 100:.1f} cm from it while hooking (needs >= "
+                f"{check.margin_m * 100:.0f} cm); use hook_drop >= "
+                f"{check.required_hook_drop_m:.2f} m with hook_drop + capture_radius < "
+                f"length = {t.length:g} m"
+            )
         phi0 = float(self.landing_traj.output(0.0).phi[0])
         d0 = R_WA @ link_direction(phi0, 0.0)
         pull = scenario.planner.start_tension / (self.mass * self.k_x) + cfg.stretch_margin

@@ -1,0 +1,123 @@
+"""Hooking clearance: analytic distances, the plant's contacts, the supervisor's refusal."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tetherland.config import load_scenario
+from tetherland.geometry import LandingGeometry
+from tetherland.mission.clearance import (
+    hooking_clearance,
+    level_vehicle_distance,
+    surface_distance,
+)
+from tetherland.mission.supervisor import MissionError, MissionSupervisor
+from tetherland.rotations import rotmat_to_quat
+from tetherland.sim.plant import Plant
+from tetherland.state import RigidBodyState
+
+
+def _surface(name: str, *overrides: str):
+    scenario = load_scenario(name, overrides)
+    return scenario, LandingGeometry.from_scenario(scenario).surface
+
+
+def test_plane_distance_is_the_height_along_the_normal():
+    _, surf = _surface("slope50")
+    p = surf.origin + 0.3 * surf.z_S + 0.7 * surf.x_S - 0.2 * surf.y_S
+    assert surface_distance(surf, p)[0] == pytest.approx(0.3, abs=1e-12)
+
+
+def test_pipe_distance_from_the_axis():
+    _, surf = _surface("pipe60")
+    R = surf.pipe_radius
+    axis = surf.origin - R * surf.z_S
+    # on the top line, beside the pipe at its widest, and on the axis
+    assert surface_distance(surf, surf.origin + 0.1 * surf.z_S)[0] == pytest.approx(0.1)
+    side = axis + 2.0 * surf.x_S + (R + 0.05) * surf.y_S
+    assert surface_distance(surf, side)[0] == pytest.approx(0.05)
+    assert surface_distance(surf, axis + 5.0 * surf.x_S)[0] == pytest.approx(-R)
+    # off the top line the pipe falls away from its tangent plane
+    y = 0.15
+    off = surf.origin + y * surf.y_S
+    assert surface_distance(surf, off)[0] == pytest.approx(math.hypot(R, y) - R)
+
+
+_UP = np.array([0.0, 0.0, 1.0])
+
+
+def _level_state(p_W, yaw: float) -> RigidBodyState:
+    c, s = math.cos(yaw), math.sin(yaw)
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return RigidBodyState.at_rest(np.asarray(p_W, dtype=float), rotmat_to_quat(R))
+
+
+@pytest.mark.parametrize(
+    ("name", "overrides"),
+    [("slope50", ()), ("slope50", ("surface.slope_deg=65",)), ("pipe60", ())],
+)
+@pytest.mark.parametrize("yaw", [0.0, 0.4])
+def test_predicted_distance_matches_the_plants_contacts(name, overrides, yaw):
+    """1 cm into the surface the plant reports contact, 1 cm away it reports none."""
+    scenario, surf = _surface(name, *overrides)
+    plant = Plant(scenario)
+    # above the anchor region, uphill of the landing point
+    base = surf.origin - 0.6 * surf.x_S + 0.5 * _UP
+    d0 = level_vehicle_distance(scenario, surf, base, yaw)
+    for target, touching in ((-0.01, True), (0.01, False)):
+        lo, hi = -1.0, 1.0  # bisect the height shift giving the target distance
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            d = level_vehicle_distance(scenario, surf, base + mid * _UP, yaw)
+            lo, hi = (mid, hi) if d < target else (lo, mid)
+        assert d0 != target
+        plant.set_state(_level_state(base + hi * _UP, yaw))
+        force = plant.frame_contact_force + float(np.sum(plant.lander_forces))
+        assert (plant.data.ncon > 0) is touching
+        assert (force > 0.0) is touching
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    slope=st.floats(0.0, 75.0),
+    drop=st.floats(0.0, 0.8),
+    yaw=st.floats(-math.pi, math.pi),
+)
+def test_required_hook_drop_restores_the_margin_on_planes(slope, drop, yaw):
+    scenario, surf = _surface(
+        "slope50", f"surface.slope_deg={slope}", "tether.length=3.0", f"tether.hook_drop={drop}"
+    )
+    hook = surf.origin - 0.8 * surf.x_S  # a hook point on the surface
+    up = np.array([0.0, 0.0, 1.0])
+    check = hooking_clearance(scenario, surf, [hook + (drop + 0.03) * up], yaw)
+    assert check.required_hook_drop_m >= drop
+    fixed = load_scenario(
+        "slope50",
+        [f"surface.slope_deg={slope}", "tether.length=3.0",
+         f"tether.hook_drop={check.required_hook_drop_m}"],
+    )  # fmt: skip
+    raised = hook + (check.required_hook_drop_m + 0.03) * up
+    again = hooking_clearance(fixed, surf, [raised], yaw)
+    assert again.clearance_m >= check.margin_m - 1e-9
+    assert again.ok
+
+
+def test_supervisor_refuses_a_hook_drop_too_short_for_the_slope():
+    scenario = load_scenario("slope50", ["surface.slope_deg=70"])
+    with pytest.raises(MissionError, match=r"tether\.hook_drop = 0\.5 m is too short") as info:
+        MissionSupervisor(scenario, Plant(scenario).start_state())
+    needed = float(str(info.value).split("hook_drop >= ")[1].split(" m")[0])
+    ok = load_scenario(
+        "slope50",
+        ["surface.slope_deg=70", "tether.length=1.2", f"tether.hook_drop={needed + 0.01}"],
+    )
+    supervisor = MissionSupervisor(ok, Plant(ok).start_state())
+    check = hooking_clearance(
+        ok, supervisor.geo.surface, (supervisor.p_pre, supervisor.p_hook), supervisor.yaw
+    )
+    assert check.ok
