@@ -173,3 +173,36 @@ def test_every_controller_implements_the_role(scenario, plans, factory):
     cmd = ctrl.update(0.0, est, ref)
     assert cmd.rotor_speeds.shape == (4,) and np.all(np.isfinite(cmd.rotor_speeds))
     assert cmd.thrust is not None and cmd.thrust > 0 and cmd.torque_B.shape == (3,)
+
+
+@pytest.mark.parametrize("integral", [True, False])
+def test_dfl_integral_removes_the_offset_of_a_mass_error(scenario, plans, integral):
+    """A controller believing 5 % too much mass: the integral removes the steady error."""
+    traj = plans["landing"]
+    track = TrajectoryTrack(traj, 0.0, 500.0)
+    believed = load_scenario(
+        "slope50", [*CENTRED, "vehicle.mass=1.05", f"controller.tethered.dfl_integral={integral}"]
+    )
+    ctrl = DflController(believed)
+    run = simulate_tethered(scenario, ctrl, track.reference, start_state(traj), traj.duration + 6.0)
+    e_phi, e_theta, _ = tracking_errors(scenario, run, track)
+    final = max(abs(e_phi[-1]), abs(e_theta[-1]))
+    if integral:
+        assert final < 0.02
+    else:
+        assert final > 1.0  # the law without it keeps an offset (13 deg here)
+
+
+def test_dfl_restarts_from_motors_off_at_the_nominal_thrust(scenario, plans):
+    """Motors off -> tethered: the extension starts at the plan's thrust, not at zero
+    (where the decoupling matrix is singular)."""
+    traj = plans["takeoff"]
+    geo = LandingGeometry.from_scenario(scenario)
+    est = estimate_of(start_state(traj), 0.0, geo, scenario.tether.length)
+    ctrl = SwitchingController(scenario, "dfl")
+    off = ctrl.update(0.0, est, Reference(t=0.0, mode=ControlMode.MOTORS_OFF))
+    assert off.thrust == 0.0
+    ref = TrajectoryTrack(traj, 0.002, 500.0).reference(0.002)
+    on = ctrl.update(0.002, est, ref)
+    assert on.diagnostics["singular"] == 0.0
+    assert on.thrust == pytest.approx(traj.nominal(0.0).f_R, rel=0.02)

@@ -55,6 +55,14 @@ def test_pipe60_mission_succeeds(pipe60_run):
     check_success(pipe60_run)
 
 
+def test_slope50_mission_succeeds_with_the_dfl_controller():
+    """Gamma_DFL^b through the whole mission, including the restart after motors off."""
+    result = run_mission(load_scenario("slope50"), controller="dfl", seed=1)
+    check_success(result)
+    assert result.summary["takeoff"]["completed"]
+    assert abs(result.summary["takeoff"]["phi_error_rad"]) < math.radians(1.0)
+
+
 def test_controller_switches_are_bumpless(slope50_run):
     """Free flight <-> tethered switches (6.6.3): no thrust jump above 1 N and no rotor
     speed jump above 10 % of the hover speed (about 40 rad/s)."""

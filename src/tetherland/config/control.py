@@ -60,6 +60,11 @@ class TetheredGains(Section):
     """DFL: repeated pole of the 4th-order phi and delta error dynamics, (s + p)^4 [rad/s]."""
     dfl_attitude_pole: float = Field(8.0, gt=0, le=100)
     """DFL: repeated pole of the 2nd-order theta_A and psi error dynamics, (s + p)^2 [rad/s]."""
+    dfl_integral: bool = True
+    """DFL: add integral action, one more pole of the same value in each error polynomial,
+    (s + p)^(r+1), so model errors (thrust, offset torque) leave no steady tracking error."""
+    dfl_integral_max: float = Field(0.3, ge=0, le=10)
+    """DFL: clamp of each error integral (anti-windup) [rad s]."""
     offset_compensation: bool = True
     """Cancel the torque of the cable attachment offset with the estimated tension (6.6.5)."""
 

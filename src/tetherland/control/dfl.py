@@ -13,7 +13,10 @@ the total thrust:
 The outputs y^b = [phi, delta, theta_A, psi] have relative degrees {4, 4, 2, 2}: 12 in
 total, the state dimension, so there are no zero dynamics. With A = L_G L_f^{r-1} y
 (4x4) and b = L_f^r y, the input u = A^-1 (v - b) gives y^(r) = v, and
-v = y_d^(r) + sum_j k_j (y_d^(j) - y^(j)) with (s + p)^r error dynamics. The Lie
+v = y_d^(r) + sum_j k_j (y_d^(j) - y^(j)) with (s + p)^r error dynamics; with
+``dfl_integral`` a clamped integral of each error is added and the error dynamics are
+(s + p)^(r+1), so a constant model error leaves no steady offset. The extension knows
+f_R', so the command leads the motor lag along it. The Lie
 derivatives are derived symbolically with CasADi once per vehicle and compiled.
 
 The extension states f_R, f_R' live in the controller and are integrated at the control
@@ -121,12 +124,15 @@ class DflController:
         self.r_att_B = np.asarray(v.cable_attachment, dtype=float)
         self.compensate_offset = gains.offset_compensation and bool(np.any(self.r_att_B))
         self._fn = _dfl_function(v.mass, scenario.tether.length, tuple(v.inertia), GRAVITY)
-        self._k = [
-            _poly_gains(gains.dfl_link_pole, 4),
-            _poly_gains(gains.dfl_link_pole, 4),
-            _poly_gains(gains.dfl_attitude_pole, 2),
-            _poly_gains(gains.dfl_attitude_pole, 2),
-        ]
+        poles = (gains.dfl_link_pole,) * 2 + (gains.dfl_attitude_pole,) * 2
+        self.integral = gains.dfl_integral
+        self.integral_max = gains.dfl_integral_max
+        extra = 1 if self.integral else 0
+        full = [_poly_gains(p, r + extra) for p, r in zip(poles, _RELATIVE_DEGREES, strict=True)]
+        # v = y_d^(r) + k_I int(e) + k . (e, e', ..., e^(r-1)): (s + p)^(r+1) with the integral
+        self._k_int = np.array([k[0] if extra else 0.0 for k in full])
+        self._k = [k[extra:] for k in full]
+        self._e_int = np.zeros(4)
         self.mixer = Mixer(v)
         self.control_dt = (
             control_dt if control_dt is not None else 1.0 / scenario.controller.rate_hz
@@ -142,6 +148,7 @@ class DflController:
         self._f = thrust
         self._fd = thrust_rate
         self._t_last = None
+        self._e_int = np.zeros(4)
 
     @property
     def extension(self) -> tuple[float | None, float]:
@@ -160,6 +167,7 @@ class DflController:
         if self._f is None:
             self._f = ff.f_R if ff is not None else self.mass * GRAVITY
             self._fd = ff.f_R_dot if ff is not None else 0.0
+        dt = 0.0
         if self._t_last is not None:
             dt = t - self._t_last
             u0 = self._last_u[0]
@@ -191,6 +199,11 @@ class DflController:
                 e[0] = math.remainder(e[0], 2 * math.pi)
             v[j] = Y[r, j] + self._k[j] @ e
             errors[_ERROR_NAMES[j]] = float(e[0])
+        if self.integral:
+            e0 = np.array([errors[n] for n in _ERROR_NAMES])
+            lim = self.integral_max
+            self._e_int = np.clip(self._e_int + e0 * dt, -lim, lim)
+            v += self._k_int * self._e_int
         ratio = abs(np.linalg.det(A)) / float(np.prod(np.sqrt((A * A).sum(axis=1))))
         singular = not ratio >= HADAMARD_MIN
         u = np.array([0.0, *self._last_u[1:]]) if singular else np.linalg.solve(A, v - b)
@@ -210,4 +223,6 @@ class DflController:
         # over it, f + f' h/2 + f'' h^2/6, so the hold adds no first-order error
         h = self.control_dt
         thrust = self._f + 0.5 * self._fd * h + u[0] * h * h / 6.0
-        return self.mixer.command(max(thrust, 0.0), tau, diag)
+        # the extension knows f_R': lead the motor lag along it (torques are not led)
+        rates = self.mixer.layout.allocation_inverse[:, 0] * (self._fd + 0.5 * u[0] * h)
+        return self.mixer.command(max(thrust, 0.0), tau, diag, thrust_rates=rates)

@@ -77,8 +77,10 @@ class SwitchingController:
                 self.free_flight.reset()
             if mode == ControlMode.TETHERED:
                 if isinstance(self.tethered, DflController):
-                    thrust = self.last.thrust if self.last is not None else None
-                    self.tethered.reset(thrust)
+                    # from flight: continue the commanded thrust (bumpless); from motors off
+                    # the thrust is zero, where A is singular: start from the plan's nominal
+                    flying = self.mode != ControlMode.MOTORS_OFF and self.last is not None
+                    self.tethered.reset(self.last.thrust if flying else None)
                 else:
                     self.tethered.reset()
         if mode == ControlMode.MOTORS_OFF:
