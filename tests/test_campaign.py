@@ -229,30 +229,30 @@ def test_killed_campaign_resumes_with_every_run_exactly_once(tmp_path: Path):
     assert summary["complete"] and sum(r["n"] for r in summary["rates"]) == 240
 
 
-def test_interrupt_stops_cleanly_with_exit_130(tmp_path: Path):
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_interrupt_stops_cleanly_with_exit_130(tmp_path: Path, sig):
     out = tmp_path / "camp"
-    cmd = [
-        EXE,
-        "campaign",
-        "slope50",
-        "--job",
-        "analysis",
-        "--runs",
-        "200",
-        "--workers",
-        "1",
-        "--out",
-        str(out),
-    ]
+    cmd = [EXE, "campaign", "slope50", "--job", "analysis", "--runs", "400", "--workers", "2",
+           "--out", str(out)]  # fmt: skip
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 120
     while _count_lines(out / "results.jsonl") < 5 and time.time() < deadline:
         time.sleep(0.01)
-    proc.send_signal(signal.SIGINT)
+    children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+    workers = [int(p) for p in children.read_text().split()] if children.exists() else []
+    proc.send_signal(sig)
     stdout, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 130, stderr
     assert "--resume" in stdout and "Traceback" not in stderr
     assert json.loads((out / "summary.json").read_text())["complete"] is False
+    alive = workers
+    for _ in range(100):  # reaped by init once they exit
+        alive = [pid for pid in alive if Path(f"/proc/{pid}").exists()]
+        if not alive:
+            break
+        time.sleep(0.05)
+    alive = [(pid, Path(f"/proc/{pid}/cmdline").read_bytes()[:200]) for pid in alive]
+    assert not alive, f"orphaned worker processes {alive}"
 
 
 def test_local_pool_and_dask_give_the_same_results(tmp_path: Path):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 from typing import Annotated
 
@@ -15,6 +16,10 @@ from tetherland.campaign.plots import plot_errors, plot_success
 from tetherland.cli.common import ScenarioArg, SetOption, console, resolve_scenario
 from tetherland.errors import ConfigError
 from tetherland.provenance import provenance
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
 
 
 def campaign(
@@ -91,9 +96,15 @@ def campaign(
             status = "ok" if ok else "fail"
             progress.update(task, advance=1, description=f"runs (last: {rec['method']} {status})")
 
-        result = run_campaign(
-            spec, store, executor, provenance=record, on_result=on_result, on_start=on_start
-        )
+        # a polite stop (SIGTERM, e.g. from a batch scheduler) ends like Ctrl-C: the pool's
+        # workers are shut down with it instead of being orphaned
+        previous = signal.signal(signal.SIGTERM, _interrupt)
+        try:
+            result = run_campaign(
+                spec, store, executor, provenance=record, on_result=on_result, on_start=on_start
+            )
+        finally:
+            signal.signal(signal.SIGTERM, previous)
 
     plot_success(
         result.summary, directory / "success_rate.png", spec.sweep.key if spec.sweep else None
