@@ -130,9 +130,9 @@ class DflController:
         extra = 1 if self.integral else 0
         full = [_poly_gains(p, r + extra) for p, r in zip(poles, _RELATIVE_DEGREES, strict=True)]
         # v = y_d^(r) + k_I int(e) + k . (e, e', ..., e^(r-1)): (s + p)^(r+1) with the integral
-        self._k_int = np.array([k[0] if extra else 0.0 for k in full])
+        self._k_int = [float(k[0]) if extra else 0.0 for k in full]
         self._k = [k[extra:] for k in full]
-        self._e_int = np.zeros(4)
+        self._e_int = [0.0] * 4
         self.mixer = Mixer(v)
         self.control_dt = (
             control_dt if control_dt is not None else 1.0 / scenario.controller.rate_hz
@@ -148,7 +148,7 @@ class DflController:
         self._f = thrust
         self._fd = thrust_rate
         self._t_last = None
-        self._e_int = np.zeros(4)
+        self._e_int = [0.0] * 4
 
     @property
     def extension(self) -> tuple[float | None, float]:
@@ -192,18 +192,22 @@ class DflController:
         packed = self._fn(x).full().ravel()
         y_all, A, b = packed[:12], packed[12:28].reshape(4, 4), packed[28:32]
         v = np.empty(4)
-        errors = {}
+        e0 = [0.0] * 4
         for j, (i, r) in enumerate(_SLICES):
             e = Y[:r, j] - y_all[i : i + r]
             if j == 3:
                 e[0] = math.remainder(e[0], 2 * math.pi)
             v[j] = Y[r, j] + self._k[j] @ e
-            errors[_ERROR_NAMES[j]] = float(e[0])
+            e0[j] = float(e[0])
+        errors = dict(zip(_ERROR_NAMES, e0, strict=True))
         if self.integral:
-            e0 = np.array([errors[n] for n in _ERROR_NAMES])
             lim = self.integral_max
-            self._e_int = np.clip(self._e_int + e0 * dt, -lim, lim)
-            v += self._k_int * self._e_int
+            e_int = self._e_int
+            extra = [0.0] * 4
+            for j in range(4):
+                e_int[j] = min(lim, max(-lim, e_int[j] + e0[j] * dt))
+                extra[j] = self._k_int[j] * e_int[j]
+            v += extra
         ratio = abs(np.linalg.det(A)) / float(np.prod(np.sqrt((A * A).sum(axis=1))))
         singular = not ratio >= HADAMARD_MIN
         u = np.array([0.0, *self._last_u[1:]]) if singular else np.linalg.solve(A, v - b)
