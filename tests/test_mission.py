@@ -129,3 +129,22 @@ def test_landing_is_robust_to_belief_errors():
     s = result.summary
     assert s["success"], s["landing"]
     assert any(e["kind"] == "touchdown" for e in result.log.metadata["events"])
+
+
+def test_a_lagging_link_far_above_the_surface_is_not_taken_for_contact():
+    """Campaign run (20 deg, seed 1920885107): a gust and a +5 % mass error made the link
+    lag its reference by more than contact_error_deg near the end of the plan, 5 cm above
+    the surface. Early contact is only believed within contact_gate_deg of phi*."""
+    from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
+    from tetherland.mission.campaign_entry import run_for_campaign
+
+    seed = 1920885107
+    truth = load_scenario(
+        "slope50", ["surface.slope_deg=20", "tether.length=1.2", "tether.hook_drop=1.0"]
+    )
+    perturbation = sample_perturbation(truth, np.random.default_rng(seed))
+    assert perturbation.mass_factor > 1.04  # the case is the one described above
+    plant, belief = apply_perturbation(truth, perturbation)
+    verdict = run_for_campaign(plant, belief, perturbation, "tethered", seed)
+    assert verdict["success"], verdict["reason"]
+    assert verdict["landing"]["conditions"] == {str(i): True for i in range(1, 6)}

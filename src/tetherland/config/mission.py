@@ -55,6 +55,10 @@ class MissionConfig(Section):
     """... for this long [s]."""
     contact_window: float = Field(0.25, ge=0, le=1)
     """Fraction of the landing duration, at its end, in which early contact is detected [-]."""
+    contact_gate_deg: float = Field(2.0, gt=0, le=45)
+    """Early contact is believed only when the estimated link elevation is within this of
+    the believed phi* (the surface cannot be much higher than believed); farther up, a
+    lagging link is a tracking error, not the surface [deg]."""
     spinup_time: float = Field(0.5, ge=0, le=10)
     """Motors back on, holding the landed output, before the tethered takeoff [s]."""
     release_slack: float = Field(0.25, gt=0, le=5)

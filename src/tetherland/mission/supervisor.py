@@ -350,11 +350,16 @@ class MissionSupervisor:
             return False
         return self._contact_rule.update(t, est.link.phi - ref.output[0, 0])
 
+    def _near(self, est: StateEstimate) -> bool:
+        """The link is low enough for the surface to be touching (contact_gate_deg)."""
+        gate = math.radians(self.cfg.contact_gate_deg)
+        return est.link is not None and est.link.phi - self.geo.phi_star < gate
+
     def _phase_tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         track = self._track.track
         ref = self._track.reference(t, self.phase)
-        if t > track.t0 + (1.0 - self.cfg.contact_window) * track.duration:
+        if t > track.t0 + (1.0 - self.cfg.contact_window) * track.duration and self._near(est):
             if self._touching(t, est, ref):
                 return self._contact(t, est, ref, "contact before the planned end (t_L)")
         else:
