@@ -17,7 +17,7 @@ from tetherland.mission.clearance import (
     surface_distance,
 )
 from tetherland.mission.supervisor import MissionError, MissionSupervisor
-from tetherland.rotations import rotmat_to_quat
+from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
@@ -52,8 +52,7 @@ _UP = np.array([0.0, 0.0, 1.0])
 
 
 def _level_state(p_W, yaw: float) -> RigidBodyState:
-    c, s = math.cos(yaw), math.sin(yaw)
-    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    R = rotation_from_z_and_yaw(_UP, yaw)
     return RigidBodyState.at_rest(np.asarray(p_W, dtype=float), rotmat_to_quat(R))
 
 

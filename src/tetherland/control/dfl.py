@@ -134,6 +134,7 @@ class DflController:
         self._k = [k[extra:] for k in full]
         self._e_int = [0.0] * 4
         self.mixer = Mixer(v)
+        self._thrust_share = self.mixer.layout.allocation_inverse[:, 0].copy()  # dF_i/df_R
         self.control_dt = (
             control_dt if control_dt is not None else 1.0 / scenario.controller.rate_hz
         )
@@ -228,5 +229,5 @@ class DflController:
         h = self.control_dt
         thrust = self._f + 0.5 * self._fd * h + u[0] * h * h / 6.0
         # the extension knows f_R': lead the motor lag along it (torques are not led)
-        rates = self.mixer.layout.allocation_inverse[:, 0] * (self._fd + 0.5 * u[0] * h)
+        rates = self._thrust_share * (self._fd + 0.5 * u[0] * h)
         return self.mixer.command(max(thrust, 0.0), tau, diag, thrust_rates=rates)

@@ -22,7 +22,13 @@ from numpy.typing import ArrayLike
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, Surface
 from tetherland.models.quadrotor import RotorLayout
-from tetherland.sim.mjcf import HUB_HALF_SIZE, PROP_RADIUS_FRACTION
+from tetherland.rotations import rotation_from_z_and_yaw
+from tetherland.sim.mjcf import (
+    HUB_HALF_SIZE,
+    PROP_HALF_THICKNESS,
+    PROP_HEIGHT,
+    PROP_RADIUS_FRACTION,
+)
 
 _N_RIM = 72
 _RIM = np.column_stack(
@@ -54,17 +60,18 @@ def level_vehicle_distance(
     """Smallest signed distance [m] of the level vehicle's collision shape from the surface.
 
     The shape is the one of :mod:`tetherland.sim.mjcf`: rotor guards (disks of radius
-    PROP_RADIUS_FRACTION arm_length, 2 cm above the rotors, 8 mm thick), the hub box and the
+    PROP_RADIUS_FRACTION arm_length, PROP_HEIGHT above the rotors), the hub box and the
     four lander spheres, with the vehicle level at centre of mass ``p_W`` [m] and heading
     ``yaw`` [rad].
     """
     v = scenario.vehicle
-    c, s = math.cos(yaw), math.sin(yaw)
-    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    R = rotation_from_z_and_yaw((0.0, 0.0, 1.0), yaw)
     rotors = RotorLayout.from_config(v).positions_B
     r_prop = PROP_RADIUS_FRACTION * v.arm_length
     guards = [
-        r_i + [0.0, 0.0, 0.02 + dz] + r_prop * _RIM for r_i in rotors for dz in (-0.004, 0.004)
+        r_i + [0.0, 0.0, PROP_HEIGHT + dz] + r_prop * _RIM
+        for r_i in rotors
+        for dz in (-PROP_HALF_THICKNESS, PROP_HALF_THICKNESS)
     ]
     hx, hy, hz = HUB_HALF_SIZE
     signs = (-1.0, 1.0)
@@ -88,8 +95,9 @@ class HookingClearance:
         Smallest signed distance [m] at the ends of the pass (it is linear in between for
         a plane).
     required_hook_drop_m : float
-        Hook drop [m] that would give ``margin_m`` of clearance on a plane; for pipes it is
-        the plane bound (conservative).
+        Hook drop [m] that gives ``margin_m`` of clearance: exact for a plane (raising the
+        vehicle by dz raises every point by dz cos(beta)); for a pipe an estimate by the
+        same rule.
     margin_m : float
         Clearance asked for [m].
     """

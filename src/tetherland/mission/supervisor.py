@@ -32,7 +32,7 @@ from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.planning import Planner
 from tetherland.planning.spline import smoothstep9_scalar
 from tetherland.planning.tracking import TrajectoryTrack
-from tetherland.rotations import quat_to_rotmat
+from tetherland.rotations import quat_to_rotmat, rotation_from_z_and_yaw
 from tetherland.state import RigidBodyState
 
 _Z = np.array([0.0, 0.0, 1.0])
@@ -115,8 +115,7 @@ class MissionSupervisor:
         self.landing_traj = self.landing_plan.require()
         self.takeoff_traj = self.takeoff_plan.require()
         # key points (centre of mass, level flight with heading yaw)
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        R_level = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        R_level = rotation_from_z_and_yaw(_Z, self.yaw)
         self._att_offset = R_level @ np.asarray(v.cable_attachment, dtype=float)
         n = R_WA @ np.asarray(scenario.tether.approach_direction, dtype=float)
         n /= np.linalg.norm(n)

@@ -38,6 +38,10 @@ PROP_RADIUS_FRACTION = 0.4
 """Propeller (rotor guard) radius as a fraction of the arm length [-]."""
 HUB_HALF_SIZE = (0.06, 0.06, 0.025)
 """Half sizes of the central hub box (collision and visual) [m]."""
+PROP_HEIGHT = 0.02
+"""Height of the rotor-guard disks above the rotor sites, along z_B [m]."""
+PROP_HALF_THICKNESS = 0.004
+"""Half thickness of the rotor-guard disks [m]."""
 
 SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("accelerometer", 3),
@@ -377,8 +381,8 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             name=f"prop{i}",
             class_="collision",
             type="cylinder",
-            size=_fmt((layout.prop_radius, 0.004)),
-            pos=_fmt(r_i + np.array([0, 0, 0.02])),
+            size=_fmt((layout.prop_radius, PROP_HALF_THICKNESS)),
+            pos=_fmt(r_i + np.array([0, 0, PROP_HEIGHT])),
             material="prop",
             group="1",
         )
