@@ -1,4 +1,4 @@
-"""Frames and landing geometry (DESIGN.md section 3): analytic values and properties."""
+"""Frames and landing geometry (docs/theory.md section 3): analytic values and properties."""
 
 from __future__ import annotations
 
@@ -125,7 +125,7 @@ def test_theta_A_recovers_tilt_in_link_plane(phi: float, delta: float, theta: fl
 
 
 def test_worked_example_of_design():
-    """DESIGN.md section 4: m = 1, l = 1, h_R = 0.1, h_A = 0, beta = 50 deg."""
+    """docs/theory.md section 4: m = 1, l = 1, h_R = 0.1, h_A = 0, beta = 50 deg."""
     beta = math.radians(50)
     surface = Surface(origin=np.zeros(3), R_WS=surface_frame(normal_from_slope(beta)))
     geo = landing_geometry(surface, length=1.0, h_R=0.1, h_A=0.0)

@@ -1,4 +1,4 @@
-"""Cable, contacts and friction of the plant against the models of DESIGN.md sections 4-5."""
+"""Cable, contacts and friction of the plant against the models of docs/theory.md sections 4-5."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The numpy taut-link model (DESIGN.md section 4) against Newton's law (6.4)."""
+"""The numpy taut-link model (docs/theory.md section 4) against Newton's law (6.4)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Frames and landing geometry (DESIGN.md section 3, chapter sections 6.2 and 6.4.2).
+"""Frames and landing geometry (docs/theory.md section 3, chapter sections 6.2 and 6.4.2).
 
 Frames: F_W (world, z_W up), F_S (surface, x_S downhill), F_A (anchor: z_A = z_W,
 y_A = y_S, x_A horizontal and downhill), F_L (link), F_B (body, z_B the thrust axis).
@@ -83,7 +83,7 @@ def link_direction(phi: float, delta: float) -> FloatArray:
 
 def link_frame(phi: float, delta: float) -> FloatArray:
     """R_AL = [x_L y_L z_L] in F_A: x_L = d_A, d(d_A)/dphi = cos(delta) z_L,
-    d(d_A)/ddelta = -y_L (DESIGN.md section 3)."""
+    d(d_A)/ddelta = -y_L (docs/theory.md section 3)."""
     cp, sp, cd, sd = math.cos(phi), math.sin(phi), math.cos(delta), math.sin(delta)
     return np.array(
         [
@@ -115,7 +115,7 @@ def link_angles(d_A: ArrayLike) -> tuple[float, float]:
 
 
 def theta_A_from_z_B(z_B_A: ArrayLike, phi: float, delta: float) -> float:
-    """Robot tilt theta_A from the thrust axis z_B given in F_A (DESIGN.md section 7).
+    """Robot tilt theta_A from the thrust axis z_B given in F_A (docs/theory.md section 7).
 
     alpha is z_B projected on the plane P_L = span(x_L, z_L); theta_A = atan2(x_A.alpha,
     z_A.alpha): the tilt of the thrust axis from vertical towards x_A (downhill).

@@ -129,7 +129,7 @@ def link_kernel(
 def link_state_of(
     x: FloatArray, r_att_B: FloatArray, p_A: FloatArray, R_WA: FloatArray
 ) -> LinkState:
-    """Link angles and rates of the attachment point around the anchor (DESIGN.md section 3).
+    """Link angles and rates of the attachment point around the anchor (docs/theory.md section 3).
 
     Used for the true state (simulation) and for estimates (estimator) alike.
 

@@ -38,7 +38,7 @@ class LandingAnalysis:
     free_flight: ContactFreeAnalysis
 
     def table(self) -> list[TableRow]:
-        """Table 6.1 for this scenario's numbers (corrected formulas, DESIGN.md section 5)."""
+        """Table 6.1 for this scenario's numbers (corrected formulas, docs/theory.md section 5)."""
         s, t, f = self.geometry.surface, self.tethered, self.free_flight
         beta = math.degrees(s.slope)
         m_g = self.limits.mass * GRAVITY

@@ -1,4 +1,4 @@
-"""Controller settings (DESIGN.md section 7).
+"""Controller settings (docs/theory.md section 7).
 
 Gains are given as natural frequencies and damping ratios of the closed-loop error
 dynamics (mass and inertia are taken from the vehicle), so they stay meaningful when the
@@ -38,7 +38,7 @@ class FreeFlightGains(Section):
 
 
 class TetheredGains(Section):
-    """Tethered controllers: hierarchical Gamma_HC^b and DFL Gamma_DFL^b (DESIGN.md section 7)."""
+    """Tethered controllers: hierarchical Gamma_HC^b and DFL Gamma_DFL^b (docs/theory.md section 7)."""
 
     link_frequency: float = Field(3.0, gt=0, le=50)
     """Hierarchical outer loop: natural frequency of the phi and delta errors [rad/s]."""

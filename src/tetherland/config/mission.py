@@ -1,4 +1,4 @@
-"""Mission settings (chapter section 6.6, DESIGN.md section 10)."""
+"""Mission settings (chapter section 6.6, docs/theory.md section 10)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The physical scenario: vehicle, tether, surface and anchor (DESIGN.md sections 3, 4, 12)."""
+"""The physical scenario: vehicle, tether, surface and anchor (docs/theory.md sections 3, 4, 12)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Settings of the landing/takeoff trajectory planner (DESIGN.md section 6)."""
+"""Settings of the landing/takeoff trajectory planner (docs/theory.md section 6)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Sensor settings: IMU and motion capture (DESIGN.md sections 8, 9 and 12)."""
+"""Sensor settings: IMU and motion capture (docs/theory.md sections 8, 9 and 12)."""
 
 from __future__ import annotations
 

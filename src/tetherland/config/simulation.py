@@ -1,4 +1,4 @@
-"""Physics simulation settings (DESIGN.md section 9)."""
+"""Physics simulation settings (docs/theory.md section 9)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Dynamic-feedback-linearising tethered controller Gamma_DFL^b (DESIGN.md section 7).
+"""Dynamic-feedback-linearising tethered controller Gamma_DFL^b (docs/theory.md section 7).
 
 Model (taut link at the centre of mass, vectors in F_A), extended with two integrators on
 the total thrust:

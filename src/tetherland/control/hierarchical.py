@@ -1,6 +1,6 @@
 """Hierarchical tethered controller Gamma_HC^b for y^b = [phi, delta, theta_A, psi].
 
-DESIGN.md section 7 (chapter 4.5.2, used in the experiments of 6.6). Outer loop on the
+docs/theory.md section 7 (chapter 4.5.2, used in the experiments of 6.6). Outer loop on the
 link angles (vectors in F_A, F_L components):
 
   v_phi   = phi_d''   + k_d (phi_d'   - phi')   + k_p (phi_d   - phi)

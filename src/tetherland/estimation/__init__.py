@@ -1,4 +1,4 @@
-"""State and cable-tension estimation (DESIGN.md section 8)."""
+"""State and cable-tension estimation (docs/theory.md section 8)."""
 
 from tetherland.estimation.estimator import UkfEstimator
 from tetherland.estimation.tension import (

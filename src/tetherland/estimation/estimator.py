@@ -1,4 +1,4 @@
-"""The estimator used in the loop: UKF + link state + cable tension (DESIGN.md section 8).
+"""The estimator used in the loop: UKF + link state + cable tension (docs/theory.md section 8).
 
 Implements :class:`tetherland.interfaces.Estimator` and ``CommandAware``. IMU samples are
 buffered by :meth:`UkfEstimator.predict` and integrated together (every sample, one

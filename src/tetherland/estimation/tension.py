@@ -1,4 +1,4 @@
-"""Cable tension from thrust and the accelerometer (DESIGN.md section 8).
+"""Cable tension from thrust and the accelerometer (docs/theory.md section 8).
 
 Newton in F_B with the IMU at the centre of mass and no contact:
     m a_m = f_R e3 - f_L d_B,     d_B = R_BW d  (d: unit link direction, anchor -> robot)
@@ -56,7 +56,7 @@ class TensionEstimate:
 class ThresholdDwell:
     """A value counts as "on" once it has stayed above ``threshold`` for ``dwell`` seconds.
 
-    The supervisor's rule for a taut cable (DESIGN.md section 8); any drop below the
+    The supervisor's rule for a taut cable (docs/theory.md section 8); any drop below the
     threshold restarts the timer.
     """
 

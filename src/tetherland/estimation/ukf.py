@@ -1,4 +1,4 @@
-"""Unscented Kalman filter on IMU (process input) and motion capture (DESIGN.md section 8).
+"""Unscented Kalman filter on IMU (process input) and motion capture (docs/theory.md section 8).
 
 State: position p_W, velocity v_W, attitude q_WB (unit quaternion, kept outside the
 filter vector), gyro bias b_g and accelerometer bias b_a. The filter works on the

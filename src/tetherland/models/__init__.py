@@ -1,4 +1,4 @@
-"""Dynamics models (DESIGN.md section 4).
+"""Dynamics models (docs/theory.md section 4).
 
 * :mod:`.quadrotor`: rotor layout, allocation Gamma (6.19) and its saturated inverse
   (:meth:`RotorLayout.allocate`), rotor lag :class:`RotorModel`;

@@ -7,14 +7,14 @@ state of a dynamic extension on f_R), attitude R_WB, angular velocity and accele
 rotor torque and the rotor thrusts Gamma^-1 [f_R, tau_B] (6.19). These are the "nominal"
 values of figure 6.5 and the feed-forward of the tethered controllers.
 
-Model (DESIGN.md sections 4 and 7; the translational dynamics of the link end, taken at
+Model (docs/theory.md sections 4 and 7; the translational dynamics of the link end, taken at
 the centre of mass as in the chapter):
 
   m l d'' = -m g z_W + f_R z_B - f_L d,   d = d_A(phi, delta)
   F := f_R z_B = u_x x_L + u_y y_L + u_z z_L   (F_L components, vectors in F_A)
   u_z = z_L . (m l d'' + m g z_W),  u_y = y_L . (m l d'' + m g z_W)
   u_x = u_z tan(phi + theta_A) / cos(delta)    (theta_A: tilt of the projection of z_B
-                                                on span(x_L, z_L), DESIGN.md section 7)
+                                                on span(x_L, z_L), docs/theory.md section 7)
   f_L = u_x - x_L . (m l d'' + m g z_W)
 
 Attitude: R_AB = R_y(theta_e) R_x(roll) R_z(psi), with theta_e and roll the two angles of

@@ -1,4 +1,4 @@
-"""Quadrotor rotor layout, allocation (6.19) and rotor dynamics, DESIGN.md section 4.
+"""Quadrotor rotor layout, allocation (6.19) and rotor dynamics, docs/theory.md section 4.
 
 u = [f_R, tau_x, tau_y, tau_z] = Gamma @ [f_1, f_2, f_3, f_4]; column i of Gamma is
 [1, (r_i x e3), sigma_i c_tau] with r_i the rotor position in F_B and sigma_i its spin

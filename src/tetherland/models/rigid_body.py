@@ -1,4 +1,4 @@
-"""Free-flight rigid-body dynamics of the quadrotor (6.1)-(6.2), DESIGN.md section 4.
+"""Free-flight rigid-body dynamics of the quadrotor (6.1)-(6.2), docs/theory.md section 4.
 
   m p''_R = -m g z_W + f_R z_B + f_ext          (F_W)
   J w'    = -w x J w + tau_B + tau_ext           (F_B)

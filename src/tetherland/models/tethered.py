@@ -1,4 +1,4 @@
-"""Taut-tether dynamics of the link angles (phi, delta), DESIGN.md section 4, (6.4).
+"""Taut-tether dynamics of the link angles (phi, delta), docs/theory.md section 4, (6.4).
 
 With the thrust vector u = f_R z_B written in F_L components (u_x, u_y, u_z) and all
 vectors in F_A (the link ends at the cable attachment point, taken at the centre of mass

@@ -1,4 +1,4 @@
-"""Landing and takeoff trajectory planning (chapter section 6.5, DESIGN.md section 6).
+"""Landing and takeoff trajectory planning (chapter section 6.5, docs/theory.md section 6).
 
 * :mod:`.ocp` states an optimal control problem; :mod:`.transcription` turns it into an
   NLP by multiple shooting; :mod:`.solvers` solves it with IPOPT or fatrop, caching the

@@ -1,6 +1,6 @@
 """The tethered landing and takeoff maneuvers: boundary states, limits and the OCP (6.21).
 
-:class:`ManeuverSpec` gathers the numbers of one maneuver from a scenario (DESIGN.md
+:class:`ManeuverSpec` gathers the numbers of one maneuver from a scenario (docs/theory.md
 sections 3, 4, 6): the planar model, the taut start hover and the landed hover, the
 rotor and tension limits, the duration and the cost gains. :func:`build_ocp` states the
 optimal control problem (6.21) for it as an :class:`~tetherland.planning.ocp.OcpProblem`;

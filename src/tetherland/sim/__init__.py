@@ -1,4 +1,4 @@
-"""MuJoCo simulation of the tethered quadrotor (DESIGN.md section 9, issue 4).
+"""MuJoCo simulation of the tethered quadrotor (docs/theory.md section 9, issue 4).
 
 - :class:`Plant`: the scene built from a scenario (:func:`build_mjcf`), rotor speed
   commands through a first-order motor lag, the cable as a limited spatial tendon engaged

@@ -1,4 +1,4 @@
-"""MJCF model of the scene, generated from a scenario (DESIGN.md section 9).
+"""MJCF model of the scene, generated from a scenario (docs/theory.md section 9).
 
 The scene: a quadrotor (one rigid body with a free joint, mass and principal inertia from
 ``[vehicle]``, four lander spheres whose lowest points form the landers plane h_R below

@@ -1,6 +1,6 @@
 """The physics plant: MuJoCo scene, rotors behind their ESCs, cable and hook.
 
-Rotor model (DESIGN.md section 4, chapter 6.6.4): the input is the commanded spinning speed
+Rotor model (docs/theory.md section 4, chapter 6.6.4): the input is the commanded spinning speed
 of each rotor (the ESC interface). Each speed follows a first-order lag with time constant
 tau_m, integrated exactly for a command held over the step,
 w_{k+1} = w_cmd + (w_k - w_cmd) exp(-dt / tau_m), and rotor i pushes f_i = c_f w_i^2 along
@@ -231,7 +231,7 @@ class Plant:
     def link_state(self) -> LinkState:
         """Link angles and rates of the attachment point around the anchor, at :attr:`time`.
 
-        phi and delta as in DESIGN.md section 3 (F_A), whether the cable is taut or not.
+        phi and delta as in docs/theory.md section 3 (F_A), whether the cable is taut or not.
         """
         geo = self.layout.geometry
         x = np.concatenate((self.data.qpos, self.data.qvel))

@@ -1,4 +1,4 @@
-"""Sensor models: strapdown IMU and motion capture (DESIGN.md sections 8, 9; chapter 6.6.4).
+"""Sensor models: strapdown IMU and motion capture (docs/theory.md sections 8, 9; chapter 6.6.4).
 
 IMU (1 kHz): specific force f_B = R_BW (a - g) (what an accelerometer measures: thrust,
 cable and contact forces over the mass, never gravity) and angular rate omega_B, from
