@@ -469,12 +469,12 @@ class SlopeLimit:
 
 
 def max_feasible_slope(
-    margin: Callable[[float], float], samples: int = 361, upper: float = math.pi
+    margin: Callable[[float], float], samples: int = 181, upper: float = math.pi
 ) -> float | None:
     """Steepest slope in [0, ``upper``] with ``margin(slope) >= 0`` [rad], or None.
 
-    The margin is sampled on a grid (every half degree by default) and the last sign
-    change refined with Brent's method.
+    The margin is sampled on a grid (every degree by default) and the last sign change
+    refined with Brent's method.
     """
     grid = np.linspace(0.0, upper, samples)
     values = np.array([margin(float(b)) for b in grid])
