@@ -47,7 +47,7 @@ def _table(result: DesignResult) -> Table:
         p = d.point
         x, y, z = p.approach_A
         # elevation below the horizontal toward the surface: 90 lowers the hook, 0 is level
-        elevation = math.degrees(math.atan2(-z, math.hypot(x, y)))
+        elevation = round(math.degrees(math.atan2(-z, math.hypot(x, y))))  # int: no "-0"
         table.add_row(
             str(k), f"{p.length:g}", f"{p.attachment[2]:g}", f"{p.h_A:g}", f"{elevation:.0f}",
             f"{p.hook_drop:g}", f"{d.min_rotor_margin:.3f}", f"{100 * d.min_clearance:.1f}",
@@ -81,7 +81,9 @@ def design(
         record = provenance(sc, extra={"slope_deg": result.slope_deg})
         title = (
             f"{sc.name}: {sc.vehicle.mass:g} kg, rotors {sc.vehicle.f_min:g}-"
-            f"{sc.vehicle.f_max:g} N, control margin {sc.vehicle.control_margin:g} N"
+            f"{sc.vehicle.f_max:g} N, control margin {sc.vehicle.control_margin:g} N\n"
+            f"hooking pass: overshoot {sc.mission.hook_overshoot:g} m, capture radius "
+            f"{sc.tether.capture_radius:g} m"
         )
         files["map"] = str(save_map_figure(out / "feasibility_map.png", fmap, result.chosen, title))
         files["map_data"] = str(
