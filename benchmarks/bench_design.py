@@ -2,11 +2,11 @@
 
 Run: ``.venv/bin/python benchmarks/bench_design.py [--repeats 3] [--map]``
 
-* search: :func:`search_designs` for the default vehicle at 50 and 80 deg (default
+* search: :func:`search_designs` for the default vehicle at 50, 80 and 90 deg (default
   hooking pass) and at 90 and 94 deg (overshoot 5 cm, capture radius 5 cm), with a
   planner whose solvers are already built; the first line is a cold call that builds them;
 * map (``--map``): the whole feasibility map of ``tetherland design --out`` (37 slopes x
-  10 cable lengths, plus the steepest slope per length).
+  11 cable lengths, plus the steepest slope per length).
 
 The counts (candidates analysed, candidates planned) show how the analysis pre-filter
 keeps the OCP to a short list. The machine's load average is printed before and after:
@@ -25,7 +25,7 @@ from tetherland.design import feasibility_map, search_designs
 from tetherland.planning import Planner
 
 RELAXED = ["mission.hook_overshoot=0.05", "tether.capture_radius=0.05"]
-CASES = ((50.0, []), (80.0, []), (90.0, RELAXED), (94.0, RELAXED))
+CASES = ((50.0, []), (80.0, []), (90.0, []), (90.0, RELAXED), (94.0, RELAXED))
 
 
 def main() -> None:

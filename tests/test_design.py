@@ -53,7 +53,7 @@ def test_designs_are_ranked_and_keep_the_margins(at_60):
     for d in at_60.designs:
         assert d.min_rotor_margin >= 0.25 - 1e-9  # the control margin, over both plans
         assert d.min_rotor_margin <= d.landed_rotor_margin + 1e-9  # the plans contain it
-        assert d.min_clearance >= 0.02 - 1e-12
+        assert d.min_clearance >= 0.02 - 1e-12  # mission.hooking_clearance
     # the analysis' best over the grid (some of it fails the hooking clearance)
     assert at_60.landed_margin >= max(d.landed_rotor_margin for d in at_60.designs) - 1e-12
 
@@ -125,16 +125,28 @@ def test_wall_design_is_the_inclined_hover_force_balance(wall):
         assert p.approach_A == pytest.approx((-1.0, 0.0, 0.0))
 
 
-def test_wall_needs_a_short_overshoot(planner, wall):
-    """With the default hooking pass (12 cm overshoot, 10 cm capture radius) the frame comes
-    within 2 cm of a wall for every design whose landed hover is feasible: the search says
-    that the hooking clearance binds; the relaxed pass reaches the wall."""
+def test_the_hooking_pass_decides_the_wall(planner, wall):
+    """Hooking a wall along its normal, the pass ends hook_overshoot beyond the anchor: the
+    frame (0.255 m ahead of the centre along x_A) keeps 2 cm only with
+    hook_drop >= 0.275 + overshoot - h_A, and hook_drop + capture_radius < l. The rotor floor
+    on the wall needs gamma = asin(0.1/l) with m g tan(gamma)/4 >= 0.45 N: l <= 0.554 m."""
+    l_max = 0.1 / math.sin(math.atan(4 * 0.45 / g))
+    assert l_max == pytest.approx(0.5541, abs=1e-4)
+    # default pass (overshoot 0.12 m, capture 0.1 m): l > 0.275 + 0.12 + 0.1 = 0.495 m
     default = search_designs(load_scenario("slope50"), 90.0, planner=planner)
-    assert not default.feasible
-    assert default.limit is DesignLimit.HOOKING_CLEARANCE
-    assert default.binding == "hooking_clearance" and default.landed_margin is not None
-    assert "hooking pass" in default.reason and "\n" not in default.reason
-    assert wall.chosen.point.length <= 0.5  # gamma >= 11.5 deg: f_R/4 >= f_min + margin
+    assert default.feasible
+    for d in default.designs:
+        assert 0.495 < d.point.length <= l_max
+        assert d.point.hook_drop >= 0.275 + 0.12 - d.point.h_A - 0.005
+    # 5 cm overshoot and capture radius: shorter cables, more rotor margin
+    assert wall.chosen.point.length < 0.495
+    assert wall.chosen.min_rotor_margin > default.chosen.min_rotor_margin + 0.1
+    # a 20 cm overshoot needs l > 0.575 + 0.1 m: no cable holds the wall, the pass binds
+    long = search_designs(load_scenario("slope50", ["mission.hook_overshoot=0.2"]), 90.0,
+                          planner=planner)  # fmt: skip
+    assert not long.feasible and long.limit is DesignLimit.HOOKING_CLEARANCE
+    assert long.binding == "hooking_clearance" and long.landed_margin is not None
+    assert "hooking pass" in long.reason and "\n" not in long.reason
 
 
 @pytest.mark.parametrize(
@@ -190,21 +202,20 @@ def test_invalid_slope_and_inputs_are_config_errors(planner):
         DesignSpace(lengths=(0.0,))
 
 
-def test_hooking_pass_is_the_supervisors_for_the_default_approach(slope50):
+def test_hooking_pass_is_the_missions_for_the_default_approach(slope50):
     """The hook hanging under the vehicle (default approach -z_W): the same pass, and the
-    same clearance, as the mission supervisor's check before it flies."""
-    from tetherland.mission.clearance import hooking_clearance
-    from tetherland.mission.supervisor import MissionSupervisor
+    same clearance, as the mission plan checks before it flies."""
+    from tetherland.mission.plan import plan_mission
     from tetherland.state import RigidBodyState
 
-    start = RigidBodyState.at_rest(np.array([-1.5, 0.0, 1.2]), np.array([1.0, 0, 0, 0]))
-    sup = MissionSupervisor(slope50, start)
+    start = RigidBodyState.at_rest(np.array([-1.5, 0.0, 1.2]))
+    plan = plan_mission(slope50, start)
     hp = hooking_pass(slope50)
-    np.testing.assert_allclose(hp.p_start_W, sup.p_pre, atol=1e-12)
-    np.testing.assert_allclose(hp.p_end_W, sup.p_hook, atol=1e-12)
+    np.testing.assert_allclose(hp.p_start_W, plan.waypoints.hook_start, atol=1e-12)
+    np.testing.assert_allclose(hp.p_end_W, plan.waypoints.hook_end, atol=1e-12)
+    assert hp.yaw == pytest.approx(plan.waypoints.yaw, abs=1e-15)
     geo = LandingGeometry.from_scenario(slope50)
-    expected = hooking_clearance(slope50, geo.surface, (sup.p_pre, sup.p_hook), sup.yaw)
-    assert pass_clearance(slope50, geo, hp) == pytest.approx(expected.clearance_m, abs=1e-12)
+    assert pass_clearance(slope50, geo, hp) == pytest.approx(plan.clearance.clearance_m, abs=1e-12)
 
 
 def test_hook_drop_choice_is_the_best_on_the_grid(at_60):

@@ -24,7 +24,7 @@ from tetherland.design.search import (
     landed_slope_limit,
     search_designs,
 )
-from tetherland.design.space import DesignPoint, DesignSpace, with_overrides
+from tetherland.design.space import DesignPoint, DesignSpace
 
 __all__ = [
     "Design",
@@ -46,5 +46,4 @@ __all__ = [
     "rotor_margin",
     "search_designs",
     "steepest_slope",
-    "with_overrides",
 ]

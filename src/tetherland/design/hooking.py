@@ -7,11 +7,12 @@ before the anchor to ``hook_overshoot`` beyond it (``mission`` section).
 Hook model assumed here: the hook point is the cable attachment point moved by
 ``hook_drop`` along n, leading the vehicle in the direction it moves. For the default
 approach n = -z_W this is the hook hanging under the vehicle, the model the simulation
-uses today; for other directions it is the hook following the approach direction
-(issue 11, item 3). :func:`hook_offset` is the one place that states it.
+and :func:`tetherland.mission.plan.plan_mission` use today; for other directions it is the
+hook following the approach direction (issue 11, item 3). :func:`hook_offset` is the one
+place that states it.
 
 The clearance is that of the plant's collision shape, computed by
-:func:`tetherland.mission.clearance.hooking_clearance`.
+:func:`tetherland.analysis.clearance.hooking_clearance`.
 """
 
 from __future__ import annotations
@@ -22,9 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from tetherland.analysis.clearance import hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
-from tetherland.mission.clearance import hooking_clearance
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
@@ -117,4 +118,5 @@ def pass_clearance(scenario: Scenario, geometry: LandingGeometry, hooking: Hooki
     surface of ``geometry`` along the hooking pass [m]."""
     count = PIPE_SAMPLES if geometry.surface.kind == "pipe" else 2
     points = hooking.points(count)
-    return hooking_clearance(scenario, geometry.surface, points, hooking.yaw).clearance_m
+    margin = scenario.mission.hooking_clearance
+    return hooking_clearance(scenario, geometry.surface, points, hooking.yaw, margin).clearance_m

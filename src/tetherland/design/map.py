@@ -30,7 +30,7 @@ from tetherland.planning import Planner
 
 MAP_SLOPES_DEG: tuple[float, ...] = tuple(float(b) for b in range(0, 181, 5))
 """Default slopes of the map [deg]."""
-MAP_LENGTHS: tuple[float, ...] = (0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.8, 1.0)
+MAP_LENGTHS: tuple[float, ...] = (0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.8, 1.0)
 """Default cable lengths of the map [m]."""
 CELL_SHORTLIST = 3
 """Candidates planned at most per map cell, best landed-hover margin first, until one is

@@ -6,8 +6,8 @@ Three stages, cheapest first:
    :func:`tetherland.analysis.landed_hover` (rotor floor and ceiling with the control
    margin, the cable-offset torque, the rest with the motors off).
 2. **Hooking clearance** for the feasible ones, best landed-hover rotor margin first:
-   every approach direction and hook drop of the space; the pass must keep
-   ``min_clearance``, and the approach with the most clearance (counted up to
+   every approach direction and hook drop of the space; the pass must keep the
+   mission's ``hooking_clearance``, and the approach with the most clearance (counted up to
    ``target_clearance``, then the shorter hook drop) is kept.
 3. **Planning** for the first ``shortlist`` of them (stopping once ``max_designs`` are
    verified): the landing and takeoff OCPs (6.21)
@@ -37,10 +37,10 @@ from tetherland.analysis import (
     landed_hover,
     tethered_slope_limit,
 )
-from tetherland.config import Scenario
+from tetherland.config import Scenario, with_overrides
 from tetherland.design.hooking import hooking_pass_for, pass_clearance
 from tetherland.design.margins import plan_rotor_margin, rotor_margin
-from tetherland.design.space import DesignPoint, DesignSpace, with_overrides
+from tetherland.design.space import DesignPoint, DesignSpace
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry, Surface, effective_h_R, landing_geometry
 from tetherland.planning import Maneuver, Planner, PlanResult
@@ -54,7 +54,8 @@ class DesignLimit(enum.Enum):
     LANDED_HOVER = "landed_hover"
     """The analysis: no candidate holds the landed hover (see ``analysis_binding``)."""
     HOOKING_CLEARANCE = "hooking_clearance"
-    """Every hooking pass of the feasible candidates comes closer than ``min_clearance``."""
+    """Every hooking pass of the feasible candidates comes closer to the surface than
+    ``mission.hooking_clearance``."""
     PLAN = "plan"
     """The planner found no verified landing and takeoff for the shortlisted candidates."""
     PLAN_ROTOR_MARGIN = "plan_rotor_margin"
@@ -281,7 +282,7 @@ def search_designs(
         best = _best_hooking(base, surface, space, cand)
         if best is None:
             continue
-        if best.clearance >= space.min_clearance - _TOL:
+        if best.clearance >= base.mission.hooking_clearance - _TOL:
             hooked.append((cand, best))
             if len(hooked) >= space.shortlist:
                 break
@@ -294,7 +295,8 @@ def search_designs(
             reason += (
                 f" for every candidate whose landed hover is feasible; the best ({cand.describe()},"
                 f" approach {list(hook.approach_A)}, hook_drop {hook.hook_drop:g} m) passes "
-                f"{100 * hook.clearance:.1f} cm from it (needs {100 * space.min_clearance:.0f} cm)"
+                f"{100 * hook.clearance:.1f} cm from it (needs mission.hooking_clearance = "
+                f"{100 * base.mission.hooking_clearance:g} cm)"
             )
         return result((), DesignLimit.HOOKING_CLEARANCE, None, reason, len(candidates), 0)
 

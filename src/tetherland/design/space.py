@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tetherland.config import Scenario, apply_overrides, scenario_from_dict
+from tetherland.config import Scenario, with_overrides
 from tetherland.errors import ConfigError
 
 
@@ -35,7 +35,8 @@ class DesignSpace:
     Attributes
     ----------
     lengths : tuple of float
-        Cable lengths l to try, each in (0, 100] [m].
+        Cable lengths l to try, each in (0, 100] [m] (default every 2 cm from 0.2 to 0.6 m,
+        where walls and overhangs are decided, then 0.7 to 1 m).
     attachment_z : tuple of float
         Attachment offsets along z_B from the centre of mass, each in [-0.5, 0.5] [m]
         (the default spans 3 cm below the CoM to the top of the hub).
@@ -50,12 +51,10 @@ class DesignSpace:
     hook_drops : tuple of float
         Hook drops to try, ascending, each in [0, 100] [m]; only those with hook_drop +
         capture_radius < l are valid (default every 2 cm up to 1 m).
-    min_clearance : float
-        Clearance the hooking pass must keep from the surface, in [0, 1] [m] (the mission
-        asks for 2 cm).
     target_clearance : float
-        Clearance beyond which more does not count when ranking, in [min_clearance, 10]
-        [m]: among hooking approaches that reach it the shorter hook drop is preferred.
+        Clearance beyond which more does not count when ranking, in [0, 10] [m]: among
+        hooking approaches that reach it the shorter hook drop is preferred. (The least
+        clearance a design must keep is the scenario's ``mission.hooking_clearance``.)
     shortlist : int
         At most how many (length, attachment, anchor height) candidates, best landed-hover
         rotor margin first, get their landing and takeoff planned, in [1, 1000].
@@ -64,13 +63,18 @@ class DesignSpace:
         this many are verified.
     """
 
-    lengths: tuple[float, ...] = (0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.7, 0.8, 1.0)
+    lengths: tuple[float, ...] = (
+        *(round(0.2 + 0.02 * i, 2) for i in range(21)),
+        0.7,
+        0.8,
+        0.9,
+        1.0,
+    )
     attachment_z: tuple[float, ...] = (-0.03, 0.0, 0.025)
     anchor_heights: tuple[float, ...] = (0.0, 0.05, 0.1)
     approach_elevations_deg: tuple[float, ...] = (90.0, 45.0, 0.0)
     include_normal_approach: bool = True
     hook_drops: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(51))
-    min_clearance: float = 0.02
     target_clearance: float = 0.10
     shortlist: int = 12
     max_designs: int = 10
@@ -83,8 +87,7 @@ class DesignSpace:
         _check("hook_drops", self.hook_drops, 0.0, 100.0, "m")
         if list(self.hook_drops) != sorted(self.hook_drops):
             raise ConfigError("design space hook_drops: give them in ascending order")
-        _check("min_clearance", (self.min_clearance,), 0.0, 1.0, "m")
-        _check("target_clearance", (self.target_clearance,), self.min_clearance, 10.0, "m")
+        _check("target_clearance", (self.target_clearance,), 0.0, 10.0, "m")
         for name in ("shortlist", "max_designs"):
             value = getattr(self, name)
             if not 1 <= value <= 1000:
@@ -158,13 +161,3 @@ class DesignPoint:
     def apply(self, scenario: Scenario) -> Scenario:
         """``scenario`` with this design's overrides (validated; ConfigError if invalid)."""
         return with_overrides(scenario, self.overrides())
-
-
-def with_overrides(scenario: Scenario, overrides: Sequence[str]) -> Scenario:
-    """A validated copy of ``scenario`` with ``section.key=value`` overrides applied.
-
-    Starts from the values the scenario set explicitly, so an override of the slope on a
-    scenario given by its normal is reported as a conflict, exactly as on the command line.
-    """
-    data = scenario.model_dump(mode="python", exclude_unset=True)
-    return scenario_from_dict(apply_overrides(data, overrides), default_name=scenario.name)
