@@ -14,7 +14,6 @@ from tetherland.runs.closed_loop import (
 from tetherland.runs.directory import (
     jsonable_summary,
     load_run,
-    prepare_output_dir,
     rejudge,
     save_run,
 )
@@ -24,7 +23,6 @@ __all__ = [
     "RunResult",
     "jsonable_summary",
     "load_run",
-    "prepare_output_dir",
     "rejudge",
     "run_mission",
     "save_run",

@@ -24,7 +24,6 @@ from tetherland.sim import Plant, Runner, SimLog
 from tetherland.state import RigidBodyState
 from tetherland.verdict import RunRecord, Verdict, judge, not_flown
 
-
 EstimatorFactory = Callable[[Scenario, RigidBodyState, float, FloatArray | None], Estimator | None]
 """``factory(belief, initial_state, t0, rotor_speeds0) -> Estimator`` (None: the truth)."""
 
@@ -164,8 +163,9 @@ def run_mission(
         on_flight(flight)
     runner = Runner(
         scenario, flight.controller,
-        estimator=estimator(belief, flight.initial_state, 0.0, flight.rotor_speeds), reference=flight.reference, seed=seed,
-        plant=plant, diagnostic_keys=flight.diagnostic_keys, observers=observers,
+        estimator=estimator(belief, flight.initial_state, 0.0, flight.rotor_speeds),
+        reference=flight.reference, seed=seed, plant=plant,
+        diagnostic_keys=flight.diagnostic_keys, observers=observers,
     )  # fmt: skip
     wall0 = time.perf_counter()
     log = runner.run(flight.duration, initial_state=flight.initial_state,

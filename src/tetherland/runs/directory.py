@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tetherland.io import atomic_write_json, prepare_output_dir, to_jsonable
+from tetherland.io import atomic_write_json, to_jsonable
 from tetherland.methods import get_method
 from tetherland.runs.closed_loop import RunResult
 from tetherland.sim import SimLog
