@@ -7,7 +7,6 @@ rotor margin over the planned maneuvers and the hooking clearance;
 lives in :mod:`tetherland.design.plot` (matplotlib).
 """
 
-from tetherland.design.hooking import HookingPass, hooking_pass, hooking_pass_for, pass_clearance
 from tetherland.design.map import (
     FeasibilityMap,
     MapCell,
@@ -25,6 +24,7 @@ from tetherland.design.search import (
     search_designs,
 )
 from tetherland.design.space import DesignPoint, DesignSpace
+from tetherland.mission.hooking import HookingPass, hooking_pass, hooking_pass_for, pass_clearance
 
 __all__ = [
     "Design",

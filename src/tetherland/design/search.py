@@ -38,11 +38,11 @@ from tetherland.analysis import (
     tethered_slope_limit,
 )
 from tetherland.config import Scenario, with_overrides
-from tetherland.design.hooking import hooking_pass_for, pass_clearance
 from tetherland.design.margins import plan_rotor_margin, rotor_margin
 from tetherland.design.space import DesignPoint, DesignSpace
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry, Surface, effective_h_R, landing_geometry
+from tetherland.mission.hooking import hooking_pass_for, pass_clearance
 from tetherland.planning import Maneuver, Planner, PlanResult
 
 _TOL = 1e-9

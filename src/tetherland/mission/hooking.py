@@ -1,15 +1,17 @@
 """The hooking pass of a design and its clearance from the surface.
 
-The pass is the one the mission supervisor flies: the vehicle level with heading x_A,
+The pass is the one the mission supervisor flies (:func:`tetherland.mission.plan_mission`
+puts its ends into the waypoints): the vehicle level with heading x_A,
 the hook point moving straight along the approach direction n from ``approach_distance``
 before the anchor to ``hook_overshoot`` beyond it (``mission`` section).
 
 Hook model assumed here: the hook point is the cable attachment point moved by
 ``hook_drop`` along n, leading the vehicle in the direction it moves. For the default
-approach n = -z_W this is the hook hanging under the vehicle, the model the simulation
-and :func:`tetherland.mission.plan.plan_mission` use today; for other directions it is the
-hook following the approach direction (issue 11, item 3). :func:`hook_offset` is the one
-place that states it.
+approach n = -z_W this is the hook hanging under the vehicle; for other directions the
+hook is held out along the approach direction (a hook on a short stiff arm), which lets
+the vehicle hook an anchor on a wall or an overhang from the side or from below.
+:func:`hook_offset` is the one place that states it; the plant's hook model
+(:mod:`tetherland.sim.hook`) uses the same offset.
 
 The clearance is that of the plant's collision shape, computed by
 :func:`tetherland.analysis.clearance.hooking_clearance`.
@@ -23,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tetherland.analysis.clearance import hooking_clearance
+from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.rotations import rotation_from_z_and_yaw
@@ -113,10 +115,18 @@ def hooking_pass_for(
     )
 
 
-def pass_clearance(scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass) -> float:
-    """Smallest distance of the level vehicle (``scenario``'s collision shape) from the
-    surface of ``geometry`` along the hooking pass [m]."""
+def check_pass(
+    scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass
+) -> HookingClearance:
+    """Clearance of the level vehicle (``scenario``'s collision shape) from the surface of
+    ``geometry`` along the hooking pass, against ``mission.hooking_clearance``, with the
+    hook drop that would restore it."""
     count = PIPE_SAMPLES if geometry.surface.kind == "pipe" else 2
     points = hooking.points(count)
     margin = scenario.mission.hooking_clearance
-    return hooking_clearance(scenario, geometry.surface, points, hooking.yaw, margin).clearance_m
+    return hooking_clearance(scenario, geometry.surface, points, hooking.yaw, margin, hooking.n_W)
+
+
+def pass_clearance(scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass) -> float:
+    """Smallest distance of the level vehicle from the surface along the hooking pass [m]."""
+    return check_pass(scenario, geometry, hooking).clearance_m
