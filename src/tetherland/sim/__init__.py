@@ -16,13 +16,15 @@ from tetherland.sim.hook import Hook, HookEvent, HookEventKind, HookState
 from tetherland.sim.log import Column, RunStatus, SimLog
 from tetherland.sim.mjcf import SceneLayout, build_mjcf
 from tetherland.sim.plant import Plant, link_state_of
-from tetherland.sim.runner import Runner, Schedule
+from tetherland.sim.runner import BoundObserver, ControlTick, Runner, Schedule
 from tetherland.sim.sensors import Imu, Mocap
 
 __all__ = [
+    "BoundObserver",
     "Column",
     "ConstantReference",
     "ConstantSpeedController",
+    "ControlTick",
     "Hook",
     "HookEvent",
     "HookEventKind",
