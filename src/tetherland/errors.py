@@ -21,3 +21,7 @@ class SingularityError(TetherlandError, ArithmeticError):
 
 class SimulationError(TetherlandError, RuntimeError):
     """The physics simulation diverged or was driven with an invalid input."""
+
+
+class MissingDependencyError(TetherlandError, ImportError):
+    """An optional dependency (an extra such as ``tetherland[viz]``) is not installed."""
