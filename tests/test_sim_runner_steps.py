@@ -82,14 +82,14 @@ def test_steps_driven_by_the_same_controller_reproduce_run(setup):
 
 def test_steps_hold_the_command_sent(setup):
     """The command sent at tick k is what the plant holds from t_k + dt (motor lag aside)."""
-    sc, x0, w0, make = setup
+    _, x0, w0, make = setup
     runner = make()
     loop = runner.steps(0.1, initial_state=x0, rotor_speeds=w0)
-    tick = next(loop)
+    next(loop)
     w = np.array([500.0, 550.0, 600.0, 650.0])  # below w_max = 775 rad/s
     from tetherland.interfaces import Command
 
     for _ in range(3):
-        tick = loop.send(Command(rotor_speeds=w))
+        loop.send(Command(rotor_speeds=w))
     np.testing.assert_array_equal(runner.plant.commanded_speeds, w)
     loop.close()

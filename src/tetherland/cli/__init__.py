@@ -20,6 +20,7 @@ from typer.exceptions import TyperException
 from tetherland import __version__
 from tetherland.cli.analyze import analyze
 from tetherland.cli.campaign import campaign
+from tetherland.cli.export import export
 from tetherland.cli.mission import mission
 from tetherland.cli.plan import plan
 from tetherland.cli.scenarios import scenarios, show
@@ -55,6 +56,7 @@ app.command()(show)
 app.command()(analyze)
 app.command()(campaign)
 app.command()(mission)
+app.command()(export)
 app.command()(plan)
 
 

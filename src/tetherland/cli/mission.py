@@ -32,7 +32,25 @@ class _ProgressObserver:
             self.progress.update(self.task, description=f"t = {t:6.2f} s  {phase}")
 
 
-def _write_tethered(result: Any, out: Path, video: bool) -> dict[str, Path]:
+def _write_mcap(run: Any, out: Path) -> Path:
+    from tetherland.viz.mcap import write_mcap
+
+    return write_mcap(run, out / "run.mcap").path
+
+
+def _start_live(sc: Any, speed: float, port: int, quiet: bool) -> Any:
+    from tetherland.cli.common import err_console
+    from tetherland.viz.live import LiveView
+
+    view = LiveView(sc, port=port, speed=speed)
+    pace = f"{speed:g}x real time" if speed > 0 else "unpaced"
+    (err_console if quiet else console).print(
+        f"live view on {view.url} ({pace}): in Foxglove, Open connection > Foxglove WebSocket"
+    )
+    return view
+
+
+def _write_tethered(result: Any, out: Path, video: bool, mcap: bool = False) -> dict[str, Path]:
     from tetherland.report import save_figures
 
     files = {"log": out / "log.npz", "summary": out / "summary.json"}
@@ -48,6 +66,10 @@ def _write_tethered(result: Any, out: Path, video: bool) -> dict[str, Path]:
         files["video"] = render_log(
             result.log, out / "mission.mp4", scenario=result.plant_scenario
         ).path
+    if mcap:
+        from tetherland.viz import run_data_from_mission
+
+        files["mcap"] = _write_mcap(run_data_from_mission(result), out)
     atomic_write_json(
         files["summary"], {**result.summary, "files": {k: str(v) for k, v in files.items()}}
     )
@@ -55,7 +77,7 @@ def _write_tethered(result: Any, out: Path, video: bool) -> dict[str, Path]:
 
 
 def _run_free_flight(
-    sc: Any, seed: int, out: Path, video: bool, observers: list
+    sc: Any, seed: int, out: Path, video: bool, observers: list, mcap: bool = False
 ) -> tuple[dict, dict]:
     from tetherland.estimation import UkfEstimator
     from tetherland.perching import run_perching
@@ -88,6 +110,10 @@ def _run_free_flight(
             from tetherland.sim.render import render_log
 
             files["video"] = render_log(log, out / "mission.mp4", scenario=sc).path
+        if mcap:
+            from tetherland.viz import RunData
+
+            files["mcap"] = _write_mcap(RunData(log=log, scenario=sc, summary=summary), out)
     atomic_write_json(files["summary"], {**summary, "files": {k: str(p) for k, p in files.items()}})
     return summary, files
 
@@ -107,6 +133,19 @@ def mission(
     video: Annotated[
         bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
     ] = False,
+    mcap: Annotated[
+        bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")
+    ] = False,
+    live: Annotated[
+        bool, typer.Option("--live", help="Stream the mission to Foxglove while it runs.")
+    ] = False,
+    live_speed: Annotated[
+        float,
+        typer.Option("--live-speed", help="With --live: sim seconds per second (0: unpaced)."),
+    ] = 1.0,
+    live_port: Annotated[
+        int, typer.Option("--live-port", help="With --live: WebSocket port (0: any free one).")
+    ] = 8765,
 ) -> None:
     """Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, controllers, supervisor).
 
@@ -123,6 +162,11 @@ def mission(
     if seed < 0:
         raise ConfigError(f"--seed must be >= 0 (got {seed})")
     directory = out or Path("out") / sc.name / ("mission" if method == "tethered" else "perching")
+    if mcap:
+        from tetherland.optional import require
+
+        require("foxglove", package="foxglove-sdk", extra="viz", feature="--mcap")
+    view = _start_live(sc, live_speed, live_port, json) if live else None
     directory.mkdir(parents=True, exist_ok=True)
     with Progress(
         SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
@@ -140,17 +184,22 @@ def mission(
 
             obs = _ProgressObserver(progress, task, phase_of)
             result = run_mission(
-                sc, controller=controller, seed=seed, observers=[obs],
+                sc, controller=controller, seed=seed, observers=[obs, *([view] if view else [])],
                 plant_setup=lambda p: None,
             )  # fmt: skip
             holder["sup"] = result.supervisor
+            if view is not None:
+                view.finish(result.summary)
             progress.update(task, description="writing results")
-            files = _write_tethered(result, directory, video)
+            files = _write_tethered(result, directory, video, mcap)
             summary = result.summary
         else:
-            summary, files = _run_free_flight(
-                sc, seed, directory, video, [_ProgressObserver(progress, task)]
-            )
+            observers = [_ProgressObserver(progress, task), *([view] if view else [])]
+            summary, files = _run_free_flight(sc, seed, directory, video, observers, mcap)
+            if view is not None:
+                view.finish(summary)
+    if view is not None:
+        view.close()
     if json:
         typer.echo(
             dumps_json({**summary, "files": {k: str(v) for k, v in files.items()}}), nl=False

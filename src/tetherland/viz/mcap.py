@@ -7,17 +7,20 @@ The file opens in Foxglove (and in Rerun, which reads MCAP); the shipped layout
 from __future__ import annotations
 
 import json
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import foxglove
 import mujoco
 import numpy as np
+from foxglove.messages import SceneUpdate
 
 from tetherland import __version__
 from tetherland.config import Scenario
 from tetherland.geometry import LandingGeometry
 from tetherland.io import atomic_path
+from tetherland.planning.trajectory import Trajectory
 from tetherland.sim.mjcf import SceneLayout, build_mjcf
 from tetherland.viz.channels import Publisher
 from tetherland.viz.run import RunData
@@ -49,16 +52,30 @@ def scene_model(scenario: Scenario) -> mujoco.MjModel:
 
 
 def make_publisher(
-    context: foxglove.Context, run: RunData, model: mujoco.MjModel | None = None
+    context: foxglove.Context,
+    scenario: Scenario,
+    plans: Callable[[], Sequence[Trajectory]],
+    model: mujoco.MjModel | None = None,
 ) -> Publisher:
-    """The :class:`Publisher` of a run: its channels in ``context`` and its static scene."""
-    sc = run.scenario
-    model = model if model is not None else scene_model(sc)
-    geo = LandingGeometry.from_scenario(sc)
-    r_att = np.asarray(sc.vehicle.cable_attachment, dtype=float)
-    plans = [(p.meta.maneuver, p) for p in run.plans]
-    scale = tension_scale(run.plans, sc.planner.start_tension)
-    return Publisher(context, sc, lambda t: static_scene(model, geo, plans, r_att, t), scale)
+    """The :class:`Publisher` of a run: its channels in ``context`` and its static scene.
+
+    Parameters
+    ----------
+    plans : callable
+        Returns the planned trajectories to draw (asked each time the scene is published:
+        a live mission knows them only once it has planned).
+    model : mujoco.MjModel, optional
+        The plant's model (default: built from ``scenario``).
+    """
+    model = model if model is not None else scene_model(scenario)
+    geo = LandingGeometry.from_scenario(scenario)
+    r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+
+    def scene(t: float) -> SceneUpdate:
+        named = [(p.meta.maneuver, p) for p in plans()]
+        return static_scene(model, geo, named, r_att, t)
+
+    return Publisher(context, scenario, scene, tension_scale(scenario.vehicle.mass))
 
 
 def _metadata(run: RunData) -> dict[str, str]:
@@ -93,7 +110,7 @@ def write_mcap(run: RunData, path: str | Path) -> McapResult:
         writer = foxglove.open_mcap(tmp, allow_overwrite=True, context=context)
         try:
             writer.write_metadata("tetherland", _metadata(run))
-            publisher = make_publisher(context, run)
+            publisher = make_publisher(context, run.scenario, lambda: run.plans)
             k = 0
             for i in range(len(series)):
                 t = float(series.t[i])

@@ -30,8 +30,8 @@ from foxglove.messages import (
     Vector3,
 )
 
+from tetherland import GRAVITY
 from tetherland.geometry import FloatArray, LandingGeometry
-from tetherland.models.flatness import FlatnessMap
 from tetherland.planning.trajectory import Trajectory
 
 WORLD, BODY, BODY_ESTIMATED, ANCHOR = "world", "body", "body_estimated", "anchor"
@@ -76,7 +76,9 @@ def tension_rgba(tension: float, scale: float) -> tuple[float, float, float, flo
 
 def _geom_primitives(model: mujoco.MjModel, geom: int, rgba: Sequence[float]) -> dict:
     """One MuJoCo geom as Foxglove primitives, in its body's frame."""
-    pose = Pose(position=vector(model.geom_pos[geom]), orientation=quaternion(model.geom_quat[geom]))
+    pose = Pose(
+        position=vector(model.geom_pos[geom]), orientation=quaternion(model.geom_quat[geom])
+    )
     size = model.geom_size[geom]
     c = color(rgba)
     kind = int(model.geom_type[geom])
@@ -157,14 +159,15 @@ def static_scene(
         _body_entity(model, vehicle, "vehicle", BODY, t, None),
         _body_entity(model, vehicle, "vehicle_estimated", BODY_ESTIMATED, t, 0.25),
     ]
+    level = quaternion([1.0, 0.0, 0.0, 0.0])
     marks = [
-        SpherePrimitive(pose=Pose(position=vector(geometry.p_A), orientation=quaternion([1, 0, 0, 0])),
+        SpherePrimitive(pose=Pose(position=vector(geometry.p_A), orientation=level),
                         size=vector([0.04] * 3), color=Color(r=0.9, g=0.2, b=0.1, a=1.0)),
-        SpherePrimitive(pose=Pose(position=vector(geometry.p_L), orientation=quaternion([1, 0, 0, 0])),
+        SpherePrimitive(pose=Pose(position=vector(geometry.p_L), orientation=level),
                         size=vector([0.03] * 3), color=Color(r=0.1, g=0.8, b=0.2, a=1.0)),
     ]  # fmt: skip
-    entities.append(SceneEntity(timestamp=timestamp(t), frame_id=WORLD, id="anchor_and_landing_point",
-                                spheres=marks))  # fmt: skip
+    entities.append(SceneEntity(timestamp=timestamp(t), frame_id=WORLD,
+                                id="anchor_and_landing_point", spheres=marks))  # fmt: skip
     for name, trajectory in plans:
         path = planned_path_W(trajectory, r_att_B)
         line = LinePrimitive(
@@ -195,11 +198,9 @@ def cable_update(
                                              lines=lines)])  # fmt: skip
 
 
-def tension_scale(plans: Sequence[Trajectory], start_tension: float) -> float:
-    """Tension at the top of the colour map: 1.5 x the largest planned tension [N]."""
-    peak = max((float(np.max(p.sample(np.linspace(0, p.duration, 50)).tension)) for p in plans),
-               default=0.0)  # fmt: skip
-    return max(1.5 * peak, 2.0 * start_tension, 1.0)
+def tension_scale(mass: float) -> float:
+    """Tension at the top of the cable's colour map: the vehicle's weight m g [N]."""
+    return mass * GRAVITY
 
 
 __all__ = [

@@ -126,7 +126,10 @@ SERIES_KINDS = ("desired", "nominal", "actual", "estimated")
 
 
 def tick_series(
-    log: SimLog, scenario: Scenario, nominal: NominalValues | None = None
+    log: SimLog,
+    scenario: Scenario,
+    nominal: NominalValues | None = None,
+    geometry: LandingGeometry | None = None,
 ) -> TickSeries:
     """The published values of every row of ``log`` (a finished log or one live row).
 
@@ -139,9 +142,11 @@ def tick_series(
         Geometry (anchor, cable attachment) and the rotor thrust coefficient.
     nominal : NominalValues, optional
         The nominal values at ``log["t"]`` (default: none, NaN).
+    geometry : LandingGeometry, optional
+        ``LandingGeometry.from_scenario(scenario)``, when the caller has it already.
     """
     n = len(log)
-    geo = LandingGeometry.from_scenario(scenario)
+    geo = geometry if geometry is not None else LandingGeometry.from_scenario(scenario)
     v = scenario.vehicle
     r_att = np.asarray(v.cable_attachment, dtype=float)
     nominal = nominal or NominalValues.empty(n)
