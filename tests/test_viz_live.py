@@ -11,17 +11,16 @@ import pytest
 pytest.importorskip("foxglove", reason="the viz extra is part of .[dev]")
 pytest.importorskip("websockets", reason="the test client is part of .[dev]")
 
-from foxglove_client import Client  # noqa: E402
-
-from tetherland.config import load_scenario  # noqa: E402
-from tetherland.control import FreeFlightController  # noqa: E402
-from tetherland.errors import ConfigError  # noqa: E402
-from tetherland.interfaces import Reference  # noqa: E402
-from tetherland.models.quadrotor import RotorModel  # noqa: E402
-from tetherland.sim import Plant, Runner  # noqa: E402
-from tetherland.state import RigidBodyState  # noqa: E402
-from tetherland.viz.channels import PER_TICK, TOPICS  # noqa: E402
-from tetherland.viz.live import LiveView  # noqa: E402
+from foxglove_client import Client
+from tetherland.config import load_scenario
+from tetherland.control import FreeFlightController
+from tetherland.errors import ConfigError
+from tetherland.interfaces import Reference
+from tetherland.models.quadrotor import RotorModel
+from tetherland.sim import Plant, Runner
+from tetherland.state import RigidBodyState
+from tetherland.viz.channels import PER_TICK, TOPICS
+from tetherland.viz.live import LiveView
 
 
 class Hold:

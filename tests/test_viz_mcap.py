@@ -11,15 +11,15 @@ import numpy as np
 import pytest
 
 pytest.importorskip("foxglove", reason="the viz extra is part of .[dev]")
-from mcap.reader import make_reader  # noqa: E402
-from mcap_protobuf.decoder import DecoderFactory  # noqa: E402
+from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
 
-from tetherland.cli import main  # noqa: E402
-from tetherland.geometry import LandingGeometry  # noqa: E402
-from tetherland.sim.log import SimLog  # noqa: E402
-from tetherland.viz.channels import PER_TICK, TOPICS  # noqa: E402
-from tetherland.viz.layout import build_layout, layout_path, layout_topics  # noqa: E402
-from tetherland.viz.scene import SLACK_TENSION, static_scene, tension_rgba  # noqa: E402
+from tetherland.cli import main
+from tetherland.geometry import LandingGeometry
+from tetherland.sim.log import SimLog
+from tetherland.viz.channels import PER_TICK, TOPICS
+from tetherland.viz.layout import build_layout, layout_path, layout_topics
+from tetherland.viz.scene import SLACK_TENSION, static_scene, tension_rgba
 
 
 def read(path: Path, topics=None):
