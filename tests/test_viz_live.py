@@ -8,8 +8,6 @@ import time
 import numpy as np
 import pytest
 
-pytest.importorskip("foxglove", reason="the viz extra is part of .[dev]")
-pytest.importorskip("websockets", reason="the test client is part of .[dev]")
 
 from foxglove_client import Client
 from tetherland.config import load_scenario

@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("foxglove", reason="the viz extra is part of .[dev]")
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 
