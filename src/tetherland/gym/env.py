@@ -64,6 +64,10 @@ OBSERVATION = (
 )  # fmt: skip
 """Observation entries: time [s], estimated p_W [m], v_W [m/s], q_WB (w, x, y, z),
 omega_B [rad/s], link phi, delta [rad] and rates [rad/s], cable tension [N]."""
+OBSERVATION_BOUND = np.array(
+    [1e3] + [1e2] * 3 + [1e2] * 3 + [1.0] * 4 + [1e2] * 3 + [np.pi] * 2 + [1e2] * 2 + [1e3]
+)
+"""Bounds of the observation space (far beyond any flight; |q| = 1; angles wrap at pi)."""
 SLACK_TENSION = 0.05
 """True tension below which the cable counts as slack [N]."""
 
@@ -198,7 +202,7 @@ class TetheredEnv(gymnasium.Env):
         self._plant = Plant(sc)
         v = sc.vehicle
         self._f_min, self._f_max = v.f_min, v.f_max
-        self.observation_space = spaces.Box(-np.inf, np.inf, (len(OBSERVATION),), np.float64)
+        self.observation_space = spaces.Box(-OBSERVATION_BOUND, OBSERVATION_BOUND, dtype=np.float64)
         self.action_space = spaces.Box(0.0, 1.0, (4,), np.float32)
         self._loop: Any = None
         self._rotors = RotorModel.from_config(v)
