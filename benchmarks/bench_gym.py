@@ -42,10 +42,13 @@ def single(steps: int) -> None:
 
 
 def vectorised(steps: int) -> None:
+    e = gym.make(tg.LANDING_ID).unwrapped
+    v = e.scenario.vehicle
+    hover = ((e._rotors.thrust(e._w0) - v.f_min) / (v.f_max - v.f_min)).astype(np.float32)
     for vector in (gym.vector.SyncVectorEnv, gym.vector.AsyncVectorEnv):
         venv = vector([lambda: gym.make(tg.LANDING_ID)] * 2)
         venv.reset(seed=[0, 1])
-        action = np.full((2, 4), 0.4, dtype=np.float32)
+        action = np.stack([hover, hover])
         t0 = time.perf_counter()
         for _ in range(steps // 2):
             venv.step(action)  # sub-envs that end are reset automatically

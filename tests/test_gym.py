@@ -112,7 +112,7 @@ def test_the_expert_takes_off_to_the_end_hover():
     obs, _ = env.reset(seed=0)
     expert.reset()
     while True:
-        obs, reward, terminated, truncated, info = env.step(expert(obs))
+        obs, _, terminated, truncated, info = env.step(expert(obs))
         if terminated or truncated:
             break
     assert info["outcome"] == Outcome.REACHED

@@ -8,7 +8,6 @@ import time
 import numpy as np
 import pytest
 
-
 from foxglove_client import Client
 from tetherland.config import load_scenario
 from tetherland.control import FreeFlightController

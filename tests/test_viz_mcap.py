@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 

@@ -103,8 +103,10 @@ class ExpertPolicy:
             hold = np.zeros((5, 4))
             hold[0] = out[0]
             hold[0, 0] = est.link.phi
-            self._hold = Reference(t=t, mode=ControlMode.TETHERED, output=hold,
-                                   thrust_ff=ref.thrust_ff, feedforward=ref.feedforward)  # fmt: skip
+            self._hold = Reference(
+                t=t, mode=ControlMode.TETHERED, output=hold, thrust_ff=ref.thrust_ff,
+                feedforward=ref.feedforward,
+            )  # fmt: skip
             return self._hold
         return Reference(t=t, mode=ControlMode.TETHERED, output=out, thrust_ff=ref.thrust_ff,
                          feedforward=ref.feedforward)  # fmt: skip
