@@ -156,7 +156,7 @@ def test_export_rejects_bad_input(tmp_path, capsys):
     assert main(["export", str(tmp_path / "missing"), "--mcap"]) == 2
     assert main(["export", str(tmp_path)]) == 2
     err = capsys.readouterr().err
-    assert "is not a directory" in err and "--mcap" in err
+    assert "not a run directory" in err and "--mcap" in err
     assert not list(tmp_path.iterdir())  # nothing half-written
 
 

@@ -11,14 +11,15 @@ link state and the estimated tension. Action (float32, 4): normalised rotor thru
 a_i in [0, 1], f_i = f_min + a_i (f_max - f_min) [N], sent as speed commands through the
 believed rotor model.
 
-Landing: the episode runs to touchdown (a lander carries load or the landers plane is
-within 2 mm of the surface, as the mission verdict) and ``rest_time`` beyond; conditions
-(1)-(4) are judged at touchdown and (5) over the rest, from ``mission.settle_time`` (the
-mission holds the link that long before the motors go off) + ``REST_SETTLE`` on. The final
+Landing: the episode runs to touchdown (a contact force above ``verdict.contact_force``,
+as the judge of a mission) and ``rest_time`` beyond; conditions (1)-(4) are judged at
+touchdown with the scenario's ``[verdict]`` tolerances and (5) over the rest, from
+``mission.settle_time`` (the mission holds the link that long before the motors go off) +
+``verdict.rest_settle`` on. The final
 reward is the number of conditions held plus ``success_bonus`` when all five hold.
 Takeoff: the episode ends ``rest_time`` after the planned end; success when the link
 elevation and the tilt are within ``takeoff_tolerance`` of the planned taut end hover.
-A frame contact (crash) or a slack cable (true tension below ``SLACK_TENSION`` for
+A frame contact above ``verdict.crash_force`` (crash) or a slack cable (true tension below ``SLACK_TENSION`` for
 ``mission.fault_slack_time`` while airborne) ends the episode with ``-failure_penalty``;
 each step costs ``dt`` x the distance to the goal [m s]. Episodes are truncated at
 ``time_limit`` (default: the plan's duration + ``rest_time`` + 3 s).
@@ -40,15 +41,13 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from tetherland.analysis.conditions import LandingTolerances, evaluate_landing
+from tetherland.analysis.conditions import evaluate_landing
 from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
-from tetherland.config import Scenario, load_scenario
+from tetherland.config import Scenario, load_scenario, with_overrides
 from tetherland.errors import ConfigError
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import FloatArray, LandingGeometry, link_angles, theta_A_from_z_B
 from tetherland.interfaces import Command, StateEstimate
-from tetherland.mission.run import with_overrides
-from tetherland.mission.verdict import CONTACT_CLEARANCE, CONTACT_FORCE, REST_SETTLE
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.maneuver import Maneuver
@@ -57,6 +56,7 @@ from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim import Plant, Runner
 from tetherland.sim.baselines import ConstantSpeedController
 from tetherland.state import LinkState, RigidBodyState
+from tetherland.verdict import tolerances_of
 
 OBSERVATION = (
     "t", "p_x", "p_y", "p_z", "v_x", "v_y", "v_z", "q_w", "q_x", "q_y", "q_z",
@@ -170,10 +170,10 @@ class TetheredEnv(gymnasium.Env):
             raise ConfigError(f"maneuver must be landing or takeoff (got {maneuver!r})") from None
         if not 0 < rest_time <= 10:
             raise ConfigError(f"rest_time must be in (0, 10] s (got {rest_time})")
-        self._rest_start = sc.mission.settle_time + REST_SETTLE
+        self._rest_start = sc.mission.settle_time + sc.verdict.rest_settle
         if self.maneuver is Maneuver.LANDING and rest_time <= self._rest_start:
             raise ConfigError(
-                f"rest_time must exceed mission.settle_time + {REST_SETTLE:g} s = "
+                f"rest_time must exceed mission.settle_time + verdict.rest_settle = "
                 f"{self._rest_start:g} s for a landing (got {rest_time})"
             )
         if time_limit is not None and not 0 < time_limit <= 600:
@@ -185,7 +185,7 @@ class TetheredEnv(gymnasium.Env):
         self.scenario = sc
         self.randomize = bool(randomize)
         self.rest_time = float(rest_time)
-        self.tolerance = LandingTolerances()
+        self.tolerance = tolerances_of(sc)
         self.takeoff_tolerance = math.radians(takeoff_tolerance_deg)
         self.success_bonus, self.failure_penalty = float(success_bonus), float(failure_penalty)
         result = (planner or Planner()).plan(sc, self.maneuver)
@@ -288,15 +288,17 @@ class TetheredEnv(gymnasium.Env):
         z_B = R_WB[:, 2]
         p_RL = p_W - geo.h_R * z_B
         info: dict[str, Any] = {"tension": plant.tension}
-        if plant.frame_contact_force > 1e-6:
+        cfg = self.scenario.verdict
+        frame = plant.frame_contact_force
+        if frame > cfg.crash_force:
             return -self.failure_penalty, Outcome.CRASHED, info
-        forces = plant.lander_forces
-        airborne = float(forces.max()) <= CONTACT_FORCE
+        force = max(float(plant.lander_forces.max()), frame)
+        airborne = force <= cfg.contact_force
         if self._slack(t, plant.tension, airborne):
             return -self.failure_penalty, Outcome.SLACK, info
         if self.maneuver is Maneuver.LANDING:
             cost = self.dt * float(np.linalg.norm(p_RL - geo.p_L))
-            reward, outcome = self._landing(t, p_RL, z_B, v_W, forces, info)
+            reward, outcome = self._landing(t, p_RL, z_B, v_W, airborne, info)
             return reward - cost, outcome, info
         p_att = p_W + R_WB @ np.asarray(self.scenario.vehicle.cable_attachment, dtype=float)
         cost = self.dt * float(np.linalg.norm(p_att - self._att_end))
@@ -312,11 +314,10 @@ class TetheredEnv(gymnasium.Env):
             self._slack_since = t
         return t - self._slack_since > self.scenario.mission.fault_slack_time
 
-    def _landing(self, t, p_RL, z_B, v_W, forces, info) -> tuple[float, Outcome]:
+    def _landing(self, t, p_RL, z_B, v_W, airborne, info) -> tuple[float, Outcome]:
         geo = self.geometry
         if self._touchdown is None:
-            clearance = float((p_RL - geo.surface.origin) @ geo.surface.z_S)
-            if float(forces.max()) <= CONTACT_FORCE and clearance > CONTACT_CLEARANCE:
+            if airborne:
                 return (0.0, Outcome.TIME_LIMIT if t >= self.time_limit else Outcome.RUNNING)
             # touchdown: the state now, and t_L- (the tick before) from the history
             hist = list(self._history)

@@ -20,6 +20,6 @@ from tetherland.optional import require
 
 require("foxglove", package="foxglove-sdk", extra="viz", feature="the Foxglove/MCAP view")
 
-from tetherland.viz.run import PlanSpan, RunData, load_run, run_data_from_mission  # noqa: E402
+from tetherland.viz.run import PlanSpan, RunData, load_run, run_data_from_result  # noqa: E402
 
-__all__ = ["PlanSpan", "RunData", "load_run", "run_data_from_mission"]
+__all__ = ["PlanSpan", "RunData", "load_run", "run_data_from_result"]

@@ -1,8 +1,8 @@
 """A finished run as the viewers need it, from a run directory or a mission result.
 
 :func:`load_run` is the one place that reads a run directory (``tetherland mission
---out``): ``log.npz``, ``summary.json`` and the planned ``*_trajectory.csv``; the scene is
-rebuilt from the scenario stored in the run's provenance.
+--out``): the run record ``run.json`` (the scenario the plant simulated, the key times),
+``log.npz``, ``summary.json`` (the verdict) and the planned trajectories' CSV files.
 """
 
 from __future__ import annotations
@@ -13,13 +13,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from tetherland.config import Scenario, scenario_from_dict
+from tetherland.config import Scenario
 from tetherland.errors import ConfigError
 from tetherland.planning.trajectory import Trajectory, load_trajectory
 from tetherland.sim.log import SimLog
 
 if TYPE_CHECKING:
-    from tetherland.mission.run import MissionResult
+    from tetherland.runs import RunResult
 
 
 @dataclass(frozen=True)
@@ -94,59 +94,63 @@ def plan_spans(
     return tuple(spans)
 
 
-def run_data_from_mission(result: MissionResult) -> RunData:
-    """The :class:`RunData` of a mission that has just been flown."""
-    sup = result.supervisor
+def _tethered_plans(trajectories: dict[str, Any]) -> dict[str, Trajectory]:
+    """The tethered (planar) trajectories by maneuver, of a method's trajectory files."""
+    return {t.meta.maneuver: t for t in trajectories.values() if isinstance(t, Trajectory)}
+
+
+def run_data(
+    log: SimLog,
+    scenario: Scenario,
+    times: dict[str, float],
+    plans: dict[str, Trajectory],
+    summary: dict[str, Any],
+) -> RunData:
+    """A :class:`RunData` from its parts (the plans by maneuver name)."""
+    clean = {k: float(v) for k, v in times.items() if v is not None}
     spans = plan_spans(
-        sup.times, sup.landing_traj, sup.takeoff_traj, result.belief_scenario.mission.spinup_time
+        clean, plans.get("landing"), plans.get("takeoff"), scenario.mission.spinup_time
     )
-    return RunData(
-        log=result.log,
-        scenario=result.plant_scenario,
-        spans=spans,
-        plans=(sup.landing_traj, sup.takeoff_traj),
-        summary=dict(result.summary),
-    )
+    return RunData(log=log, scenario=scenario, spans=spans, plans=tuple(plans.values()),
+                   summary=dict(summary))  # fmt: skip
+
+
+def run_data_from_result(result: RunResult) -> RunData:
+    """The :class:`RunData` of a run that has just been flown (:func:`tetherland.runs.run_mission`)."""
+    from tetherland.methods import get_method
+
+    if result.log is None:
+        raise ConfigError("the run was not flown (no plan): there is nothing to export")
+    trajectories = get_method(result.method).trajectories(result.plan) if result.plan else {}
+    return run_data(result.log, result.plant_scenario, dict(result.record.times),
+                    _tethered_plans(trajectories), result.summary)  # fmt: skip
 
 
 def load_run(run_dir: str | Path) -> RunData:
-    """Read a run directory written by ``tetherland mission --out``.
+    """Read a run directory written by ``tetherland mission --out`` (``run.json``, ``log.npz``,
+    ``summary.json`` and the plans' CSV files).
 
     Raises
     ------
-    ConfigError
-        When the directory, its log or its summary is missing or unreadable.
+    TetherlandError
+        One line when the directory holds no readable run.
     """
+    from tetherland.runs import load_run as load_log_and_record
+
     run_dir = Path(run_dir)
-    if not run_dir.is_dir():
-        raise ConfigError(f"RUN_DIR '{run_dir}' is not a directory")
-    log_path, summary_path = run_dir / "log.npz", run_dir / "summary.json"
-    for path in (log_path, summary_path):
-        if not path.is_file():
-            raise ConfigError(
-                f"RUN_DIR '{run_dir}' has no {path.name} (write one with tetherland mission --out)"
-            )
-    try:
-        log = SimLog.load(log_path)
-        summary = json.loads(summary_path.read_text())
-    except (OSError, ValueError, KeyError) as err:
-        raise ConfigError(f"cannot read the run in '{run_dir}': {err}") from err
-    stored = (summary.get("provenance") or {}).get("scenario")
-    stored = stored or (log.metadata.get("provenance") or {}).get("scenario")
-    if stored is None:
-        raise ConfigError(f"'{summary_path}' records no scenario (provenance.scenario)")
-    scenario = scenario_from_dict(stored, summary.get("scenario", "run"))
+    log, record = load_log_and_record(run_dir)
+    summary_path = run_dir / "summary.json"
+    summary: dict[str, Any] = {}
+    if summary_path.is_file():
+        try:
+            summary = json.loads(summary_path.read_text())
+        except (OSError, ValueError) as err:
+            raise ConfigError(f"'{summary_path}' is unreadable: {err}") from None
     plans: dict[str, Trajectory] = {}
-    for name in ("landing", "takeoff"):
-        path = run_dir / f"{name}_trajectory.csv"
-        if path.is_file():
-            plans[name] = load_trajectory(path)
-    spans = plan_spans(
-        {k: float(v) for k, v in (summary.get("times") or {}).items() if v is not None},
-        plans.get("landing"),
-        plans.get("takeoff"),
-        scenario.mission.spinup_time,
-    )
-    return RunData(
-        log=log, scenario=scenario, spans=spans, plans=tuple(plans.values()), summary=summary
-    )
+    for path in sorted(run_dir.glob("*.csv")):
+        try:
+            trajectory = load_trajectory(path)
+        except (ConfigError, ValueError, KeyError):
+            continue  # not a tethered trajectory (e.g. a perching maneuver)
+        plans[trajectory.meta.maneuver] = trajectory
+    return run_data(log, record.truth_scenario(), dict(record.times), plans, summary)
