@@ -46,7 +46,7 @@ def hover():
 
 def test_a_client_receives_the_advertised_channels_and_messages(hover):
     sc, run = hover
-    with LiveView(sc, port=0, speed=0.0) as view:
+    with LiveView(sc, port=0, speed=0.0, rate_hz=sc.controller.rate_hz) as view:
         client = Client(view.url, duration=30.0).start()
         assert client.subscribed.wait(10)
         deadline = time.monotonic() + 10
@@ -93,6 +93,25 @@ def test_bad_live_settings_are_rejected(hover):
         LiveView(sc, port=0, speed=-1.0)
     with pytest.raises(ConfigError, match="--live-port"):
         LiveView(sc, port=70000)
+    with pytest.raises(ConfigError, match="--live-rate"):
+        LiveView(sc, port=0, rate_hz=0.0)
+
+
+def test_the_publishing_rate_is_limited(hover):
+    """At 50 Hz a viewer gets every 10th control tick of the 500 Hz loop."""
+    sc, run = hover
+    with LiveView(sc, port=0, speed=0.0, rate_hz=50.0) as view:
+        client = Client(view.url, duration=20.0).start()
+        assert client.subscribed.wait(10)
+        deadline = time.monotonic() + 10
+        while not view.publisher.watched and time.monotonic() < deadline:
+            time.sleep(0.01)
+        log = run([view], duration=1.0)
+        time.sleep(0.5)
+    client.join()
+    stamps = np.array([s for s, _ in client.messages["/tension"]])
+    expected = np.round(log["t"][::10] * 1e9).astype(np.int64)
+    np.testing.assert_array_equal(stamps, expected)
 
 
 def test_a_busy_port_is_one_clear_error(hover):

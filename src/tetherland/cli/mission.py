@@ -32,11 +32,11 @@ class _ProgressObserver:
             self.progress.update(self.task, description=f"t = {t:6.2f} s  {phase}")
 
 
-def _start_live(sc: Any, speed: float, port: int, quiet: bool) -> Any:
+def _start_live(sc: Any, speed: float, port: int, rate: float, quiet: bool) -> Any:
     from tetherland.cli.common import err_console
     from tetherland.viz.live import LiveView
 
-    view = LiveView(sc, port=port, speed=speed)
+    view = LiveView(sc, port=port, speed=speed, rate_hz=rate)
     pace = f"{speed:g}x real time" if speed > 0 else "unpaced"
     (err_console if quiet else console).print(
         f"live view on {view.url} ({pace}): in Foxglove, Open connection > Foxglove WebSocket"
@@ -85,6 +85,9 @@ def mission(
     live_port: Annotated[
         int, typer.Option("--live-port", help="With --live: WebSocket port (0: any free one).")
     ] = 8765,
+    live_rate: Annotated[
+        float, typer.Option("--live-rate", help="With --live: messages per second per topic.")
+    ] = 100.0,
 ) -> None:
     """Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, controllers, supervisor).
 
@@ -106,7 +109,7 @@ def mission(
         require("foxglove", package="foxglove-sdk", extra="viz", feature="--mcap")
     default = "mission" if how.name == "tethered" else "perching"
     directory = prepare_output_dir(out or Path("out") / sc.name / default)
-    view = _start_live(sc, live_speed, live_port, json) if live else None
+    view = _start_live(sc, live_speed, live_port, live_rate, json) if live else None
     with Progress(
         SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
         console=console, transient=True, disable=json,

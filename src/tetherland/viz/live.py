@@ -4,7 +4,7 @@
 tick it reads the log row just written and publishes it (``tetherland mission --live``).
 With no viewer subscribed it only checks that and paces the loop, so the mission runs
 essentially as fast as without it; ``speed`` paces simulated time to ``speed`` x wall time
-(0: as fast as possible). Connect Foxglove to ``ws://HOST:PORT`` (Open connection >
+(0: as fast as possible), and ``rate_hz`` limits the publishing rate. Connect Foxglove to ``ws://HOST:PORT`` (Open connection >
 Foxglove WebSocket).
 """
 
@@ -41,13 +41,26 @@ class LiveView:
         TCP port (0: any free port, see :attr:`port`).
     speed : float
         Simulated seconds per wall-clock second (1: real time; 0: unpaced) [-].
+    rate_hz : float
+        Publishing rate [Hz] in [1, 10000]; at most one message per topic per control tick
+        (a viewer draws at display rate: 100 Hz keeps the mission real time with a viewer
+        connected; the control rate sends every tick, like the MCAP file).
     """
 
     def __init__(
-        self, scenario: Scenario, *, host: str = "127.0.0.1", port: int = 8765, speed: float = 1.0
+        self,
+        scenario: Scenario,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 8765,
+        speed: float = 1.0,
+        rate_hz: float = 100.0,
     ) -> None:
         if not (speed >= 0 and math.isfinite(speed)):
             raise ConfigError(f"--live-speed must be a number >= 0 (got {speed})")
+        if not 1 <= rate_hz <= 10_000:
+            raise ConfigError(f"--live-rate must be in [1, 10000] Hz (got {rate_hz})")
+        self.period = 1.0 / rate_hz
         if not 0 <= port <= 65535:
             raise ConfigError(f"--live-port must be in 0..65535 (got {port})")
         self.scenario = scenario
@@ -89,6 +102,7 @@ class LiveView:
         plans = (getattr(ref, "landing_traj", None), getattr(ref, "takeoff_traj", None))
         self._plans = [p for p in plans if p is not None]
         self._wall0 = time.perf_counter()
+        self._next_publish = 0.0
 
     def __call__(self, t: float, plant: Any) -> None:
         self._t_last = t
@@ -96,8 +110,9 @@ class LiveView:
             ahead = self._wall0 + t / self.speed - time.perf_counter()
             if ahead > 1e-3:
                 time.sleep(ahead)
-        if not self.publisher.watched:
+        if t < self._next_publish - 1e-9 or not self.publisher.watched:
             return
+        self._next_publish = t + self.period
         row = self._row
         row.matrix[0] = self._writer.last_row
         series = tick_series(row, self.scenario, self._nominal(t), self._geometry)
