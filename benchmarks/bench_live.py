@@ -20,8 +20,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from foxglove_client import Client  # the tests' Foxglove WebSocket client
 from tetherland.config import load_scenario
-from tetherland.mission import run_mission
-from tetherland.planning import Planner
+from tetherland.methods import Planners
+from tetherland.runs import run_mission
 from tetherland.viz.live import LiveView
 
 
@@ -44,17 +44,17 @@ def main() -> None:
     name = sys.argv[1] if len(sys.argv) > 1 else "slope50"
     rounds = int(sys.argv[2]) if len(sys.argv) > 2 else 3
     scenario = load_scenario(name)
-    planner = Planner()
-    run_mission(scenario, seed=0, planner=planner)  # compile the solvers once
+    planners = Planners()
+    run_mission(scenario, seed=0, planners=planners)  # compile the solvers once
     plain, live, inside = [], [], []
     with LiveView(scenario, port=0, speed=0.0) as view:
         timed = Timed(view)
         for _ in range(rounds):
-            plain.append(run_mission(scenario, seed=0, planner=planner).wall_time_s)
+            plain.append(run_mission(scenario, seed=0, planners=planners).record.wall_time_s)
             timed.spent = 0.0
-            result = run_mission(scenario, seed=0, planner=planner, observers=[timed])
-            live.append(result.wall_time_s)
-            inside.append(timed.spent / result.wall_time_s)
+            result = run_mission(scenario, seed=0, planners=planners, observers=[timed])
+            live.append(result.record.wall_time_s)
+            inside.append(timed.spent / result.record.wall_time_s)
     a, b = statistics.median(plain), statistics.median(live)
     ticks = len(result.log)
     print(f"{name} mission loop, median of {rounds}: {a:.2f} s without, {b:.2f} s with --live "
@@ -67,11 +67,11 @@ def main() -> None:
             client.subscribed.wait(10)
             while not view.publisher.watched:
                 time.sleep(0.01)
-            result = run_mission(scenario, seed=0, planner=planner, observers=[view])
-        print(f"with a viewer subscribed to every channel, {rate:g} Hz: "
-              f"{result.wall_time_s:.2f} s, {1e3 * (result.wall_time_s - a) / ticks:.2f} ms "
-              f"per control tick for publishing, "
-              f"{result.summary['sim_time_s'] / result.wall_time_s:.1f}x real time")  # fmt: skip
+            result = run_mission(scenario, seed=0, planners=planners, observers=[view])
+        wall = result.record.wall_time_s
+        print(f"with a viewer subscribed to every channel, {rate:g} Hz: {wall:.2f} s, "
+              f"{1e3 * (wall - a) / ticks:.2f} ms per control tick for publishing, "
+              f"{result.summary['sim_time_s'] / wall:.1f}x real time")  # fmt: skip
 
 
 if __name__ == "__main__":

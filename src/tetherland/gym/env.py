@@ -19,8 +19,9 @@ touchdown with the scenario's ``[verdict]`` tolerances and (5) over the rest, fr
 reward is the number of conditions held plus ``success_bonus`` when all five hold.
 Takeoff: the episode ends ``rest_time`` after the planned end; success when the link
 elevation and the tilt are within ``takeoff_tolerance`` of the planned taut end hover.
-A frame contact above ``verdict.crash_force`` (crash) or a slack cable (true tension below ``SLACK_TENSION`` for
-``mission.fault_slack_time`` while airborne) ends the episode with ``-failure_penalty``;
+A frame contact above ``verdict.crash_force`` (crash) or a slack cable (true tension
+below ``SLACK_TENSION`` for ``mission.fault_slack_time`` while airborne) ends the episode
+with ``-failure_penalty``;
 each step costs ``dt`` x the distance to the goal [m s]. Episodes are truncated at
 ``time_limit`` (default: the plan's duration + ``rest_time`` + 3 s).
 
@@ -240,9 +241,7 @@ class TetheredEnv(gymnasium.Env):
                 "perturbation": perturbation.to_dict() if perturbation else {}}  # fmt: skip
         return _observe(tick.estimate), info
 
-    def step(
-        self, action: FloatArray
-    ) -> tuple[FloatArray, float, bool, bool, dict[str, Any]]:
+    def step(self, action: FloatArray) -> tuple[FloatArray, float, bool, bool, dict[str, Any]]:
         if self._loop is None or self._done:
             raise RuntimeError("call reset() before step() (the episode is over)")
         a = np.clip(np.asarray(action, dtype=float).reshape(4), 0.0, 1.0)

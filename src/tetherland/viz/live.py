@@ -4,8 +4,8 @@
 tick it reads the log row just written and publishes it (``tetherland mission --live``).
 With no viewer subscribed it only checks that and paces the loop, so the mission runs
 essentially as fast as without it; ``speed`` paces simulated time to ``speed`` x wall time
-(0: as fast as possible), and ``rate_hz`` limits the publishing rate. Connect Foxglove to ``ws://HOST:PORT`` (Open connection >
-Foxglove WebSocket).
+(0: as fast as possible), and ``rate_hz`` limits the publishing rate. Connect Foxglove to
+``ws://HOST:PORT`` (Open connection > Foxglove WebSocket).
 """
 
 from __future__ import annotations

@@ -116,7 +116,7 @@ def run_data(
 
 
 def run_data_from_result(result: RunResult) -> RunData:
-    """The :class:`RunData` of a run that has just been flown (:func:`tetherland.runs.run_mission`)."""
+    """The :class:`RunData` of a run just flown (:func:`tetherland.runs.run_mission`)."""
     from tetherland.methods import get_method
 
     if result.log is None:
