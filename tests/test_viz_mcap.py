@@ -78,6 +78,7 @@ def test_channels_schemas_and_one_message_per_tick(run_dir):
     assert len(messages["/verdict"]) == 1
     verdict = messages["/verdict"][0][1]
     doc = json.loads((run_dir / "summary.json").read_text())
+    assert doc["files"]["mcap"] == str(run_dir / "run.mcap")
     assert verdict["success"] is doc["success"] is True
     assert verdict["conditions"] == doc["landing"]["conditions"]
     # every phase change and hook event of the run is a Log message
