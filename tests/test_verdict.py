@@ -23,7 +23,7 @@ def planners() -> Planners:
 
 @pytest.fixture(scope="module")
 def short_tethered(planners):
-    """A tethered run aborted by the operator early in the landing: short, judged."""
+    """A tethered run aborted by the operator while stretching the cable: short, judged."""
     sc = with_overrides(load_scenario("slope50"), ["mission.abort_time=24"])
     return run_mission(sc, seed=0, planners=planners)
 

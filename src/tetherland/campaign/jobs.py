@@ -133,3 +133,14 @@ def execute(job: Job) -> dict[str, Any]:
         record.update(status="error", error=f"internal error: {last}", verdict={"success": False})
     record["wall_time_s"] = time.perf_counter() - start
     return record
+
+
+def lost_record(job: Job, error: BaseException) -> dict[str, Any]:
+    """The record of a run whose worker was lost for good (the engine gave up on it)."""
+    run = job.run
+    return {
+        "run_id": run.run_id, "method": run.method, "index": run.index, "seed": run.seed,
+        "sweep_key": run.sweep_key, "sweep_value": run.sweep_value, "status": "error",
+        "error": f"worker lost: {type(error).__name__}: {error}", "verdict": {"success": False},
+        "wall_time_s": 0.0,
+    }  # fmt: skip

@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from types import MappingProxyType
 
 from tetherland.errors import ConfigError
-from tetherland.methods.base import Flight, LandingMethod, Planners
+from tetherland.methods.base import ControllerChoice, Flight, LandingMethod, Planners
 from tetherland.methods.contact_free import ContactFreeMethod
 from tetherland.methods.tethered import TetheredMethod
 
@@ -43,6 +43,7 @@ def get_method(name: str, option: str = "method") -> LandingMethod:
 __all__ = [
     "METHODS",
     "ContactFreeMethod",
+    "ControllerChoice",
     "Flight",
     "LandingMethod",
     "Planners",

@@ -76,6 +76,11 @@ class Flight:
     diagnostic_keys: tuple[str, ...] = ()
 
 
+ControllerChoice = str | Controller | None
+"""A controller by name (tethered: ``"hierarchical"``, ``"dfl"``), your own
+:class:`~tetherland.interfaces.Controller`, or None for the scenario's default."""
+
+
 @runtime_checkable
 class LandingMethod(Protocol):
     """A way to land on (and leave) a surface; see the module docstring."""
@@ -93,8 +98,9 @@ class LandingMethod(Protocol):
         """
         ...
 
-    def fly(self, plan: Any, belief: Scenario, controller: str | None) -> Flight:
-        """The roles of one closed-loop run of ``plan``."""
+    def fly(self, plan: Any, belief: Scenario, controller: ControllerChoice) -> Flight:
+        """The roles of one closed-loop run of ``plan``; ``controller`` replaces the
+        method's own controller for its main maneuver (see :data:`ControllerChoice`)."""
         ...
 
     def record(self, plan: Any, flight: Flight, t_end: float, base: RunRecord) -> RunRecord:

@@ -13,9 +13,10 @@ import numpy as np
 
 from tetherland.config import Scenario
 from tetherland.control.tracking import FreeFlightTracker
-from tetherland.errors import InfeasibleError
+from tetherland.errors import ConfigError, InfeasibleError
 from tetherland.geometry import LandingGeometry, effective_h_R
-from tetherland.methods.base import Flight, Planners
+from tetherland.interfaces import Controller
+from tetherland.methods.base import ControllerChoice, Flight, Planners
 from tetherland.perching.reference import LanderGeometry, PerchingReference, PerchPhase
 from tetherland.planning.perching import FreeFlightTrajectory, PerchResult
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
@@ -40,7 +41,7 @@ class ContactFreeMethod:
             raise InfeasibleError(f"no perching plan: {result.status.value}: {result.message}")
         return result
 
-    def fly(self, plan: PerchResult, belief: Scenario, controller: str | None) -> Flight:
+    def fly(self, plan: PerchResult, belief: Scenario, controller: ControllerChoice) -> Flight:
         traj = plan.require()
         cfg = belief.perching
         geo = LandingGeometry.from_scenario(belief)
@@ -57,9 +58,14 @@ class ContactFreeMethod:
         )
         p0 = traj.flat_outputs(0.0)[0]
         R0 = rotation_from_z_and_yaw(np.array([0.0, 0.0, 1.0]), traj.meta.heading)
+        if controller is not None and not isinstance(controller, Controller):
+            raise ConfigError(
+                f"the {self.name} method has no controller named {controller!r}: give a "
+                "Controller or None"
+            )
         return Flight(
             reference=reference,
-            controller=tracker,
+            controller=tracker if controller is None else controller,
             initial_state=RigidBodyState.at_rest(p0, rotmat_to_quat(R0)),
             rotor_speeds=tracker.hover_speeds,
             duration=cfg.hover_time + traj.duration + cfg.contact_grace + cfg.rest_time
@@ -86,7 +92,7 @@ class ContactFreeMethod:
             times["t_motors_off"] = t_off
         return replace(
             base,
-            controller="free-flight tracker",
+            controller=base.controller or "free-flight tracker",
             phase_codes={p.name.lower(): int(p) for p in PerchPhase},
             landing_phases=tuple(p.name.lower() for p in PerchPhase),
             phases=tuple(spans),

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 from tetherland.config import Scenario
 from tetherland.control import SwitchingController
-from tetherland.methods.base import Flight, Planners
+from tetherland.methods.base import ControllerChoice, Flight, Planners
 from tetherland.mission import MissionPlan, MissionSupervisor, Phase, plan_mission
 from tetherland.planning.trajectory import Trajectory
 from tetherland.state import RigidBodyState
@@ -29,7 +29,7 @@ class TetheredMethod:
     def plan(self, belief: Scenario, start: RigidBodyState, planners: Planners) -> MissionPlan:
         return plan_mission(belief, start, planners.tethered)
 
-    def fly(self, plan: MissionPlan, belief: Scenario, controller: str | None) -> Flight:
+    def fly(self, plan: MissionPlan, belief: Scenario, controller: ControllerChoice) -> Flight:
         return Flight(
             reference=MissionSupervisor(belief, plan),
             controller=SwitchingController(belief, controller or belief.controller.kind),
