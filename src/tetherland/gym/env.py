@@ -12,10 +12,11 @@ a_i in [0, 1], f_i = f_min + a_i (f_max - f_min) [N], sent as speed commands thr
 believed rotor model.
 
 Landing: the episode runs to touchdown (a contact force above ``verdict.contact_force``,
-as the judge of a mission) and ``rest_time`` beyond; conditions (1)-(4) are judged at
-touchdown with the scenario's ``[verdict]`` tolerances and (5) over the rest, from
-``mission.settle_time`` (the mission holds the link that long before the motors go off) +
-``verdict.rest_settle`` on. The final
+as the judge of a mission) and on until the rotors have idled (the action's zero, the
+motors-off of the mission) for ``rest_time``; conditions (1)-(4) are judged at touchdown
+with the scenario's ``[verdict]`` tolerances and (5) over the rest as the judge does: the
+slip over the whole idle interval, the speed from ``verdict.rest_settle`` after idling.
+The rest ends early if the rotors are driven again. The final
 reward is the number of conditions held plus ``success_bonus`` when all five hold.
 Takeoff: the episode ends ``rest_time`` after the planned end; success when the link
 elevation and the tilt are within ``takeoff_tolerance`` of the planned taut end hover.
@@ -132,8 +133,8 @@ class TetheredEnv(gymnasium.Env):
     randomize : bool
         Draw the campaign perturbations at each reset.
     rest_time : float
-        Landing: time after touchdown (> mission.settle_time + 0.3 s); takeoff: time after
-        the planned end [s], in (0, 10].
+        Landing: the rest with idle rotors judged for condition (5) (> verdict.rest_settle);
+        takeoff: time after the planned end [s], in (0, 10].
     time_limit : float, optional
         Truncation time [s] (default: plan duration + rest_time + 3 s), in (0, 600].
     takeoff_tolerance_deg : float
@@ -153,7 +154,7 @@ class TetheredEnv(gymnasium.Env):
         *,
         overrides: tuple[str, ...] | list[str] = (),
         randomize: bool = False,
-        rest_time: float = 1.5,
+        rest_time: float = 1.0,
         time_limit: float | None = None,
         takeoff_tolerance_deg: float = 3.0,
         success_bonus: float = 5.0,
@@ -171,11 +172,11 @@ class TetheredEnv(gymnasium.Env):
             raise ConfigError(f"maneuver must be landing or takeoff (got {maneuver!r})") from None
         if not 0 < rest_time <= 10:
             raise ConfigError(f"rest_time must be in (0, 10] s (got {rest_time})")
-        self._rest_start = sc.mission.settle_time + sc.verdict.rest_settle
-        if self.maneuver is Maneuver.LANDING and rest_time <= self._rest_start:
+        self._rest_settle = sc.verdict.rest_settle
+        if self.maneuver is Maneuver.LANDING and rest_time <= self._rest_settle:
             raise ConfigError(
-                f"rest_time must exceed mission.settle_time + verdict.rest_settle = "
-                f"{self._rest_start:g} s for a landing (got {rest_time})"
+                f"rest_time must exceed verdict.rest_settle = {self._rest_settle:g} s for a "
+                f"landing (got {rest_time})"
             )
         if time_limit is not None and not 0 < time_limit <= 600:
             raise ConfigError(f"time_limit must be in (0, 600] s (got {time_limit})")
@@ -193,7 +194,7 @@ class TetheredEnv(gymnasium.Env):
         if result.trajectory is None or result.status.value != "solved":
             raise ConfigError(f"no {self.maneuver.value} plan for '{sc.name}': {result.message}")
         self.plan: Trajectory = result.require()
-        self.time_limit = float(time_limit or self.plan.duration + self.rest_time + 3.0)
+        self.time_limit = float(time_limit or self.plan.duration + self.rest_time + 4.0)
         self.geometry = LandingGeometry.from_scenario(sc)
         self.dt = 1.0 / sc.controller.rate_hz
         self._x0, self._w0 = initial_state(self.plan, sc)
@@ -235,6 +236,7 @@ class TetheredEnv(gymnasium.Env):
         self._rest_p: list[FloatArray] = []
         self._rest_v: list[FloatArray] = []
         self._slack_since: float | None = None
+        self._idle_since: float | None = None
         self._done = False
         self._record_truth()
         info = {"t": tick.t, "outcome": Outcome.RUNNING.value,
@@ -260,7 +262,7 @@ class TetheredEnv(gymnasium.Env):
             penalty = 0.0 if outcome is Outcome.TIME_LIMIT else -self.failure_penalty
             info = {"t": t, "outcome": outcome.value, "message": log.metadata.get("message", "")}
             return obs, penalty, outcome is Outcome.DIVERGED, outcome is Outcome.TIME_LIMIT, info
-        reward, outcome, info = self._judge(tick.t)
+        reward, outcome, info = self._judge(tick.t, not a.any())
         terminated = outcome not in (Outcome.RUNNING, Outcome.TIME_LIMIT)
         truncated = outcome is Outcome.TIME_LIMIT
         self._done = terminated or truncated
@@ -279,7 +281,7 @@ class TetheredEnv(gymnasium.Env):
         self._history.append((v, w))
         return v, w
 
-    def _judge(self, t: float) -> tuple[float, Outcome, dict[str, Any]]:
+    def _judge(self, t: float, idle: bool) -> tuple[float, Outcome, dict[str, Any]]:
         plant, geo = self._plant, self.geometry
         v_W, _ = self._record_truth()
         p_W, q_WB = plant.qpos[0:3], plant.qpos[3:7]
@@ -297,7 +299,7 @@ class TetheredEnv(gymnasium.Env):
             return -self.failure_penalty, Outcome.SLACK, info
         if self.maneuver is Maneuver.LANDING:
             cost = self.dt * float(np.linalg.norm(p_RL - geo.p_L))
-            reward, outcome = self._landing(t, p_RL, z_B, v_W, airborne, info)
+            reward, outcome = self._landing(t, p_RL, z_B, v_W, airborne, idle, info)
             return reward - cost, outcome, info
         p_att = p_W + R_WB @ np.asarray(self.scenario.vehicle.cable_attachment, dtype=float)
         cost = self.dt * float(np.linalg.norm(p_att - self._att_end))
@@ -313,7 +315,7 @@ class TetheredEnv(gymnasium.Env):
             self._slack_since = t
         return t - self._slack_since > self.scenario.mission.fault_slack_time
 
-    def _landing(self, t, p_RL, z_B, v_W, airborne, info) -> tuple[float, Outcome]:
+    def _landing(self, t, p_RL, z_B, v_W, airborne, idle, info) -> tuple[float, Outcome]:
         geo = self.geometry
         if self._touchdown is None:
             if airborne:
@@ -328,15 +330,24 @@ class TetheredEnv(gymnasium.Env):
             }  # fmt: skip
         td = self._touchdown
         info["t_L"] = td["t"]
-        if t >= td["t"] + self._rest_start:
+        running = Outcome.TIME_LIMIT if t >= self.time_limit else Outcome.RUNNING
+        if self._idle_since is None:
+            if not idle:
+                return 0.0, running
+            self._idle_since = t
+        rest_over = not idle or t >= self._idle_since + self.rest_time
+        if idle:
             self._rest_p.append(p_RL.copy())
-            self._rest_v.append(v_W.copy())
-        if t < td["t"] + self.rest_time:
-            return 0.0, (Outcome.TIME_LIMIT if t >= self.time_limit else Outcome.RUNNING)
+            if t >= self._idle_since + self._rest_settle:
+                self._rest_v.append(v_W.copy())
+        info["t_rest"] = self._idle_since
+        if not rest_over:
+            return 0.0, running
+        rest_v = np.array(self._rest_v) if self._rest_v else np.full((1, 3), np.inf)
         verdict = evaluate_landing(
             p_RL=td["p_RL"], z_B=td["z_B"], v_W=td["v_W"], omega_B=td["omega_B"],
             a_W=td["a_W"], omega_dot_B=td["omega_dot_B"], p_L_star=geo.p_L, z_S=geo.surface.z_S,
-            rest_p_RL=np.array(self._rest_p), rest_v_W=np.array(self._rest_v), tol=self.tolerance,
+            rest_p_RL=np.array(self._rest_p), rest_v_W=rest_v, tol=self.tolerance,
         )  # fmt: skip
         info["conditions"] = verdict.to_dict()
         info["measures"] = {m.name: m.value for c in verdict.conditions for m in c.measures}

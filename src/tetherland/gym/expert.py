@@ -3,11 +3,12 @@
 It maps an observation of :class:`~tetherland.gym.env.TetheredEnv` to an action, for
 learning from demonstration. It holds the plan (a :class:`TrajectoryTrack` started at
 t = 0) and the mission's :class:`~tetherland.control.SwitchingController` in tethered mode.
-Landing ends as the mission's touchdown phase does: past the planned end, a guarded
-descent lowers phi_d at ``mission.touchdown_rate_deg`` until the estimated link stops
-following (``mission.contact_error_deg`` for ``mission.contact_dwell``), holds the link
-where it touched for ``mission.settle_time`` and then idles the rotors at f_min (the
-action's zero: the motors-off of the mission). Takeoff holds the planned end hover.
+Landing ends as the mission's touchdown phase does: contact is believed near the end of
+the plan when the estimated link stops following the reference, past the planned end a
+guarded descent lowers phi_d at ``mission.touchdown_rate_deg`` until it does; the expert
+then holds the link where it touched for ``mission.settle_time`` and idles the rotors at
+f_min (the action's zero: the motors-off of the mission). Takeoff holds the planned end
+hover.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 from tetherland.config import Scenario
 from tetherland.control import SwitchingController
 from tetherland.estimation import ThresholdDwell
-from tetherland.geometry import FloatArray
+from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.gym.env import estimate_of
 from tetherland.interfaces import ControlMode, Reference
 from tetherland.models.quadrotor import RotorModel
@@ -60,6 +61,7 @@ class ExpertPolicy:
         self.kind = controller
         v = scenario.vehicle
         self.rotors = RotorModel.from_config(v)
+        self._phi_star = LandingGeometry.from_scenario(scenario).phi_star
         self._f_min, self._f_span = v.f_min, v.f_max - v.f_min
         self.reset()
 
@@ -87,26 +89,41 @@ class ExpertPolicy:
         return np.clip((f - self._f_min) / self._f_span, 0.0, 1.0).astype(np.float32)
 
     def reference(self, t: float, est: Any) -> Reference:
-        """The tethered reference at ``t``: the plan, then the guarded touchdown (landing)."""
-        ref = self.track.reference(t)
-        if self.maneuver is Maneuver.TAKEOFF or t < self.plan.duration:
-            return ref
+        """The tethered reference at ``t``: the plan, then the guarded touchdown (landing).
+
+        As the mission's supervisor: contact counts from the last ``mission.contact_window``
+        of the plan on, once the link is within ``mission.contact_gate_deg`` of phi*, when
+        the estimated link stays ``contact_error_deg`` above the reference for
+        ``contact_dwell``; past the plan's end phi_d descends at ``touchdown_rate_deg``.
+        """
         if self._hold is not None:
             return self._hold
+        ref = self.track.reference(t)
+        if self.maneuver is Maneuver.TAKEOFF:
+            return ref
         m = self.scenario.mission
-        rate, depth = math.radians(m.touchdown_rate_deg), math.radians(m.touchdown_search_deg)
-        s = min(rate * (t - self.plan.duration), depth)
-        out = ref.output.copy()
-        out[0, 0] -= s
-        out[1, 0] = -rate if s < depth else 0.0
-        if est.link is not None and self._contact.update(t, est.link.phi - out[0, 0]):
-            hold = np.zeros((5, 4))
-            hold[0] = out[0]
-            hold[0, 0] = est.link.phi
-            self._hold = Reference(
-                t=t, mode=ControlMode.TETHERED, output=hold, thrust_ff=ref.thrust_ff,
-                feedforward=ref.feedforward,
-            )  # fmt: skip
-            return self._hold
-        return Reference(t=t, mode=ControlMode.TETHERED, output=out, thrust_ff=ref.thrust_ff,
-                         feedforward=ref.feedforward)  # fmt: skip
+        T = self.plan.duration
+        out = ref.output
+        if t >= T:
+            rate, depth = math.radians(m.touchdown_rate_deg), math.radians(m.touchdown_search_deg)
+            s = min(rate * (t - T), depth)
+            out = out.copy()
+            out[0, 0] -= s
+            out[1, 0] = -rate if s < depth else 0.0
+            ref = Reference(t=t, mode=ControlMode.TETHERED, output=out, thrust_ff=ref.thrust_ff,
+                            feedforward=ref.feedforward)  # fmt: skip
+        link = est.link
+        near = link is not None and link.phi - self._phi_star < math.radians(m.contact_gate_deg)
+        if t > (1.0 - m.contact_window) * T and near:
+            if self._contact.update(t, link.phi - out[0, 0]):
+                hold = np.zeros((5, 4))
+                hold[0] = out[0]
+                hold[0, 0] = link.phi
+                self._hold = Reference(
+                    t=t, mode=ControlMode.TETHERED, output=hold, thrust_ff=ref.thrust_ff,
+                    feedforward=ref.feedforward,
+                )  # fmt: skip
+                return self._hold
+        else:
+            self._contact.reset()
+        return ref
