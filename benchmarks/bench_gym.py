@@ -20,9 +20,7 @@ import tetherland.gym as tg
 
 def single(steps: int) -> None:
     env = gym.make(tg.LANDING_ID)
-    e = env.unwrapped
-    v = e.scenario.vehicle
-    hover = ((e._rotors.thrust(e._w0) - v.f_min) / (v.f_max - v.f_min)).astype(np.float32)
+    hover = env.unwrapped.planned_action()
     expert = tg.ExpertPolicy.for_env(env)
     for label, policy in (("constant action", lambda obs: hover), ("expert policy", expert)):
         n, seed = 0, 0
@@ -42,9 +40,7 @@ def single(steps: int) -> None:
 
 
 def vectorised(steps: int) -> None:
-    e = gym.make(tg.LANDING_ID).unwrapped
-    v = e.scenario.vehicle
-    hover = ((e._rotors.thrust(e._w0) - v.f_min) / (v.f_max - v.f_min)).astype(np.float32)
+    hover = gym.make(tg.LANDING_ID).unwrapped.planned_action()
     for vector in (gym.vector.SyncVectorEnv, gym.vector.AsyncVectorEnv):
         venv = vector([lambda: gym.make(tg.LANDING_ID)] * 2)
         venv.reset(seed=[0, 1])

@@ -209,6 +209,11 @@ class TetheredEnv(gymnasium.Env):
         self._loop: Any = None
         self._rotors = RotorModel.from_config(v)
 
+    def planned_action(self) -> FloatArray:
+        """The action of the plan's initial rotor thrusts (the taut start hover) [-]."""
+        f = RotorModel.from_config(self.scenario.vehicle).thrust(self._w0)
+        return ((f - self._f_min) / (self._f_max - self._f_min)).astype(np.float32)
+
     # ------------------------------------------------------------------ gymnasium API
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None

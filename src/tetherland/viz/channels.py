@@ -33,7 +33,7 @@ from typing import Any
 import foxglove
 import numpy as np
 from foxglove.channels import FrameTransformsChannel, LogChannel, SceneUpdateChannel
-from foxglove.messages import FrameTransform, FrameTransforms, Log, LogLevel, SceneUpdate
+from foxglove.messages import FrameTransform, FrameTransforms, Log, LogLevel
 
 from tetherland.config import Scenario
 from tetherland.geometry import LandingGeometry
@@ -255,4 +255,4 @@ class Publisher:
                         log_time=_ns(t))  # fmt: skip
 
 
-__all__ = ["PER_TICK", "SCENE_PERIOD", "SCHEMAS", "TOPICS", "Publisher", "SceneUpdate"]
+__all__ = ["PER_TICK", "SCENE_PERIOD", "SCHEMAS", "TOPICS", "Publisher", "phase_name"]

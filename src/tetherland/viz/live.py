@@ -24,7 +24,7 @@ from tetherland.geometry import LandingGeometry
 from tetherland.planning.trajectory import Trajectory
 from tetherland.sim.log import SimLog, row_width
 from tetherland.viz.mcap import make_publisher
-from tetherland.viz.run import plan_spans
+from tetherland.viz.run import PlanSpan, plan_spans
 from tetherland.viz.series import NominalPlan, NominalValues, tick_series
 
 
@@ -137,7 +137,7 @@ class LiveView:
             if key not in self._grids:
                 dt = 1.0 / self.scenario.controller.rate_hz
                 grid = span.t0 + np.arange(math.ceil(span.trajectory.duration / dt) + 2) * dt
-                open_span = [type(span)(span.name, span.trajectory, span.t0)]
+                open_span = [PlanSpan(span.name, span.trajectory, span.t0)]
                 self._grids[key] = (dt, NominalPlan(self.scenario, open_span).evaluate(grid))
             dt, values = self._grids[key]
             j = min(round((t - span.t0) / dt), len(values.phi) - 1)
