@@ -75,6 +75,11 @@ def test_channels_schemas_and_one_message_per_tick(run_dir):
     for topic in PER_TICK:
         stamps = np.array([m[0] for m in messages[topic]])
         np.testing.assert_array_equal(np.sort(stamps), t_ns, err_msg=topic)
+    record = json.loads((run_dir / "run.json").read_text())
+    names = {m[1]["phase_name"] for m in messages["/mission/state"]}
+    assert "tethered_landing" in names and names <= set(record["phase_codes"])
+    for _, state in messages["/mission/state"][::500]:
+        assert record["phase_codes"][state["phase_name"]] == state["phase"]
     assert len(messages["/verdict"]) == 1
     verdict = messages["/verdict"][0][1]
     doc = json.loads((run_dir / "summary.json").read_text())

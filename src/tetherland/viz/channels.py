@@ -153,6 +153,8 @@ class Publisher:
         self._scene = scene
         self.tension_scale = tension_scale
         self._next_scene = 0.0
+        self.phase_names: dict[int, str] = {}
+        """Phase names by code (empty: the tethered mission's phases)."""
         c = context
         self.tf = FrameTransformsChannel("/tf", context=c)
         self.scene = SceneUpdateChannel("/scene", context=c)
@@ -222,7 +224,8 @@ class Publisher:
         doc = _finite(actual=actual, estimated=estimated, nominal=nominal)
         self.tension.log(json.dumps(doc).encode(), log_time=ns)
         phase = int(s.phase[i])
-        state = {"phase": phase, "phase_name": phase_name(phase), "mode": int(s.mode[i]),
+        name = self.phase_names.get(phase) or phase_name(phase)
+        state = {"phase": phase, "phase_name": name, "mode": int(s.mode[i]),
                  "hook": int(s.hook[i])}  # fmt: skip
         self.state.log(json.dumps(state).encode(), log_time=ns)
 

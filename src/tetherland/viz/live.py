@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
+from enum import IntEnum
 from typing import Any
 
 import foxglove
@@ -101,6 +102,9 @@ class LiveView:
         ref = runner.reference
         plans = (getattr(ref, "landing_traj", None), getattr(ref, "takeoff_traj", None))
         self._plans = [p for p in plans if p is not None]
+        phase = getattr(ref, "phase", None)  # the reference's phase enum names its codes
+        if isinstance(phase, IntEnum):
+            self.publisher.phase_names = {int(p): p.name.lower() for p in type(phase)}
         self._wall0 = time.perf_counter()
         self._next_publish = 0.0
 

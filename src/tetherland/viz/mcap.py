@@ -111,6 +111,7 @@ def write_mcap(run: RunData, path: str | Path) -> McapResult:
         try:
             writer.write_metadata("tetherland", _metadata(run))
             publisher = make_publisher(context, run.scenario, lambda: run.plans)
+            publisher.phase_names = dict(run.phase_names)
             k = 0
             for i in range(len(series)):
                 t = float(series.t[i])

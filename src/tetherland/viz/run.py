@@ -60,6 +60,9 @@ class RunData:
         Every planned trajectory (drawn as the planned path), flown or not.
     summary : dict
         The verdict document (``summary.json``); empty while a run is live.
+    phase_names : dict of int to str
+        The method's phase names by the codes of the log's ``phase`` column (default: the
+        tethered mission's :class:`~tetherland.mission.Phase`).
     """
 
     log: SimLog
@@ -67,6 +70,7 @@ class RunData:
     spans: tuple[PlanSpan, ...] = ()
     plans: tuple[Trajectory, ...] = ()
     summary: dict[str, Any] = field(default_factory=dict)
+    phase_names: dict[int, str] = field(default_factory=dict)
 
     @property
     def events(self) -> list[dict[str, Any]]:
@@ -105,14 +109,17 @@ def run_data(
     times: dict[str, float],
     plans: dict[str, Trajectory],
     summary: dict[str, Any],
+    phase_codes: dict[str, int] | None = None,
 ) -> RunData:
-    """A :class:`RunData` from its parts (the plans by maneuver name)."""
+    """A :class:`RunData` from its parts (the plans by maneuver name, the phase codes by
+    name as the run record holds them)."""
     clean = {k: float(v) for k, v in times.items() if v is not None}
     spans = plan_spans(
         clean, plans.get("landing"), plans.get("takeoff"), scenario.mission.spinup_time
     )
+    names = {int(code): name for name, code in (phase_codes or {}).items()}
     return RunData(log=log, scenario=scenario, spans=spans, plans=tuple(plans.values()),
-                   summary=dict(summary))  # fmt: skip
+                   summary=dict(summary), phase_names=names)  # fmt: skip
 
 
 def run_data_from_result(result: RunResult) -> RunData:
@@ -123,7 +130,8 @@ def run_data_from_result(result: RunResult) -> RunData:
         raise ConfigError("the run was not flown (no plan): there is nothing to export")
     trajectories = get_method(result.method).trajectories(result.plan) if result.plan else {}
     return run_data(result.log, result.plant_scenario, dict(result.record.times),
-                    _tethered_plans(trajectories), result.summary)  # fmt: skip
+                    _tethered_plans(trajectories), result.summary,
+                    dict(result.record.phase_codes))  # fmt: skip
 
 
 def load_run(run_dir: str | Path) -> RunData:
@@ -153,4 +161,5 @@ def load_run(run_dir: str | Path) -> RunData:
         except (ConfigError, ValueError, KeyError):
             continue  # not a tethered trajectory (e.g. a perching maneuver)
         plans[trajectory.meta.maneuver] = trajectory
-    return run_data(log, record.truth_scenario(), dict(record.times), plans, summary)
+    return run_data(log, record.truth_scenario(), dict(record.times), plans, summary,
+                    dict(record.phase_codes))  # fmt: skip
