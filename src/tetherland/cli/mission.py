@@ -11,9 +11,9 @@ from rich.table import Table
 
 from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
 from tetherland.errors import ConfigError
-from tetherland.io import dumps_json
+from tetherland.io import dumps_json, prepare_output_dir
 from tetherland.methods import get_method, method_names
-from tetherland.runs import prepare_output_dir, run_mission, save_run
+from tetherland.runs import run_mission, save_run
 
 CONTROLLERS = ("hierarchical", "dfl")
 
