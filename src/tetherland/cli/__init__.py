@@ -21,6 +21,7 @@ from tetherland import __version__
 from tetherland.cli.analyze import analyze
 from tetherland.cli.campaign import campaign
 from tetherland.cli.design import design
+from tetherland.cli.export import export
 from tetherland.cli.judge import judge
 from tetherland.cli.mission import mission
 from tetherland.cli.plan import plan
@@ -59,6 +60,7 @@ app.command()(campaign)
 app.command()(design)
 app.command()(mission)
 app.command()(judge)
+app.command()(export)
 app.command()(plan)
 
 
