@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 from tetherland import GRAVITY
 from tetherland.errors import ConfigError
 from tetherland.geometry import FloatArray
+from tetherland.models.integrators import rk4
 from tetherland.models.quadrotor import RotorLayout
 
 if TYPE_CHECKING:
@@ -404,12 +405,8 @@ def parametric_rk4_step() -> ca.Function:
         mass=c[0], length=c[1], inertia=c[2], gravity=c[3], torque_row=[c[4 + i] for i in range(4)]
     )
 
-    def f(z: ca.SX) -> ca.SX:
-        return rotor_form_rhs(z, u, coeffs, CASADI)
+    def f(z: ca.SX, v: ca.SX) -> ca.SX:
+        return rotor_form_rhs(z, v, coeffs, CASADI)
 
-    k1 = f(x)
-    k2 = f(x + 0.5 * h * k1)
-    k3 = f(x + 0.5 * h * k2)
-    k4 = f(x + h * k3)
-    x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    x_next = rk4(f, x, u, h)
     return ca.Function("planar_rk4", [x, u, h, c], [x_next], ["x", "u", "h", "c"], ["x_next"])

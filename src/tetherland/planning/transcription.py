@@ -17,28 +17,17 @@ P = [p, T, x_init], so one transcription serves every problem of the same struct
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
 
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
+from tetherland.models import integrators
 from tetherland.planning.ocp import OcpProblem
 
-Integrator = Literal["rk4", "euler"]
-
-
-def _step(f: Callable[[ca.SX], ca.SX], x: ca.SX, h: ca.SX, method: Integrator) -> ca.SX:
-    if method == "euler":
-        return x + h * f(x)
-    k1 = f(x)
-    k2 = f(x + 0.5 * h * k1)
-    k3 = f(x + 0.5 * h * k2)
-    k4 = f(x + h * k3)
-    return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+Integrator = integrators.Method
 
 
 @dataclass(frozen=True)
@@ -64,7 +53,7 @@ class MultipleShooting:
             raise ValueError(f"nodes must be >= 2, got {self.nodes}")
         if self.steps < 1:
             raise ValueError(f"steps must be >= 1, got {self.steps}")
-        if self.integrator not in ("rk4", "euler"):
+        if self.integrator not in integrators.METHODS:
             raise ValueError(f"integrator must be 'rk4' or 'euler', got {self.integrator!r}")
 
     def transcribe(self, problem: OcpProblem) -> Transcript:
@@ -77,7 +66,7 @@ class MultipleShooting:
         x_s, u_s = ca.SX.sym("xs", nx), ca.SX.sym("us", nu)
         xf = x_s
         for _ in range(self.steps):
-            xf = _step(lambda z: fn["ode"](z, u_s, p), xf, h, self.integrator)
+            xf = integrators.step(self.integrator, lambda z, v: fn["ode"](z, v, p), xf, u_s, h)
         F = ca.Function("F", [x_s, u_s, p, T], [xf])
 
         X = [ca.SX.sym(f"x_{k}", nx) for k in range(N + 1)]
@@ -165,7 +154,7 @@ class Transcript:
         """w from node states (N+1, nx) and inputs (N, nu)."""
         X = np.asarray(X, dtype=float).reshape(self.nodes + 1, self.nx)
         U = np.asarray(U, dtype=float).reshape(self.nodes, self.nu)
-        return np.concatenate([np.concatenate((X[k], U[k])) for k in range(self.nodes)] + [X[-1]])
+        return np.concatenate((np.hstack((X[:-1], U)).reshape(-1), X[-1]))
 
     def unpack(self, w: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Node states (N+1, nx) and inputs (N, nu) from w."""
