@@ -26,6 +26,7 @@ and arrays, ``casadi`` for symbols); parameters may be numbers or CasADi symbols
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -162,16 +163,21 @@ class PlanarParams:
         """y_A in F_B: the body axis of the planar rotation."""
         return np.array([math.sin(self.heading), math.cos(self.heading), 0.0])
 
-    @property
+    @functools.cached_property
     def Gamma_M(self) -> FloatArray:
-        """(2, 4) map f -> [f_R, tau_y] (6.19)."""
-        return np.vstack((np.ones(4), self.torque_row))
+        """(2, 4) map f -> [f_R, tau_y] (6.19) (computed once; read-only)."""
+        GM = np.vstack((np.ones(4), self.torque_row))
+        GM.setflags(write=False)
+        return GM
 
-    @property
+    @functools.cached_property
     def G(self) -> FloatArray:
-        """(4, 2) map [f_R, tau_y] -> rotor thrusts with zero roll and yaw torque [-, 1/m]."""
+        """(4, 2) map [f_R, tau_y] -> rotor thrusts with zero roll and yaw torque [-, 1/m]
+        (computed once; read-only)."""
         Gi = np.linalg.inv(self.allocation)
-        return np.column_stack((Gi[:, 0], Gi[:, 1:4] @ self.e_B))
+        G = np.column_stack((Gi[:, 0], Gi[:, 1:4] @ self.e_B))
+        G.setflags(write=False)
+        return G
 
 
 def planar_terms(

@@ -129,15 +129,13 @@ def decode(text: str, schemas: Iterable[CsvSchema]) -> CsvDocument:
     if header.get("format") != str(FORMAT_VERSION):
         raise ConfigError(f"trajectory CSV: unsupported format {header.get('format')!r}")
     names = tuple(lines[i].split(",")) if i < len(lines) else ()
-    schema = accepted.get(header.get("kind", ""))
-    if schema is None:
-        if names in {s.columns for s in accepted.values()}:
-            raise ConfigError(
-                f"trajectory CSV: kind {header.get('kind')!r} is not "
-                + " or ".join(repr(k) for k in accepted)
-            )
-        raise ConfigError("trajectory CSV: missing or unexpected column header")
-    if names != schema.columns:
+    kind = header.get("kind")
+    schema = accepted.get(kind or "")
+    if schema is None and kind is not None:
+        raise ConfigError(
+            f"trajectory CSV: kind {kind!r} is not " + " or ".join(repr(k) for k in accepted)
+        )
+    if schema is None or names != schema.columns:
         raise ConfigError("trajectory CSV: missing or unexpected column header")
     try:
         meta = json.loads(header["meta"])

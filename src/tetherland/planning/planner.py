@@ -246,8 +246,9 @@ class _ManeuverOcp:
         if self.check is CheckScope.NODES:
             X = self.planner.rotor_states(spec, sol)
             check = verify_nodes(
-                spec, sol.times, X, U, candidate.transcription.steps, self.planner.tolerances
-            )
+                spec, sol.times, X, U, candidate.transcription.steps, self.planner.tolerances,
+                self.planner.simulator,
+            )  # fmt: skip
             traj: Trajectory = ShootingTrajectory(
                 self.meta, sol.times, X, U, simulator=self.planner.simulator
             )

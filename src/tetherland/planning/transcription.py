@@ -137,6 +137,7 @@ class Transcript:
     nx: int
     nu: int
     interval_map: ca.Function = field(repr=False)
+    _path_index: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def nodes(self) -> int:
@@ -173,23 +174,26 @@ class Transcript:
         if problem.structure_key != self.structure_key:
             raise ValueError("problem structure differs from the transcribed one")
         N = self.nodes
-        inf_x = np.full(self.nx, np.inf)
-        lbX = [problem.x_lb if 0 < k < N else -inf_x for k in range(N + 1)]
-        ubX = [problem.x_ub if 0 < k < N else inf_x for k in range(N + 1)]
-        lbx = self.pack(lbX, [problem.u_lb] * N)
-        ubx = self.pack(ubX, [problem.u_ub] * N)
-        lbg, ubg = [], []
-        for kind, n in self.layout:
-            if kind == "path":
-                lbg.append(problem.path_lb)
-                ubg.append(problem.path_ub)
-            else:
-                lbg.append(np.zeros(n))
-                ubg.append(np.zeros(n))
+        lbX, ubX = np.tile(problem.x_lb, (N + 1, 1)), np.tile(problem.x_ub, (N + 1, 1))
+        lbX[[0, N]], ubX[[0, N]] = -np.inf, np.inf
+        lbx = self.pack(lbX, np.tile(problem.u_lb, (N, 1)))
+        ubx = self.pack(ubX, np.tile(problem.u_ub, (N, 1)))
+        rows = self.path_index
+        path = rows >= 0
+        lbg, ubg = np.zeros(len(rows)), np.zeros(len(rows))
+        lbg[path], ubg[path] = problem.path_lb[rows[path]], problem.path_ub[rows[path]]
         return {
             "lbx": lbx,
             "ubx": ubx,
-            "lbg": np.concatenate(lbg),
-            "ubg": np.concatenate(ubg),
+            "lbg": lbg,
+            "ubg": ubg,
             "p": np.concatenate((problem.p_value, [problem.duration], problem.x0)),
         }
+
+    @property
+    def path_index(self) -> np.ndarray:
+        """Per constraint row: its index in the path constraints g, or -1 (equalities)."""
+        if self._path_index is None:
+            blocks = [np.arange(n) if kind == "path" else np.full(n, -1) for kind, n in self.layout]
+            object.__setattr__(self, "_path_index", np.concatenate(blocks))
+        return self._path_index  # type: ignore[return-value]
