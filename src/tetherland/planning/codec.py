@@ -23,9 +23,9 @@ from __future__ import annotations
 import io
 import json
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -35,6 +35,7 @@ from tetherland.geometry import FloatArray
 
 FORMAT_VERSION = 1
 TITLE = "# tetherland trajectory"
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -151,6 +152,26 @@ def decode(text: str, schemas: Iterable[CsvSchema]) -> CsvDocument:
             f"{len(schema.columns)} columns"
         )
     return CsvDocument(schema=schema, header=header, meta=meta, data=data)
+
+
+def meta_to_json(record: Any) -> dict[str, Any]:
+    """A frozen dataclass of model constants as JSON (arrays as nested lists)."""
+    return {
+        f.name: np.asarray(v).tolist() if isinstance(v, np.ndarray) else v
+        for f in fields(record)
+        for v in (getattr(record, f.name),)
+    }
+
+
+def meta_from_json(cls: type[T], d: dict[str, Any]) -> T:
+    """The dataclass ``cls`` from :func:`meta_to_json` output (fields typed ``FloatArray``
+    become float arrays). Raises KeyError for a missing field."""
+    return cls(
+        **{
+            f.name: np.asarray(d[f.name], dtype=float) if f.type == "FloatArray" else d[f.name]
+            for f in fields(cls)  # type: ignore[arg-type]
+        }
+    )
 
 
 def read_text(path: str | Path) -> str:

@@ -10,7 +10,19 @@
 A result is :attr:`PlanStatus.SOLVED` only when its trajectory passed
 :func:`~tetherland.planning.verify.verify` (the fine re-simulation meets the final
 conditions, thrust and tension bounds); otherwise ``trajectory`` is None and
-``message`` says why.
+``message`` says why. Solving, fallback, refinement and the result base are the shared
+:mod:`~tetherland.planning.driver`'s; this module states the maneuver's OCP job.
+
+Online re-planning (receding horizon): :meth:`Planner.replan` plans the rest of the
+maneuver from the current state on the same compiled solver, warm-started from the plan
+being flown, and by default checks only the solver's nodes
+(:func:`~tetherland.planning.verify.verify_nodes`; ``verification.scope`` says so):
+
+>>> x = result.trajectory.state(2.0)          # mid-way, with an error in phi
+>>> x[0] += 0.01
+>>> rest = planner.replan(result, x, elapsed=2.0)
+>>> rest.status.name, rest.verification.scope.value, rest.spec.duration
+('SOLVED', 'nodes', 2.0)
 """
 
 from __future__ import annotations
@@ -77,11 +89,11 @@ __all__ = [
 class PlanResult(VerifiedResult[Trajectory, Verification]):
     """What :meth:`Planner.plan` and :meth:`Planner.replan` return.
 
+    The fields of :class:`~tetherland.planning.driver.VerifiedResult` (status, message,
+    solver, cost, trajectory, verification, solution, attempts) and:
+
     Attributes
     ----------
-    status : PlanStatus
-    message : str
-        Why (one line); ``"ok"`` when solved.
     maneuver : Maneuver
     method : {"ocp", "spline"}
     spec : ManeuverSpec
@@ -89,20 +101,9 @@ class PlanResult(VerifiedResult[Trajectory, Verification]):
     start_time : float
         Time since the start of the maneuver at which this plan's t = 0 lies (0 for
         :meth:`Planner.plan`, the ``elapsed`` time of a re-plan) [s].
-    solver : str or None
-        NLP solver (ocp only).
-    cost : float or None
-        Optimal cost J (ocp only, when the solve converged).
-    trajectory : Trajectory or None
-        Present only when ``status`` is SOLVED.
-    verification : Verification or None
-        Its check; ``verification.scope`` says what was checked (the dense
-        re-simulation, or for an online re-plan possibly the solver's nodes only).
-    solution : OcpSolution or None
-        Raw output of the last solve (also when not solved: for warm starts and diagnosis).
-    attempts : tuple of Attempt
-        Every NLP solve made (fallback solver, integrator refinements), in order;
-        ``solve_time_s``, ``build_time_s`` and ``iterations`` are their totals.
+
+    ``verification.scope`` says what was checked: the dense re-simulation, or for an
+    online re-plan possibly the solver's nodes only.
     """
 
     maneuver: Maneuver
@@ -172,7 +173,7 @@ class ReplanSettings:
 
     solver: SolverName = "fatrop"
     tol: float = 1e-4
-    constr_viol_tol: float = 1e-8
+    constr_viol_tol: float = 1e-6
     max_iter: int = 30
     warm_mu_init: float = 1e-8
     check: CheckScope = CheckScope.NODES

@@ -8,6 +8,7 @@ a previous :class:`OcpSolution` (primal values, and the multipliers for IPOPT).
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import os
 import shutil
@@ -136,12 +137,8 @@ class SolverSettings:
         return {
             "jit": True,
             "compiler": "shell",
-            "jit_options": {
-                "compiler": JIT_COMPILER,
-                "flags": list(JIT_FLAGS),
-                "directory": tempfile.gettempdir() + os.sep,
-                "verbose": False,
-            },
+            "jit_name": "tetherland_ocp",
+            "jit_options": {"compiler": JIT_COMPILER, "flags": list(JIT_FLAGS), "verbose": False},
         }
 
     def options(self, transcript: Transcript, warm: bool) -> dict[str, Any]:
@@ -291,7 +288,17 @@ class OcpSolver:
             return self._solvers[key], 0.0
         t0 = time.perf_counter()
         opts = self.settings.options(transcript, warm)
-        solver = ca.nlpsol(f"ocp_{self.settings.name}", self.settings.name, transcript.nlp, opts)
+        name = f"ocp_{self.settings.name}"
+        if self.settings.jit:
+            # CasADi writes the generated C to the working directory and compiles it in
+            # jit_options["directory"]: do both in a temporary directory, removed after
+            # the library is loaded (nothing is left on disk).
+            with tempfile.TemporaryDirectory(prefix="tetherland_jit_") as tmp:
+                opts["jit_options"]["directory"] = tmp + os.sep
+                with contextlib.chdir(tmp):
+                    solver = ca.nlpsol(name, self.settings.name, transcript.nlp, opts)
+        else:
+            solver = ca.nlpsol(name, self.settings.name, transcript.nlp, opts)
         self._solvers[key] = solver
         return solver, time.perf_counter() - t0
 

@@ -104,30 +104,11 @@ class TrajectoryMeta:
         )
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "scenario": self.scenario,
-            "maneuver": self.maneuver,
-            "mass": self.mass,
-            "length": self.length,
-            "inertia_B": np.asarray(self.inertia_B).tolist(),
-            "allocation": np.asarray(self.allocation).tolist(),
-            "heading": self.heading,
-            "R_WA": np.asarray(self.R_WA).tolist(),
-            "p_A": np.asarray(self.p_A).tolist(),
-            "gravity": self.gravity,
-            "version": self.version,
-        }
+        return codec.meta_to_json(self)
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> TrajectoryMeta:
-        arrays = {
-            k: np.asarray(d[k], dtype=float) for k in ("inertia_B", "allocation", "R_WA", "p_A")
-        }
-        scalars = {
-            k: d[k]
-            for k in ("scenario", "maneuver", "mass", "length", "heading", "gravity", "version")
-        }
-        return cls(**scalars, **arrays)
+        return codec.meta_from_json(cls, d)
 
 
 @dataclass(frozen=True)

@@ -77,9 +77,8 @@ class Verification(CheckResult):
         Extreme rotor thrusts [N].
     surface_margin : float
         min over t of phi - phi* [rad].
-    problems : tuple of str
-        What is out of tolerance (empty when the trajectory is accepted).
-    scope : CheckScope
+
+    With ``problems`` and ``scope`` of :class:`~tetherland.planning.checks.CheckResult`.
     """
 
     final_error: dict[str, float]

@@ -70,26 +70,15 @@ PerchStatus = PlanStatus
 class PerchResult(VerifiedResult[FreeFlightTrajectory, PerchVerification]):
     """What :meth:`PerchingPlanner.plan` returns.
 
+    The fields of :class:`~tetherland.planning.driver.VerifiedResult` (``cost`` is
+    J*(T) of the chosen duration, without the time term; ``attempts`` holds every search
+    point, fallback and refinement) and:
+
     Attributes
     ----------
-    status : PlanStatus
-    message : str
-        Why (one line); ``"ok"`` when solved.
     spec : PerchSpec
     duration : float or None
         Chosen maneuver duration t_L - t_0 [s] (None when no solve was made).
-    cost : float or None
-        Optimal cost J*(T) of the chosen duration (without the time term).
-    solver : str or None
-        Solver of the chosen solution.
-    trajectory : FreeFlightTrajectory or None
-        Present only when SOLVED.
-    verification : PerchVerification or None
-    solution : OcpSolution or None
-        Raw solver output of the chosen (or last) solve.
-    attempts : tuple of Attempt
-        Every NLP solve (search points, fallbacks and refinements); ``solves``,
-        ``solve_time_s``, ``build_time_s`` and ``iterations`` count them.
     """
 
     spec: PerchSpec

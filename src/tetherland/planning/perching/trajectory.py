@@ -126,20 +126,11 @@ class FreeFlightMeta:
         return self.p_L + self.h_R * self.z_S
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "scenario": self.scenario, "mass": self.mass, "inertia": self.inertia,
-            "G": np.asarray(self.G).tolist(), "R_WA": np.asarray(self.R_WA).tolist(),
-            "p_L": np.asarray(self.p_L).tolist(), "beta": self.beta, "h_R": self.h_R,
-            "approach_speed": self.approach_speed, "gravity": self.gravity,
-            "version": self.version,
-        }  # fmt: skip
+        return codec.meta_to_json(self)
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> FreeFlightMeta:
-        arrays = {k: np.asarray(d[k], dtype=float) for k in ("G", "R_WA", "p_L")}
-        scalars = {k: d[k] for k in ("scenario", "mass", "inertia", "beta", "h_R",
-                                     "approach_speed", "gravity", "version")}  # fmt: skip
-        return cls(**scalars, **arrays)
+        return codec.meta_from_json(cls, d)
 
 
 @dataclass(frozen=True)

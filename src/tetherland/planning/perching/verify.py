@@ -70,9 +70,8 @@ class PerchVerification(CheckResult):
         Extreme rotor thrusts [N].
     min_clearance : float
         Least clearance of landers and guards before t_L [m].
-    problems : tuple of str
-        What is out of tolerance (empty when accepted).
-    scope : CheckScope
+
+    With ``problems`` and ``scope`` of :class:`~tetherland.planning.checks.CheckResult`.
     """
 
     position_error: float
