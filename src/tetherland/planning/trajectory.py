@@ -23,6 +23,7 @@ trajectory.
 
 from __future__ import annotations
 
+import functools
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -97,8 +98,9 @@ class TrajectoryMeta:
     gravity: float = GRAVITY
     version: str = __version__
 
-    @property
+    @functools.cached_property
     def params(self) -> PlanarParams:
+        """The planar model constants (computed once)."""
         return PlanarParams.from_matrices(
             self.mass, self.length, self.inertia_B, self.allocation, self.heading, self.gravity
         )
