@@ -140,9 +140,11 @@ class SolverSettings:
             "jit_name": "tetherland_ocp",
             "jit_cleanup": False,  # the temporary directory goes as a whole (OcpSolver)
             "jit_options": {
-                "compiler": JIT_COMPILER, "flags": list(JIT_FLAGS), "verbose": False,
+                "compiler": JIT_COMPILER,
+                "flags": list(JIT_FLAGS),
+                "verbose": False,
                 "cleanup": False,
-            },  # fmt: skip
+            },
         }
 
     def options(self, transcript: Transcript, warm: bool) -> dict[str, Any]:
