@@ -15,7 +15,8 @@ from collections import defaultdict
 from tetherland.config import load_scenario
 from tetherland.control import SwitchingController
 from tetherland.estimation import UkfEstimator
-from tetherland.mission import MissionSupervisor, run_mission
+from tetherland.mission import MissionSupervisor
+from tetherland.runs import run_mission
 from tetherland.sim.plant import Plant
 
 

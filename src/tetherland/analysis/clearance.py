@@ -6,7 +6,8 @@ of the frame comes close to the surface: with the hook at the anchor, the rotor 
 horizontal distance R from the centre meet a surface that rises R tan(beta). The mission
 checks this before it flies and reports the hook drop the slope needs instead of crashing.
 
-The vehicle's collision shape is the one the plant simulates (:mod:`tetherland.sim.mjcf`);
+The vehicle's collision shape is the one the plant simulates
+(:mod:`tetherland.models.airframe`);
 the frame is sampled on the rims of the rotor guards (5 degree steps, under 0.3 mm error)
 and the corners of the hub.
 """
@@ -21,14 +22,14 @@ from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, Surface
-from tetherland.models.quadrotor import RotorLayout
-from tetherland.rotations import rotation_from_z_and_yaw
-from tetherland.sim.mjcf import (
+from tetherland.models.airframe import (
     HUB_HALF_SIZE,
     PROP_HALF_THICKNESS,
     PROP_HEIGHT,
     PROP_RADIUS_FRACTION,
 )
+from tetherland.models.quadrotor import RotorLayout
+from tetherland.rotations import rotation_from_z_and_yaw
 
 _N_RIM = 72
 _RIM = np.column_stack(
@@ -59,10 +60,10 @@ def level_vehicle_distance(
 ) -> float:
     """Smallest signed distance [m] of the level vehicle's collision shape from the surface.
 
-    The shape is the one of :mod:`tetherland.sim.mjcf`: rotor guards (disks of radius
-    PROP_RADIUS_FRACTION arm_length, PROP_HEIGHT above the rotors), the hub box and the
-    four lander spheres, with the vehicle level at centre of mass ``p_W`` [m] and heading
-    ``yaw`` [rad].
+    The shape is the one the plant simulates (:mod:`tetherland.models.airframe`): rotor
+    guards (disks of radius PROP_RADIUS_FRACTION arm_length, PROP_HEIGHT above the rotors),
+    the hub box and the four lander spheres, with the vehicle level at centre of mass
+    ``p_W`` [m] and heading ``yaw`` [rad].
     """
     v = scenario.vehicle
     R = rotation_from_z_and_yaw((0.0, 0.0, 1.0), yaw)
@@ -112,7 +113,7 @@ class HookingClearance:
 
 
 def hooking_clearance(
-    scenario: Scenario, surface: Surface, pass_W: ArrayLike, yaw: float, margin: float = 0.02
+    scenario: Scenario, surface: Surface, pass_W: ArrayLike, yaw: float, margin: float
 ) -> HookingClearance:
     """Clearance of the hooking pass whose centre-of-mass end points are ``pass_W``.
 
