@@ -9,10 +9,12 @@ from scipy.integrate import solve_ivp
 from tetherland.config import load_scenario
 from tetherland.planning import (
     CheckScope,
+    ManeuverSpec,
     Planner,
     PlanningError,
     PlanStatus,
     ReplanSettings,
+    kernels,
     verify_nodes,
 )
 
@@ -125,15 +127,15 @@ def test_node_check_catches_gaps_and_thrusts_beyond_the_bounds(planner, landing)
     spec, sol = result.spec, result.solution
     X = planner.rotor_states(spec, sol)
     U = planner.rotor_inputs(spec, sol)
-    ok = verify_nodes(spec, sol.times, X, U, 1, simulator=planner.simulator)
+    ok = verify_nodes(spec, sol.times, X, U, 1)
     assert ok.ok and ok.scope is CheckScope.NODES
     broken = X.copy()
     broken[20, 0] += 1e-3  # a node off the motion
-    v = verify_nodes(spec, sol.times, broken, U, 1, simulator=planner.simulator)
+    v = verify_nodes(spec, sol.times, broken, U, 1)
     assert any("shooting gaps" in p for p in v.problems)
     steep = X.copy()
     steep[30, 8:12] += 200.0  # thrust rates whose arc leaves the bounds between the nodes
-    v = verify_nodes(spec, sol.times, steep, U, 1, simulator=planner.simulator)
+    v = verify_nodes(spec, sol.times, steep, U, 1)
     assert any("rotor thrusts" in p for p in v.problems)
 
 
@@ -146,3 +148,17 @@ def test_bad_replan_requests_are_refused(planner, landing):
     spline = planner.plan(load_scenario("slope50"), method="spline")
     with pytest.raises(PlanningError, match="solved OCP plan"):
         planner.replan(spline, x, 1.0)
+
+
+def test_gap_kernel_agrees_with_its_numpy_reference():
+    """The compiled interval integration equals the model's numpy RK4 (random states)."""
+    spec = ManeuverSpec.from_scenario(load_scenario("slope50"))
+    rng = np.random.default_rng(11)
+    N = 30
+    X = np.tile(spec.x_start, (N + 1, 1)) + rng.normal(scale=0.3, size=(N + 1, 12))
+    U = rng.normal(scale=5.0, size=(N, 4))
+    h = rng.uniform(0.01, 0.1, N)
+    for steps in (1, 3):
+        fast = kernels.interval_ends(X, U, h, steps, spec.params.coefficients)
+        plain = kernels.interval_ends_reference(spec.model, X, U, h, steps)
+        np.testing.assert_allclose(fast, plain, rtol=1e-12, atol=1e-12)

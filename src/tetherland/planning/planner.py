@@ -247,9 +247,8 @@ class _ManeuverOcp:
         if self.check is CheckScope.NODES:
             X = self.planner.rotor_states(spec, sol)
             check = verify_nodes(
-                spec, sol.times, X, U, candidate.transcription.steps, self.planner.tolerances,
-                self.planner.simulator,
-            )  # fmt: skip
+                spec, sol.times, X, U, candidate.transcription.steps, self.planner.tolerances
+            )
             traj: Trajectory = ShootingTrajectory(
                 self.meta, sol.times, X, U, simulator=self.planner.simulator
             )

@@ -8,11 +8,7 @@ a previous :class:`OcpSolution` (primal values, and the multipliers for IPOPT).
 
 from __future__ import annotations
 
-import contextlib
 import enum
-import os
-import shutil
-import tempfile
 import time
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -22,15 +18,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
+from tetherland.planning import jit
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.transcription import MultipleShooting, Transcript
 
 SolverName = Literal["fatrop", "ipopt"]
 SOLVERS: tuple[str, ...] = ("fatrop", "ipopt")
-JIT_COMPILER = "gcc"
-JIT_FLAGS = ("-O1",)
-"""C compiler and flags of :attr:`SolverSettings.jit` (-O1: 3x the -O0 speed, half the
-compile time of -O2)."""
 
 
 class SolveStatus(enum.Enum):
@@ -106,8 +99,8 @@ class SolverSettings:
         Constraint violation tolerance of the converged point (None: the solver's
         default, 1e-4) [constraint units].
     jit : bool
-        Compile the NLP's functions to C with the system compiler (``gcc``) before the
-        first solve: about 20 s once per structure, then 2-3x faster evaluations.
+        Compile the NLP's functions to C with the system compiler (:mod:`.jit`) before
+        the first solve: about 20 s once per structure, then 2-3x faster evaluations.
     """
 
     name: SolverName = "fatrop"
@@ -128,29 +121,13 @@ class SolverSettings:
             value = getattr(self, name)
             if value is not None and not value > 0:
                 raise ValueError(f"{name} must be > 0 (or None), got {value}")
-        if self.jit and shutil.which(JIT_COMPILER) is None:
-            raise ValueError(f"jit needs the C compiler '{JIT_COMPILER}', which is not installed")
-
-    def _jit(self) -> dict[str, Any]:
-        if not self.jit:
-            return {}
-        return {
-            "jit": True,
-            "compiler": "shell",
-            "jit_name": "tetherland_ocp",
-            "jit_cleanup": False,  # the temporary directory goes as a whole (OcpSolver)
-            "jit_options": {
-                "compiler": JIT_COMPILER,
-                "flags": list(JIT_FLAGS),
-                "verbose": False,
-                "cleanup": False,
-            },
-        }
+        if self.jit and not jit.available():
+            raise ValueError(f"jit needs the C compiler '{jit.COMPILER}', which is not installed")
 
     def options(self, transcript: Transcript, warm: bool) -> dict[str, Any]:
         """CasADi ``nlpsol`` options (warm: tuned to start near a solution)."""
         common: dict[str, Any] = {
-            "expand": True, "print_time": False, "error_on_fail": False, **self._jit(),
+            "expand": True, "print_time": False, "error_on_fail": False,
         }  # fmt: skip
         if self.name == "ipopt":
             ipopt: dict[str, Any] = {
@@ -247,6 +224,11 @@ class InitialGuess:
     U: FloatArray
 
 
+def _vector(value: ca.DM) -> FloatArray:
+    """A dense CasADi column as a 1-D numpy array."""
+    return np.array(value.nonzeros(), dtype=float)
+
+
 def _classify(solver: str, stats: dict[str, Any]) -> tuple[SolveStatus, str]:
     unified = str(stats.get("unified_return_status", ""))
     if solver == "ipopt":
@@ -280,6 +262,7 @@ class OcpSolver:
         self.settings = settings or SolverSettings()
         self._transcripts: dict[str, Transcript] = {}
         self._solvers: dict[tuple[str, bool], ca.Function] = {}
+        self._bounds: dict[tuple[str, bytes], dict[str, ca.DM]] = {}
 
     def transcript(self, problem: OcpProblem) -> Transcript:
         """The (cached) transcript of ``problem``'s structure."""
@@ -296,13 +279,11 @@ class OcpSolver:
         opts = self.settings.options(transcript, warm)
         name = f"ocp_{self.settings.name}"
         if self.settings.jit:
-            # CasADi writes the generated C to the working directory and compiles it in
-            # jit_options["directory"]: do both in a temporary directory, removed after
-            # the library is loaded (nothing is left on disk).
-            with tempfile.TemporaryDirectory(prefix="tetherland_jit_") as tmp:
-                opts["jit_options"]["directory"] = tmp + os.sep
-                with contextlib.chdir(tmp):
-                    solver = ca.nlpsol(name, self.settings.name, transcript.nlp, opts)
+            solver = jit.compiled(
+                lambda compile_opts: ca.nlpsol(
+                    name, self.settings.name, transcript.nlp, {**opts, **compile_opts}
+                )
+            )
         else:
             solver = ca.nlpsol(name, self.settings.name, transcript.nlp, opts)
         self._solvers[key] = solver
@@ -340,7 +321,9 @@ class OcpSolver:
                     f"guess shapes {X0.shape}, {U0.shape} do not match the transcription "
                     f"({N + 1}, {problem.nx}), ({N}, {problem.nu})"
                 )
-        args: dict[str, ArrayLike] = {"x0": tr.pack(X0, U0), **tr.numbers(problem)}
+        args: dict[str, ArrayLike | ca.DM] = {
+            "x0": tr.pack(X0, U0), "p": tr.parameters(problem), **self._bound_args(tr, problem)
+        }  # fmt: skip
         if (
             warm
             and isinstance(guess, OcpSolution)
@@ -372,7 +355,7 @@ class OcpSolver:
         elapsed = time.perf_counter() - t0
         stats = solver.stats()
         status, raw = _classify(self.settings.name, stats)
-        X, U = tr.unpack(np.asarray(res["x"]).reshape(-1))
+        X, U = tr.unpack(_vector(res["x"]))
         return OcpSolution(
             status=status,
             return_status=raw,
@@ -385,6 +368,20 @@ class OcpSolver:
             solve_time=elapsed,
             build_time=build_time,
             structure_key=problem.structure_key,
-            lam_x=np.asarray(res["lam_x"]).reshape(-1),
-            lam_g=np.asarray(res["lam_g"]).reshape(-1),
+            lam_x=_vector(res["lam_x"]),
+            lam_g=_vector(res["lam_g"]),
         )
+
+    def _bound_args(self, tr: Transcript, problem: OcpProblem) -> dict[str, ca.DM]:
+        """``lbx``, ``ubx``, ``lbg``, ``ubg`` as CasADi matrices, cached per bound values
+        (re-plans change only the initial state, the duration and the parameters)."""
+        key = (tr.structure_key, b"".join(
+            np.ascontiguousarray(getattr(problem, name)).tobytes()
+            for name in ("x_lb", "x_ub", "u_lb", "u_ub", "path_lb", "path_ub")
+        ))  # fmt: skip
+        if key not in self._bounds:
+            if len(self._bounds) >= 16:
+                self._bounds.clear()
+            numbers = tr.numbers(problem)
+            self._bounds[key] = {k: ca.DM(numbers[k]) for k in ("lbx", "ubx", "lbg", "ubg")}
+        return self._bounds[key]

@@ -187,8 +187,12 @@ class Transcript:
             "ubx": ubx,
             "lbg": lbg,
             "ubg": ubg,
-            "p": np.concatenate((problem.p_value, [problem.duration], problem.x0)),
+            "p": self.parameters(problem),
         }
+
+    def parameters(self, problem: OcpProblem) -> FloatArray:
+        """The NLP parameters P = [p, T, x_init] of one problem of this structure."""
+        return np.concatenate((problem.p_value, [problem.duration], problem.x0))
 
     @property
     def path_index(self) -> np.ndarray:
