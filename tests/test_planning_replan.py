@@ -14,9 +14,11 @@ from tetherland.planning import (
     PlanningError,
     PlanStatus,
     ReplanSettings,
+    build_ocp,
     kernels,
     verify_nodes,
 )
+from tetherland.planning.maneuver import remainder_ocp
 
 ELAPSED = 2.0
 
@@ -162,3 +164,23 @@ def test_gap_kernel_agrees_with_its_numpy_reference():
         fast = kernels.interval_ends(X, U, h, steps, spec.params.coefficients)
         plain = kernels.interval_ends_reference(spec.model, X, U, h, steps)
         np.testing.assert_allclose(fast, plain, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("form", ["wrench", "rotor"])
+def test_remainder_ocp_has_the_numbers_of_the_full_statement(form):
+    """The re-plan's shortcut (only x0, T and the tension ramp recomputed) states the same
+    problem as building the OCP of the remaining maneuver from scratch."""
+    sc = load_scenario("slope50", ["surface.slope_deg=0"])
+    spec = ManeuverSpec.from_scenario(sc, "takeoff")  # landed on flat ground: no tension
+    x = spec.x_start
+    x[2] = 0.01  # lifting off
+    rest = spec.remainder(x, 0.3)
+    assert rest.start_tension < spec.min_tension  # the bound ramps from the state's tension
+    assert rest.tension_floor(0.0) == pytest.approx(rest.start_tension, abs=1e-12)
+    ramp = spec.tension_ramp * spec.duration  # the same absolute ramp length as the plan's
+    assert rest.tension_floor(ramp) == pytest.approx(spec.min_tension)
+    full = build_ocp(rest, form)
+    short = remainder_ocp(build_ocp(spec, form), rest)
+    assert short.structure_key == full.structure_key
+    for name in ("duration", "x0", "p_value", "path_lb", "path_ub", "x_lb", "x_ub"):
+        np.testing.assert_allclose(getattr(short, name), getattr(full, name), rtol=0, atol=1e-12)

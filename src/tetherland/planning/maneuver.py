@@ -295,6 +295,10 @@ _PARAM_NAMES = (
     "theta_s", "width", "f_R_f", "f_L_min", "a0", "aT", "ramp", *_WEIGHT_NAMES,
 )  # fmt: skip
 _PARAM_SIZES = {"torque_row": 4, "G": 8}
+_PARAM_OFFSETS = {
+    name: int(sum(_PARAM_SIZES.get(n, 1) for n in _PARAM_NAMES[:i]))
+    for i, name in enumerate(_PARAM_NAMES)
+}
 
 
 def _param_values(spec: ManeuverSpec) -> dict[str, float | FloatArray]:
@@ -380,6 +384,21 @@ def build_ocp(
             raise ValueError(f"template is not a {form}-form problem")
         return template.with_numbers(**numbers)
     return OcpProblem(**_statement(form), **numbers)
+
+
+def remainder_ocp(problem: OcpProblem, spec: ManeuverSpec) -> OcpProblem:
+    """The OCP of ``spec``, the rest of the maneuver whose OCP is ``problem``
+    (:meth:`ManeuverSpec.remainder`): only the duration, the initial state and the
+    tension-ramp parameters change, so they are all that is recomputed (online re-plans).
+    """
+    x0 = spec.x_start
+    if problem.nx == 8:
+        G_M = spec.params.Gamma_M
+        x0 = np.concatenate((x0[:4], G_M @ x0[4:8], G_M @ x0[8:12]))
+    p_value = problem.p_value.copy()
+    p_value[_PARAM_OFFSETS["a0"]] = max(0.0, spec.min_tension - spec.start_tension)
+    p_value[_PARAM_OFFSETS["ramp"]] = spec.tension_ramp
+    return problem.with_numbers(duration=spec.duration, x0=x0, p_value=p_value)
 
 
 def _statement(form: StateForm) -> dict[str, object]:

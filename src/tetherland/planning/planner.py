@@ -50,7 +50,14 @@ from tetherland.planning.driver import (
     VerifiedResult,
     usable_warm_start,
 )
-from tetherland.planning.maneuver import Maneuver, ManeuverSpec, StateForm, build_ocp, precheck
+from tetherland.planning.maneuver import (
+    Maneuver,
+    ManeuverSpec,
+    StateForm,
+    build_ocp,
+    precheck,
+    remainder_ocp,
+)
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.solvers import (
     InitialGuess,
@@ -402,16 +409,20 @@ class Planner:
         N = nodes or len(prev.U)
         into = elapsed - plan.start_time  # time into the previous plan [s]
         spec = plan.spec.remainder(x0, into)
-        problem = self._problem(spec)
-        if prev.X.shape[1] != problem.nx:
+        if prev.X.shape[1] != (8 if self.form == "wrench" else 12):
             raise PlanningError("replan: the plan was made by a planner of another state form")
+        # The statement and all numbers but x0, T and the tension ramp are the plan's.
+        problem = self._problem(spec) if self._template is None else remainder_ocp(
+            self._template, spec
+        )  # fmt: skip
         # Node times of the re-plan on the previous plan's clock; its nodes interpolated
         # there (inputs held) start the solver; the first node is the new initial state.
         t_new = into + np.linspace(0.0, spec.duration, N + 1)
-        X = np.column_stack([np.interp(t_new, prev.times, col) for col in prev.X.T])
+        k = np.clip(np.searchsorted(prev.times, t_new, side="right") - 1, 0, len(prev.U) - 1)
+        w = ((t_new - prev.times[k]) / (prev.times[k + 1] - prev.times[k]))[:, None]
+        X = (1.0 - w) * prev.X[k] + w * prev.X[k + 1]
         X[0] = problem.x0
-        k = np.clip(np.searchsorted(prev.times, t_new[:-1], side="right") - 1, 0, len(prev.U) - 1)
-        guess = InitialGuess(X=X, U=prev.U[k])
+        guess = InitialGuess(X=X, U=prev.U[k[:-1]])
         # The previous plan's integrator step length, at most (one compiled solver).
         candidate = [a for a in plan.attempts if a.candidate]
         steps0 = candidate[-1].steps if candidate else 1
