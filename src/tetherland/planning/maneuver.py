@@ -23,6 +23,7 @@ the optimum.
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass, replace
 from typing import Literal
@@ -166,9 +167,9 @@ class ManeuverSpec:
             return self.start_state.copy()
         return self.model.hover_state(self.phi_start, self.theta_start)
 
-    @property
+    @functools.cached_property
     def start_tension(self) -> float:
-        """f_L at the start: of the start hover, or of ``start_state`` [N]."""
+        """f_L at the start: of the start hover, or of ``start_state`` [N] (computed once)."""
         if self.start_state is None:
             return self.hover("start")[1]
         return float(self.model.derivatives(self.start_state)["tension"])
