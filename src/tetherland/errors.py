@@ -28,3 +28,7 @@ class InfeasibleError(TetherlandError):
 
     The command line reports it on one line with exit code 1 (invalid input is 2).
     """
+
+
+class MissingDependencyError(TetherlandError, ImportError):
+    """An optional dependency (an extra such as ``tetherland[viz]``) is not installed."""

@@ -96,9 +96,9 @@ class HookingClearance:
         Smallest signed distance [m] at the ends of the pass (it is linear in between for
         a plane).
     required_hook_drop_m : float
-        Hook drop [m] that gives ``margin_m`` of clearance: exact for a plane (raising the
-        vehicle by dz raises every point by dz cos(beta)); for a pipe an estimate by the
-        same rule.
+        Hook drop [m] that gives ``margin_m`` of clearance: exact for a plane (a longer
+        drop dh moves the vehicle back along the approach direction n, away from the plane
+        by dh (-n . z_S)); for a pipe an estimate by the same rule.
     margin_m : float
         Clearance asked for [m].
     """
@@ -113,7 +113,12 @@ class HookingClearance:
 
 
 def hooking_clearance(
-    scenario: Scenario, surface: Surface, pass_W: ArrayLike, yaw: float, margin: float
+    scenario: Scenario,
+    surface: Surface,
+    pass_W: ArrayLike,
+    yaw: float,
+    margin: float,
+    approach_W: ArrayLike = (0.0, 0.0, -1.0),
 ) -> HookingClearance:
     """Clearance of the hooking pass whose centre-of-mass end points are ``pass_W``.
 
@@ -129,11 +134,15 @@ def hooking_clearance(
         Heading of the vehicle during the pass [rad].
     margin : float
         Clearance the pass must keep [m].
+    approach_W : (3,) array
+        Unit approach direction n: the hook leads the vehicle by ``hook_drop`` along n, so
+        a longer hook drop moves the vehicle back by the same length along -n.
     """
     clearance = min(
         level_vehicle_distance(scenario, surface, p, yaw)
         for p in np.atleast_2d(np.asarray(pass_W, dtype=float))
     )
-    cos_beta = max(float(surface.z_S[2]), 1e-3)
-    needed = scenario.tether.hook_drop + max(0.0, margin - clearance) / cos_beta
+    # a longer drop dh moves the vehicle by -dh n: away from a plane by dh (-n . z_S)
+    away = max(-float(np.dot(np.asarray(approach_W, dtype=float), surface.z_S)), 1e-3)
+    needed = scenario.tether.hook_drop + max(0.0, margin - clearance) / away
     return HookingClearance(clearance_m=clearance, required_hook_drop_m=needed, margin_m=margin)

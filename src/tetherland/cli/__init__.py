@@ -20,6 +20,8 @@ from typer.exceptions import TyperException
 from tetherland import __version__
 from tetherland.cli.analyze import analyze
 from tetherland.cli.campaign import campaign
+from tetherland.cli.design import design
+from tetherland.cli.export import export
 from tetherland.cli.judge import judge
 from tetherland.cli.mission import mission
 from tetherland.cli.plan import plan
@@ -55,8 +57,10 @@ app.command()(scenarios)
 app.command()(show)
 app.command()(analyze)
 app.command()(campaign)
+app.command()(design)
 app.command()(mission)
 app.command()(judge)
+app.command()(export)
 app.command()(plan)
 
 

@@ -11,9 +11,9 @@ from rich.table import Table
 
 from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
 from tetherland.errors import ConfigError
-from tetherland.io import dumps_json
+from tetherland.io import dumps_json, prepare_output_dir
 from tetherland.methods import get_method, method_names
-from tetherland.runs import prepare_output_dir, run_mission, save_run
+from tetherland.runs import run_mission, save_run
 
 CONTROLLERS = ("hierarchical", "dfl")
 
@@ -32,6 +32,30 @@ class _ProgressObserver:
             self.progress.update(self.task, description=f"t = {t:6.2f} s  {phase}")
 
 
+def _start_live(sc: Any, speed: float, port: int, rate: float, quiet: bool) -> Any:
+    from tetherland.cli.common import err_console
+    from tetherland.viz.live import LiveView
+
+    view = LiveView(sc, port=port, speed=speed, rate_hz=rate)
+    pace = f"{speed:g}x real time" if speed > 0 else "unpaced"
+    (err_console if quiet else console).print(
+        f"live view on {view.url} ({pace}): in Foxglove, Open connection > Foxglove WebSocket"
+    )
+    return view
+
+
+def _add_mcap(result: Any, directory: Path, files: dict[str, Path]) -> None:
+    """Write run.mcap and list it in summary.json."""
+    from tetherland.io import atomic_write_json
+    from tetherland.viz import run_data_from_result
+    from tetherland.viz.mcap import write_mcap
+
+    files["mcap"] = write_mcap(run_data_from_result(result), directory / "run.mcap").path
+    atomic_write_json(
+        files["summary"], {**result.summary, "files": {k: str(v) for k, v in files.items()}}
+    )
+
+
 def mission(
     scenario: ScenarioArg,
     overrides: SetOption = None,
@@ -48,11 +72,28 @@ def mission(
     video: Annotated[
         bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
     ] = False,
+    mcap: Annotated[
+        bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")
+    ] = False,
+    live: Annotated[
+        bool, typer.Option("--live", help="Stream the mission to Foxglove while it runs.")
+    ] = False,
+    live_speed: Annotated[
+        float,
+        typer.Option("--live-speed", help="With --live: sim seconds per second (0: unpaced)."),
+    ] = 1.0,
+    live_port: Annotated[
+        int, typer.Option("--live-port", help="With --live: WebSocket port (0: any free one).")
+    ] = 8765,
+    live_rate: Annotated[
+        float, typer.Option("--live-rate", help="With --live: messages per second per topic.")
+    ] = 100.0,
 ) -> None:
     """Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, controllers, supervisor).
 
     Writes the log, summary.json, the figure 6.5 plots and the 3D path (and an mp4 with
-    --video) into --out. Exit code 0 when the mission succeeded, 1 when it failed.
+    --video, run.mcap for Foxglove or Rerun with --mcap) into --out; --live streams the
+    run to Foxglove while it flies. Exit code 0 when the mission succeeded, 1 when it failed.
     """
     sc = resolve_scenario(scenario, overrides)
     how = get_method(method, "--method")
@@ -62,8 +103,13 @@ def mission(
         )
     if seed < 0:
         raise ConfigError(f"--seed must be >= 0 (got {seed})")
+    if mcap:
+        from tetherland.optional import require
+
+        require("foxglove", package="foxglove-sdk", extra="viz", feature="--mcap")
     default = "mission" if how.name == "tethered" else "perching"
     directory = prepare_output_dir(out or Path("out") / sc.name / default)
+    view = _start_live(sc, live_speed, live_port, live_rate, json) if live else None
     with Progress(
         SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
         console=console, transient=True, disable=json,
@@ -77,11 +123,16 @@ def mission(
 
         result = run_mission(
             sc, method=how.name, controller=controller, seed=seed,
-            observers=[_ProgressObserver(progress, task, phase_of)],
+            observers=[_ProgressObserver(progress, task, phase_of), *([view] if view else [])],
             on_flight=lambda flight: holder.update(reference=flight.reference),
         )  # fmt: skip
+        if view is not None:
+            view.finish(result.summary)
+            view.close()
         progress.update(task, description="writing results")
         files = save_run(result, directory, video=video)
+        if mcap and result.log is not None:
+            _add_mcap(result, directory, files)
         summary = result.summary
     if json:
         typer.echo(

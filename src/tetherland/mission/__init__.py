@@ -9,12 +9,14 @@ Nothing here imports the simulator: the same supervisor can drive a real vehicle
 closed loop in MuJoCo is :func:`tetherland.runs.run_mission`.
 """
 
+from tetherland.mission.hooking import HookingPass, check_pass, hooking_pass, hooking_pass_for
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import MissionError, MissionPlan, Waypoints, plan_mission
 from tetherland.mission.supervisor import TRANSITIONS, MissionSupervisor, TransitionError
 
 __all__ = [
     "TRANSITIONS",
+    "HookingPass",
     "MissionError",
     "MissionPlan",
     "MissionSupervisor",
@@ -22,5 +24,8 @@ __all__ = [
     "PhaseRecord",
     "TransitionError",
     "Waypoints",
+    "check_pass",
+    "hooking_pass",
+    "hooking_pass_for",
     "plan_mission",
 ]

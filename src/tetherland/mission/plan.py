@@ -13,10 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tetherland.analysis.clearance import HookingClearance, hooking_clearance
+from tetherland.analysis.clearance import HookingClearance
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.geometry import FloatArray, LandingGeometry, link_direction
+from tetherland.mission.hooking import check_pass, hooking_pass
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import rotation_from_z_and_yaw
@@ -123,22 +124,13 @@ def plan_mission(
         if not result.success:
             raise MissionError(f"no {result.maneuver.value} plan: {result.message}")
     R_WA = geo.R_WA
-    yaw = math.atan2(R_WA[1, 0], R_WA[0, 0])
+    hooking = hooking_pass(scenario, geo)
+    yaw = hooking.yaw
     attachment_W = rotation_from_z_and_yaw(Z_W, yaw) @ np.asarray(v.cable_attachment, float)
-    n = R_WA @ np.asarray(scenario.tether.approach_direction, dtype=float)
-    n /= np.linalg.norm(n)
-
-    def com_for_hook(hook_point: FloatArray) -> FloatArray:
-        """Centre of mass that puts the hook point at ``hook_point`` in level flight."""
-        return hook_point + scenario.tether.hook_drop * Z_W - attachment_W
-
     p_A = geo.p_A
     p_start = np.asarray(start.p_W, dtype=float)
-    hook_start = com_for_hook(p_A - cfg.approach_distance * n)
-    hook_end = com_for_hook(p_A + cfg.hook_overshoot * n)
-    clearance = hooking_clearance(
-        scenario, geo.surface, (hook_start, hook_end), yaw, cfg.hooking_clearance
-    )
+    hook_start, hook_end = hooking.p_start_W, hooking.p_end_W
+    clearance = check_pass(scenario, geo, hooking)
     if not clearance.ok:
         t = scenario.tether
         raise MissionError(

@@ -24,6 +24,7 @@ _EXPORTS = {
     "HookEventKind": "hook", "HookState": "hook", "Column": "log", "RunStatus": "log",
     "SimLog": "log", "SceneLayout": "mjcf", "build_mjcf": "mjcf", "Plant": "plant",
     "link_state_of": "plant", "Runner": "runner", "Schedule": "runner", "Imu": "sensors",
+    "BoundObserver": "runner", "ControlTick": "runner",
     "Mocap": "sensors",
 }  # fmt: skip
 
@@ -33,7 +34,7 @@ if TYPE_CHECKING:
     from tetherland.sim.log import Column, RunStatus, SimLog
     from tetherland.sim.mjcf import SceneLayout, build_mjcf
     from tetherland.sim.plant import Plant, link_state_of
-    from tetherland.sim.runner import Runner, Schedule
+    from tetherland.sim.runner import BoundObserver, ControlTick, Runner, Schedule
     from tetherland.sim.sensors import Imu, Mocap
 
 
@@ -45,9 +46,11 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
+    "BoundObserver",
     "Column",
     "ConstantReference",
     "ConstantSpeedController",
+    "ControlTick",
     "Hook",
     "HookEvent",
     "HookEventKind",
