@@ -19,14 +19,27 @@ from tetherland import GRAVITY
 from tetherland.analysis.statics import landing_hover, tethered_rest_tension
 from tetherland.cli import main
 from tetherland.config import TETHER_MATERIALS, CableModel, load_scenario
+from tetherland.control import SwitchingController
 from tetherland.errors import ConfigError
+from tetherland.estimation import UkfEstimator, elastic_tension
+from tetherland.estimation.tension import (
+    TENSION_FILTER_FAST,
+    TENSION_FILTER_SLOW,
+    tension_filter_time_constant,
+)
 from tetherland.geometry import (
     LandingGeometry,
     StretchedLanding,
     cable_stretch,
     landing_geometry,
+    link_direction,
+    link_frame,
     stretched_landing,
 )
+from tetherland.models.quadrotor import RotorModel
+from tetherland.planning import Planner
+from tetherland.planning.tracking import TrajectoryTrack
+from tetherland.rotations import rotmat_to_quat
 from tetherland.sim.cable import ChainCable, ElasticCable, chain_nodes, joint_quaternions
 from tetherland.sim.mjcf import (
     ChainSpec,
@@ -37,7 +50,8 @@ from tetherland.sim.mjcf import (
     hook_timeconst,
 )
 from tetherland.sim.plant import Plant
-from tetherland.state import RigidBodyState
+from tetherland.sim.runner import Runner
+from tetherland.state import RigidBodyState, link_kernel
 
 AT_COM = "vehicle.cable_attachment=[0,0,0]"
 """Cable at the centre of mass: the vehicle is a point mass on the cable (no torque)."""
@@ -446,3 +460,93 @@ def test_plant_rests_at_the_stretched_landing_point():
     np.testing.assert_allclose(plant.attachment_point(), sl.geometry.p_att_landed, atol=3e-4)
     rigid = plant.layout.geometry.p_att_landed
     assert np.linalg.norm(plant.attachment_point() - rigid) > 0.8 * sl.stretch
+
+
+# -- estimation with an elastic cable ----------------------------------------------------
+
+
+def test_tension_filter_follows_the_cable_axial_mode():
+    slow, fast = TENSION_FILTER_SLOW, TENSION_FILTER_FAST
+    assert tension_filter_time_constant(None, 1.0) == slow
+    k_nylon = TETHER_MATERIALS["nylon"].axial_stiffness  # l = 1 m
+    assert tension_filter_time_constant(k_nylon, 1.0) == pytest.approx(0.2 / math.sqrt(k_nylon))
+    assert math.atan(tension_filter_time_constant(k_nylon, 1.0) * math.sqrt(k_nylon)) < 0.2
+    assert tension_filter_time_constant(1e9, 1.0) == fast
+    assert tension_filter_time_constant(1.0, 1.0) == slow
+    est = UkfEstimator(load_scenario("slope50", [NYLON]), RigidBodyState.at_rest(np.zeros(3)))
+    assert est.tension.time_constant == pytest.approx(0.2 / math.sqrt(k_nylon))
+
+
+def test_link_rates_of_a_stretched_cable_use_its_real_length():
+    """At distance l + s the link rates are v_t/(l + s): the estimate assumes no length."""
+    rng = np.random.default_rng(7)
+    R_WA = np.eye(3)
+    p_A = np.array([0.2, -0.1, 1.0])
+    for _ in range(5):
+        phi, delta = rng.uniform(-1.2, 1.2), rng.uniform(-0.6, 0.6)
+        dphi, ddelta = rng.normal(size=2)
+        D = 1.0 + rng.uniform(0.0, 0.05)  # stretched
+        d, R_AL = link_direction(phi, delta), link_frame(phi, delta)
+        dd = math.cos(delta) * R_AL[:, 2] * dphi - R_AL[:, 1] * ddelta
+        x = np.concatenate((p_A + D * d, [1.0, 0, 0, 0], D * dd + 0.3 * d, np.zeros(3)))
+        out, d_B = link_kernel(x, np.zeros(3), p_A, R_WA)  # 0.3 m/s of stretch rate too
+        np.testing.assert_allclose(out, [phi, delta, dphi, ddelta], atol=1e-12)
+        np.testing.assert_allclose(d_B, d, atol=1e-12)
+
+
+def test_cable_estimate_of_a_known_pose():
+    sc = load_scenario("slope50", [NYLON])
+    geo = LandingGeometry.from_scenario(sc)
+    r_att = np.asarray(sc.vehicle.cable_attachment)
+    p_att = geo.p_A + (sc.tether.length + 0.004) * geo.d_tilde
+    est = UkfEstimator(sc, RigidBodyState.at_rest(p_att - r_att), 0.0)
+    c = est.cable()
+    assert c.distance == pytest.approx(sc.tether.length + 0.004, abs=1e-12)
+    assert c.stretch == pytest.approx(0.004, abs=1e-12)
+    assert c.elastic_tension == pytest.approx(sc.tether.stiffness * 0.004, rel=1e-9)
+    assert elastic_tension(0.9, 1.0, 1e3) == 0.0  # slack
+    ideal = UkfEstimator(load_scenario("slope50", ['tether.material="ideal"']),
+                         RigidBodyState.at_rest(p_att - r_att), 0.0)  # fmt: skip
+    assert ideal.cable().elastic_tension is None
+
+
+@pytest.mark.slow
+def test_nylon_tethered_landing_with_the_ukf_in_the_loop():
+    """The planned 50 deg landing on 1 m of nylon (k = 1200 N/m), UKF in the loop: the
+    tension estimate within 10 % while taut, the estimated distance within 1.5 mm of the
+    true l + s (so k (D - l) within 1.8 N), and touchdown within the stretch of p*_L."""
+    sc = load_scenario("slope50", [NYLON])
+    traj = Planner().plan(sc, "landing").require()
+    track = TrajectoryTrack(traj, 0.0, 500.0)
+
+    class Track:
+        def reference(self, t, est):
+            return track.reference(t)
+
+    nom = traj.nominal(0.0)
+    r_att = np.asarray(sc.vehicle.cable_attachment)
+    x0 = RigidBodyState(nom.p_W - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
+                        nom.omega_B)  # fmt: skip
+    w0 = RotorModel.from_config(sc.vehicle).speed(nom.rotor_thrusts)
+    est = UkfEstimator(sc, x0, 0.0, rotor_speeds0=w0)
+    plant = Plant(sc)
+    rows = []
+
+    def watch(t, plant):
+        if 0.3 < t < traj.duration - 0.2:
+            D = float(np.linalg.norm(plant.attachment_point() - plant.layout.geometry.p_A))
+            rows.append((est.cable().distance, D))
+
+    log = Runner(sc, SwitchingController(sc), estimator=est, reference=Track(), seed=4,
+                 plant=plant, observers=[watch]).run(
+        traj.duration + 0.5, initial_state=x0, rotor_speeds=w0, cable_engaged=True)  # fmt: skip
+    t = log["t"]
+    taut = (t > 0.3) & (t < traj.duration - 0.2) & (log["tension"] > 0.5)
+    rel = np.abs(log["est_tension"][taut] - log["tension"][taut]) / log["tension"][taut]
+    assert rel.max() < 0.10
+    est_D, true_D = np.array(rows).T
+    assert np.abs(est_D - true_D).max() < 1.5e-3
+    assert np.max(true_D) - sc.tether.length > 0.8 * sc.tether.stretch(log["tension"][taut].max())
+    sl = StretchedLanding.from_scenario(sc)
+    p_att_end = plant.attachment_point()
+    assert np.linalg.norm(p_att_end - sl.geometry.p_att_landed) < 3e-3

@@ -24,6 +24,7 @@ from tetherland.estimation.tension import (
     TensionEstimate,
     TensionEstimator,
     elastic_tension,
+    tension_filter_time_constant,
 )
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
 from tetherland.geometry import FloatArray, LandingGeometry
@@ -53,8 +54,9 @@ class UkfEstimator:
     noise_inflation : float
         Process/measurement noise multiplier (>= 1 makes the filter more robust to
         unmodelled effects) [-].
-    tension_time_constant : float
-        Low-pass time constant of the tension estimate [s].
+    tension_time_constant : float, optional
+        Low-pass time constant of the tension estimate (default: from the believed
+        cable's stiffness, :func:`~tetherland.estimation.tension.tension_filter_time_constant`) [s].
     """
 
     def __init__(
@@ -66,7 +68,7 @@ class UkfEstimator:
         rotor_speeds0: ArrayLike | None = None,
         P0: ArrayLike | None = None,
         noise_inflation: float = 1.0,
-        tension_time_constant: float = 0.02,
+        tension_time_constant: float | None = None,
     ) -> None:
         v = scenario.vehicle
         self.mass = v.mass
@@ -81,6 +83,8 @@ class UkfEstimator:
         self._p_A, self._R_WA = geo.p_A, geo.R_WA
         self._r_att = np.asarray(v.cable_attachment, dtype=float)
         self._length, self._stiffness = scenario.tether.length, scenario.tether.stiffness
+        if tension_time_constant is None:
+            tension_time_constant = tension_filter_time_constant(self._stiffness, v.mass)
         self.tension = TensionEstimator(
             v.mass,
             scenario.mission.tension_threshold,

@@ -41,6 +41,27 @@ def tension_from_forces(
     return float(np.asarray(d_B, dtype=float) @ residual)
 
 
+TENSION_FILTER_SLOW = 0.02
+"""Low-pass time constant of the tension estimate with an inextensible cable [s]."""
+TENSION_FILTER_FAST = 0.005
+"""Shortest time constant: below it the accelerometer noise dominates the estimate [s]."""
+
+
+def tension_filter_time_constant(stiffness: float | None, mass: float) -> float:
+    """Low-pass time constant of the tension estimate for a cable of spring constant k
+    (None: inextensible) holding ``mass`` [kg] [s].
+
+    A taut elastic cable oscillates axially at w = sqrt(k/m) (5.5 Hz for 1 m of 1 mm
+    nylon, 19 Hz for Dyneema), which a 20 ms filter lags by 35-68 deg: the time constant
+    is 0.2/w (11 deg of lag), between :data:`TENSION_FILTER_FAST` and
+    :data:`TENSION_FILTER_SLOW`.
+    """
+    if stiffness is None:
+        return TENSION_FILTER_SLOW
+    tau = 0.2 / math.sqrt(stiffness / mass)
+    return min(TENSION_FILTER_SLOW, max(TENSION_FILTER_FAST, tau))
+
+
 def elastic_tension(distance: float, length: float, stiffness: float) -> float:
     """Tension k (D - l) of an elastic cable of unstretched length l [m] and spring constant
     k [N/m] whose ends are D [m] apart; 0 when slack (D <= l) [N]."""
