@@ -39,7 +39,7 @@ from tetherland.geometry import (
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.tracking import TrajectoryTrack
-from tetherland.rotations import rotmat_to_quat
+from tetherland.rotations import quat_multiply, rotmat_to_quat, rotvec_to_quat
 from tetherland.sim.cable import ChainCable, ElasticCable, chain_nodes, joint_quaternions
 from tetherland.sim.mjcf import (
     ChainSpec,
@@ -47,7 +47,6 @@ from tetherland.sim.mjcf import (
     _sub,
     add_chain,
     chain_armature,
-    hook_timeconst,
 )
 from tetherland.sim.plant import Plant
 from tetherland.sim.runner import Runner
@@ -297,7 +296,8 @@ def _catenary(rho: float, length: float, span: float) -> tuple[float, float]:
 
 def _settled_chain(n: int, rho: float, length: float, span: float) -> tuple[float, float, float]:
     """The plant's chain (mjcf.add_chain) between the anchor and a fixed point at equal
-    height, laid out as a V and settled with joint damping; (sag, T_end, T_anchor)."""
+    height, laid out at rest by the plant (cable.chain_nodes), pushed out of it and
+    settled again with joint damping; (sag, T_end, T_anchor) as MuJoCo holds it."""
     dt = 1e-3
     root = ET.Element("mujoco")
     _sub(root, "option", timestep=f"{dt}", integrator="implicitfast", jacobian="dense",
@@ -313,11 +313,16 @@ def _settled_chain(n: int, rho: float, length: float, span: float) -> tuple[floa
     data = mujoco.MjData(model)
     nodes, excess = chain_nodes(p_A, p_B, length, n, np.array([1.0, 0.0, 0.0]))
     assert excess == 0.0 and np.allclose(nodes[-1], p_B)
+    sag_layout = p_A[2] - nodes[:, 2].min()
+    assert sag_layout == pytest.approx(_discrete_chain(n, rho, length, span)[0], rel=1e-9)
     for i, q in enumerate(joint_quaternions(nodes)):
         data.qpos[4 * i : 4 * i + 4] = q
     mujoco.mj_kinematics(model, data)
     np.testing.assert_allclose(data.site_xpos[model.site("cable_end").id], p_B, atol=1e-12)
     data.eq_active[0] = 1
+    for i in range(1, n):  # bend it in its plane (about the links' y = y_W), out of rest
+        bend = rotvec_to_quat([0.0, 0.15 * (-1) ** i, 0.0])
+        data.qpos[4 * i : 4 * i + 4] = quat_multiply(data.qpos[4 * i : 4 * i + 4].copy(), bend)
     for _ in range(6000):
         mujoco.mj_step(model, data)
     assert np.abs(data.qvel).max() < 1e-3  # at rest
@@ -379,41 +384,50 @@ def test_massive_cable_holds_a_hanging_vehicle_and_carries_its_own_weight():
     assert plant.cable.stretch == pytest.approx(s_static, rel=1e-6)
     D = np.linalg.norm(plant.attachment_point() - plant.layout.geometry.p_A)
     assert D - sc.tether.length == pytest.approx(s_static, abs=1e-5)  # + the hook's compliance
-    assert plant.link_state().phi == pytest.approx(-math.pi / 2, abs=1e-6)
+    link = plant.link_state()  # from the vehicle's state, not the chain's joints
+    assert link.phi == pytest.approx(-math.pi / 2, abs=1e-6)
+    assert abs(link.phi_dot) < 1e-6 and abs(link.delta_dot) < 1e-6
+    assert plant.qpos.shape == (7,) and plant.qvel.shape == (6,)
     nodes = [plant.data.xpos[plant.model.body(f"cable_link{i}").id] for i in range(8)]
     off = [np.linalg.norm((p - plant.layout.geometry.p_A)[:2]) for p in nodes]
     assert max(off) < 1e-6  # straight down
 
 
 def test_massive_cable_drapes_when_slack_and_is_taken_up():
-    """As in the mission: hooked (hook point 5 cm past the anchor), then drifting away
-    downhill at 0.3 m/s on hover thrust. The slack chain hangs below the anchor carrying
-    at most its weight (after the 50 ms pick-up of the chain, laid out at rest when the hook
-    catches); the vehicle then takes it up to many times that."""
+    """As in the mission: hooked at rest (hook point 5 cm past the anchor), then drifting
+    away downhill on hover thrust tilted by 2 deg. The slack chain hangs below the anchor
+    (laid out as a V, the attachment being straight above the anchor, it swings into its
+    rest shape) pulling with a few times its weight at most; the vehicle then takes it
+    up to a thousand times that."""
     sc = load_scenario("slope50", [AT_COM, "tether.segments=6"])  # 1 mm Dyneema, 0.6 g
     plant = Plant(sc)
     geo = plant.layout.geometry
-    w = math.sqrt(sc.vehicle.mass * GRAVITY / 4 / sc.vehicle.thrust_coefficient)
+    tilt = math.radians(2.0)
+    w = math.sqrt(sc.vehicle.mass * GRAVITY / math.cos(tilt) / 4 / sc.vehicle.thrust_coefficient)
     start = geo.p_A + np.array([0.0, 0.0, sc.tether.hook_drop - 0.05])
-    moving = RigidBodyState(start, 0.3 * geo.R_WA[:, 0], np.array([1.0, 0, 0, 0]), np.zeros(3))
-    plant.reset(moving, rotor_speeds=np.full(4, w), cable_engaged=True)
+    q = rotvec_to_quat(tilt * geo.R_WA[:, 1])  # thrust tilted towards x_A (downhill)
+    plant.reset(RigidBodyState.at_rest(start, q), rotor_speeds=np.full(4, w), cable_engaged=True)
     weight = sc.tether.mass_per_length * sc.tether.length * GRAVITY
     end, att = plant.model.site("cable_end").id, plant.model.site("attachment").id
-    tau = hook_timeconst(sc)  # the hook yields about v tau while arresting a speed v
-    gap = 0.0
+    gap, final_gap = 0.0, 0.0
     lowest, slack_max, peak = 0.0, 0.0, 0.0
-    for k in range(3500):
+    for _ in range(3000):
         plant.step()
-        if k < 800:  # D < 0.6 l: slack
+        D = np.linalg.norm(plant.attachment_point() - geo.p_A)
+        if D < 0.8 * sc.tether.length:
             z = [plant.data.xpos[plant.model.body(f"cable_link{i}").id][2] for i in range(6)]
             lowest = min(lowest, min(z) - geo.p_A[2])
-            slack_max = max(slack_max, plant.tension) if k >= 50 else 0.0
+            slack_max = max(slack_max, plant.tension)
         peak = max(peak, plant.tension)
-        gap = max(gap, np.linalg.norm(plant.data.site_xpos[end] - plant.data.site_xpos[att]))
-    assert gap < 0.3 * tau + peak * tau**2 / sc.vehicle.mass  # the hook stays on the vehicle
+        final_gap = np.linalg.norm(plant.data.site_xpos[end] - plant.data.site_xpos[att])
+        gap = max(gap, final_gap)
     assert lowest < -0.1  # draped below the anchor
-    assert slack_max < weight
+    assert slack_max < 5 * weight
     assert peak > 1000 * weight and plant.cable_engaged
+    # The hook stays on the vehicle: the soft connection (time constant hook_timeconst)
+    # lets the chain end lag by about a centimetre while the straightening chain cannot
+    # follow the vehicle, millimetres otherwise.
+    assert gap < 0.02 and final_gap < 3e-3
 
 
 # -- the touchdown point of the stretched cable -----------------------------------------

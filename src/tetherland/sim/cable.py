@@ -17,7 +17,8 @@ evaluated at the start of the last step like the other sensors.
   elongation of the line is quasi-static (its axial modes are kHz): a Kelvin-Voigt
   element k s + c s' = f_L, integrated implicitly with the tension of the last step,
   lengthens the last link. Disengaged, the chain is parked hanging from the anchor,
-  inactive and hidden; engaging lays it from the anchor to the attachment point.
+  inactive and hidden; engaging lays it at rest from the anchor to the attachment point,
+  in its hanging equilibrium.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from typing import Protocol, runtime_checkable
 
 import mujoco
 import numpy as np
+from scipy.optimize import least_squares
 
 from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray
@@ -36,11 +38,14 @@ from tetherland.sim.mjcf import (
     CABLE_GROUP_HIDDEN,
     CABLE_GROUP_VISIBLE,
     SENSOR_SLICES,
+    chain_armature,
     chain_spec,
     hook_timeconst,
 )
 
 _Z = np.array([0.0, 0.0, 1.0])
+ARMATURE_DECAY = 0.99
+"""Per-step decay of the tension the chain's armature is held for (0.1 s at 1 ms) [-]."""
 
 
 def set_cable_visible(model: mujoco.MjModel, visible: bool) -> None:
@@ -261,6 +266,12 @@ class ChainCable:
         self._engaged = False
         self.stretch = 0.0
         """Current elongation s of the line (quasi-static Kelvin-Voigt element) [m]."""
+        v0 = self._vadr[0]
+        self._armature = model.dof_armature[v0 : v0 + 3 * n]
+        self._link_inertia = self.spec.link_mass * self.spec.link_length**2 / 3.0
+        self._t_held = 0.0
+        self._t_set = 0.0
+        self._set_armature(0.0)
 
 
     @property
@@ -280,6 +291,25 @@ class ChainCable:
         f = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
         self._sensordata[self._slot] = f
         self._set_stretch(self._relax(self.stretch, f))
+        # armature for the tension: twice the current one, held and decaying over ~0.1 s
+        held = self._t_held * ARMATURE_DECAY
+        self._t_held = held if held > 2.0 * f else 2.0 * f
+        if not (self._t_set * 0.8 <= self._t_held <= self._t_set):
+            self._set_armature(self._t_held)
+
+    def _set_armature(self, tension: float) -> None:
+        """Armature for links pulled by ``tension`` (w dt <= CHAIN_W_DT); raising it scales
+        the links' joint rates down by (I + a_old)/(I + a_new), so that changing the
+        inertia never adds kinetic energy (lowering it keeps the rates)."""
+        spec, d = self.spec, self._data
+        a_old = self._armature[0]
+        a = chain_armature(tension, spec.link_length, spec.link_mass, self.dt)
+        if a > a_old:
+            scale = (self._link_inertia + a_old) / (self._link_inertia + a)
+            for adr in self._vadr:
+                d.qvel[adr : adr + 3] *= scale
+        self._armature[:] = a
+        self._t_set = tension
 
     def _relax(self, s: float, tension: float) -> float:
         """Next elongation of the Kelvin-Voigt element k s + c s' = f_L [m].
@@ -330,6 +360,8 @@ class ChainCable:
 
     def _park(self) -> None:
         d = self._data
+        self._t_held = 0.0
+        self._set_armature(0.0)
         for a in self._qadr:
             d.qpos[a : a + 4] = (1.0, 0.0, 0.0, 0.0)
         for a in self._vadr:
@@ -338,8 +370,8 @@ class ChainCable:
 
     def _lay_out(self) -> None:
         """Lay the chain at rest from p_A to the attachment point: straight when the
-        distance D >= l (the excess is the initial stretch of an elastic line), else a
-        V in the vertical plane through both ends, its corner as low as it goes."""
+        distance D >= l (the excess is the initial stretch of an elastic line), else
+        hanging in its discrete catenary (:func:`chain_nodes`)."""
         nodes, stretch = chain_nodes(
             self._p_A, self.attachment_point(), self.length, self.spec.segments, self._side
         )
@@ -357,16 +389,48 @@ class ChainCable:
 # -- chain geometry (plain numpy: runs at hook events only) ------------------------------
 
 
+def hanging_chain_angles(
+    n: int, span: float, rise: float, link_length: float
+) -> FloatArray | None:
+    """Upward slopes theta_i of n uniform rigid links hanging at rest between two points
+    ``span`` apart horizontally and ``rise`` apart vertically [rad], i = 0 from the first;
+    None when no such shape exists (ends nearly on one vertical: the rest shape folds back).
+
+    Each link lies along the mean force on it (its weight at its middle):
+    tan(theta_i) = ((i + 1/2) w - V_0)/H, V_0 the first support's vertical force and H
+    the horizontal tension (w = 1: the shape does not depend on the weight), found from
+    sum l_s cos(theta_i) = span and sum l_s sin(theta_i) = rise: the exact discrete
+    catenary, for sqrt(span^2 + rise^2) < n l_s.
+    """
+    mid = np.arange(n) + 0.5
+
+    def angles(x: FloatArray) -> FloatArray:
+        return np.arctan2(mid - x[1], math.exp(x[0]))
+
+    def residual(x: FloatArray) -> FloatArray:
+        th = angles(x)
+        return np.array([np.cos(th).sum() - span / link_length,
+                         np.sin(th).sum() - rise / link_length])  # fmt: skip
+
+    starts = [(math.log(h), f * n) for h in (1e-2, 1.0, 1e2) for f in (0.25, 0.5, 0.75)]
+    best = min(starts, key=lambda x: float(np.sum(residual(np.array(x)) ** 2)))
+    sol = least_squares(residual, best, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=500)
+    if float(np.max(np.abs(sol.fun))) > 1e-9:
+        return None
+    return angles(sol.x)
+
+
 def chain_nodes(
     p_A: FloatArray, p_B: FloatArray, length: float, segments: int, side_W: FloatArray
 ) -> tuple[FloatArray, float]:
     """Joint positions of a chain of ``segments`` equal links from ``p_A`` to ``p_B``.
 
     Returns the (segments + 1, 3) nodes and the excess distance max(0, D - l) that the
-    straight chain leaves to ``p_B`` (zero for a slack chain, whose last node is ``p_B``).
-    Slack chains form a V with its corner at node N // 2, in the vertical plane through
-    the chord, as low as the two straight legs allow (``side_W`` orients that plane when
-    the chord is vertical).
+    straight chain leaves to ``p_B``. A slack chain (D < l) hangs at rest in its exact
+    discrete catenary (:func:`hanging_chain_angles`) in the vertical plane through both
+    ends. With the ends nearly on one vertical, where that shape folds back, it is laid
+    as a V instead: its corner at node N // 2, as low as the two straight legs allow, out
+    along ``side_W`` (the chain then swings into its rest shape).
     """
     p_A, p_B = np.asarray(p_A, dtype=float), np.asarray(p_B, dtype=float)
     n = int(segments)
@@ -374,9 +438,16 @@ def chain_nodes(
     chord = p_B - p_A
     D = float(np.linalg.norm(chord))
     if D >= length:
-        nodes = p_A + np.outer(np.arange(n + 1) * l_s, chord / D)
-        return nodes, D - length
+        return p_A + np.outer(np.arange(n + 1) * l_s, chord / D), D - length
+    rise = float(chord[2])
+    horizontal = chord - rise * _Z
+    span = float(np.linalg.norm(horizontal))
     side = np.asarray(side_W, dtype=float)
+    theta = hanging_chain_angles(n, span, rise, l_s) if span > 1e-9 * length else None
+    if theta is not None:
+        e_h = horizontal / span
+        steps = l_s * (np.outer(np.cos(theta), e_h) + np.outer(np.sin(theta), _Z))
+        return p_A + np.vstack((np.zeros(3), np.cumsum(steps, axis=0))), 0.0
     e = chord / D if D > 1e-9 else side
     j = n // 2
     a, b = j * l_s, (n - j) * l_s

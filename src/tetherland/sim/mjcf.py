@@ -57,6 +57,9 @@ CABLE_GROUP_VISIBLE, CABLE_GROUP_HIDDEN = 0, 5
 """Tendon and geom groups of the engaged (drawn) and disengaged (hidden) cable."""
 CHAIN_RADIUS = 0.002
 """Radius of the drawn chain links (visual only: the links do not collide) [m]."""
+CHAIN_DAMPING_TIME = 0.2
+"""Time constant of the chain's joint damping on the links' own inertia [s]: air drag and
+internal friction damp a thin line's transverse vibration within about a second."""
 CHAIN_W_DT = 0.5
 """Highest angular frequency times the time step allowed for a link's swing about its
 joint under the largest tension (the armature of :func:`chain_spec`) [-]."""
@@ -210,7 +213,8 @@ def chain_spec(scenario: Scenario) -> ChainSpec:
     l_s = t.length / n
     m_s = t.mass_per_length * l_s
     a = chain_armature(chain_design_tension(scenario), l_s, m_s, scenario.sim.timestep)
-    return ChainSpec(n, l_s, m_s, a)
+    damping = m_s * l_s * l_s / 3.0 / CHAIN_DAMPING_TIME
+    return ChainSpec(n, l_s, m_s, a, damping)
 
 
 def hook_timeconst(scenario: Scenario) -> float:
@@ -237,11 +241,14 @@ def add_chain(
     Bodies ``cable_link0`` (jointed to the world at p_A) to ``cable_link{N-1}``, each a
     ball joint at its start and its length along its local x; site ``cable_end`` at the
     far end of the last link (the hook). Equality ``hook`` (a connect, inactive) holds
-    ``cable_end`` at ``end_site`` when the cable is engaged. The links do not collide.
+    ``cable_end`` at ``end_site`` when the cable is engaged. The links do not collide;
+    each link's inertia about its axis equals its transverse inertia (see the body).
     """
     l_s, m_s = spec.link_length, spec.link_mass
     i_t = m_s * l_s * l_s / 12.0
-    i_a = max(0.5 * m_s * CHAIN_RADIUS**2, 1e-12)
+    # About its own axis a link gets its transverse inertia: a line's own (m r^2/2, 1e-9
+    # of it) would make the twist of the ball joints unresolvable at any usable step.
+    i_a = i_t
     parent = world
     for i in range(spec.segments):
         attrs = {"pos": _fmt(p_A), "quat": _fmt((math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0))}

@@ -98,6 +98,7 @@ class Plant:
         # Views into MjData (stable for the life of ``data``).
         self._ctrl = self.data.ctrl[0:4]  # rotor thrusts (the elastic cable owns ctrl[4])
         self._p_att_view = self.data.site_xpos[self._att_site]
+        self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
         self.sensordata = self.data.sensordata
         geo = self.layout.geometry
@@ -217,13 +218,14 @@ class Plant:
 
     @property
     def qpos(self) -> FloatArray:
-        """MuJoCo qpos view: [p_W (3), q_WB (4)] at :attr:`time` (do not write)."""
-        return self.data.qpos
+        """The vehicle's qpos view: [p_W (3), q_WB (4)] at :attr:`time` (do not write; a
+        massive cable's joints follow in ``data.qpos``)."""
+        return self._qpos
 
     @property
     def qvel(self) -> FloatArray:
-        """MuJoCo qvel view: [v_W (3), omega_B (3)] at :attr:`time` (do not write)."""
-        return self.data.qvel
+        """The vehicle's qvel view: [v_W (3), omega_B (3)] at :attr:`time` (do not write)."""
+        return self._qvel
 
     def forward(self) -> None:
         """Recompute kinematics, forces and sensors at the current state (no time step)."""
@@ -241,7 +243,7 @@ class Plant:
         phi and delta as in docs/theory.md section 3 (F_A), whether the cable is taut or not.
         """
         geo = self.layout.geometry
-        x = np.concatenate((self.data.qpos, self.data.qvel))
+        x = np.concatenate((self._qpos, self._qvel))
         return link_state_of(x, self._r_att, geo.p_A, geo.R_WA)
 
     def truth_estimate(self) -> StateEstimate:
