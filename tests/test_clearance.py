@@ -123,3 +123,47 @@ def test_mission_plan_refuses_a_hook_drop_too_short_for_the_slope():
     )  # fmt: skip
     assert check.ok and plan.clearance.ok
     assert check.clearance_m == pytest.approx(plan.clearance.clearance_m)
+
+
+def _vehicle_surface_distance(plant: Plant) -> float:
+    """MuJoCo's smallest signed distance between the surface and the vehicle's colliding
+    geoms (mj_geomDistance) [m]."""
+    import mujoco
+
+    m, d = plant.model, plant.data
+    surface = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "surface")
+    fromto = np.zeros(6)
+    geoms = [g for g in range(m.ngeom) if m.geom_bodyid[g] != 0 and m.geom_contype[g]]
+    assert len(geoms) == 9  # hub, four landers, four rotor guards
+    return min(mujoco.mj_geomDistance(m, d, surface, g, 1.0, fromto) for g in geoms)
+
+
+@pytest.mark.parametrize("slope", [80.0, 90.0, 93.0])
+@pytest.mark.parametrize("yaw", [0.0, 0.4, math.pi / 4])
+def test_predicted_clearance_matches_mujoco_distances_on_walls(slope, yaw):
+    """The level vehicle at known offsets from an 80 deg slope, a wall and an overhang:
+    the predicted distance equals MuJoCo's geom distance (to the 5 deg rim sampling,
+    < 0.1 mm), and the first contact appears within a millimetre of the prediction."""
+    scenario, surf = _surface(
+        "slope50", f"surface.slope_deg={slope}", "tether.length=0.4", "tether.hook_drop=0.3",
+        "tether.capture_radius=0.05",
+    )  # fmt: skip
+    plant = Plant(scenario)
+    for offset in (0.28, 0.32, 0.4, 0.6):
+        p = surf.origin + offset * surf.z_S + 0.4 * _UP  # at the anchor's height
+        plant.set_state(_level_state(p, yaw))
+        predicted = level_vehicle_distance(scenario, surf, p, yaw)
+        assert _vehicle_surface_distance(plant) == pytest.approx(predicted, abs=1e-4)
+    # First contact: 1 mm short of the predicted touching position no contact, 1 mm past
+    # it one at 1 mm penetration.
+    base = surf.origin + 0.4 * _UP
+    touching = base + (
+        0.5 - level_vehicle_distance(scenario, surf, base + 0.5 * surf.z_S, yaw)
+    ) * surf.z_S  # distance is affine along z_S for a plane: exactly 0 here
+    assert level_vehicle_distance(scenario, surf, touching, yaw) == pytest.approx(0.0, abs=1e-12)
+    plant.set_state(_level_state(touching + 0.001 * surf.z_S, yaw))
+    assert plant.data.ncon == 0 and plant.frame_contact_force == 0.0
+    plant.set_state(_level_state(touching - 0.001 * surf.z_S, yaw))
+    assert plant.data.ncon > 0
+    deepest = min(plant.data.contact.dist)
+    assert deepest == pytest.approx(-0.001, abs=1e-4)

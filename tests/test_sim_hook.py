@@ -153,3 +153,120 @@ def test_teleporting_is_not_a_crossing(plant):
     plant.set_state(RigidBodyState.at_rest(below, q))
     plant.step(2)
     assert not plant.cable_engaged and not plant.hook.events
+
+
+# -- hooking along any direction: steep slopes, walls, overhangs ---------------------------
+
+_WALL_DESIGN = [
+    "tether.length=0.4", "vehicle.cable_attachment=[0,0,0]", "anchor.h_A=0",
+    "tether.hook_drop=0.34", "tether.capture_radius=0.05", "mission.hook_overshoot=0.05",
+]  # fmt: skip
+
+
+def _normal_approach(slope_deg: float) -> str:
+    """-n_S in F_A: straight at the surface along its normal."""
+    b = math.radians(slope_deg)
+    return f"tether.approach_direction=[{-math.sin(b)!r},0,{-math.cos(b)!r}]"
+
+
+DIRECTIONS = {
+    "normal-80": ["surface.slope_deg=80", _normal_approach(80.0)],
+    "horizontal-wall": ["surface.slope_deg=90", "tether.approach_direction=[-1,0,0]"],
+    "normal-overhang-93": ["surface.slope_deg=93", _normal_approach(93.0)],
+}
+
+
+@pytest.fixture(scope="module", params=[(d, c) for d in sorted(DIRECTIONS) for c in sorted(CABLES)])
+def directed_plant(request):
+    direction, cable = request.param
+    return Plant(load_scenario("slope50", _WALL_DESIGN + DIRECTIONS[direction] + CABLES[cable]))
+
+
+def _fly_pass(plant: Plant, across: float, speed: float = 0.3) -> tuple[float, np.ndarray]:
+    """Level at hover thrust, the hook point from 0.1 m before the capture disk to
+    ``mission.hook_overshoot`` beyond it along n, ``across`` off the anchor along y_A.
+    Returns the largest frame and lander contact force during the pass [N] and n_W."""
+    sc = plant.scenario
+    geo = plant.layout.geometry
+    n_W = plant.layout.approach_W
+    np.testing.assert_allclose(plant.hook.n_W, n_W, atol=1e-15)
+    hook0 = geo.p_A - 0.1 * n_W + across * geo.R_WA[:, 1]
+    q = plant.start_state().q_WB  # level, x_B along x_A: the mission's heading
+    p_att_B = np.asarray(sc.vehicle.cable_attachment)
+    p_com = hook0 - sc.tether.hook_drop * n_W - p_att_B  # level: R_WB r_att = r_att here
+    w = math.sqrt(sc.vehicle.mass * GRAVITY / 4 / sc.vehicle.thrust_coefficient)
+    plant.reset(RigidBodyState(p_com, speed * n_W, q, np.zeros(3)), rotor_speeds=np.full(4, w))
+    np.testing.assert_allclose(plant.hook.hook_point(plant.attachment_point()), hook0, atol=1e-12)
+    touch = 0.0
+    for _ in range(round((0.1 + sc.mission.hook_overshoot) / speed / plant.dt)):
+        plant.step()
+        touch = max(touch, plant.frame_contact_force + float(np.sum(plant.lander_forces)))
+    return touch, n_W
+
+
+def test_hooking_along_the_approach_direction_engages_then_holds(directed_plant):
+    """Along the normal of an 80 deg slope or a 93 deg overhang, horizontally toward a
+    wall: the hook point held hook_drop ahead along n catches the anchor; the frame keeps
+    off the surface (the pass the mission flies); the engaged cable then holds at l."""
+    plant = directed_plant
+    sc = plant.scenario
+    touch, n_W = _fly_pass(plant, across=0.02)
+    assert touch == 0.0
+    assert plant.cable_engaged
+    (event,) = plant.hook.events
+    assert event.kind is HookEventKind.ENGAGED
+    assert event.distance == pytest.approx(0.02, abs=1e-6)  # the pass is along n exactly
+    geo = plant.layout.geometry
+    assert float(n_W @ (event.point_W - geo.p_A)) == pytest.approx(0.0, abs=1e-9)  # on the disk
+    assert 0.0 <= plant.tension <= _slack_tension(plant, speed=0.3)
+    # Fly parallel to the capture plane, down the surface: no crossing, the cable snaps taut.
+    x_S = geo.surface.x_S
+    u = x_S - (x_S @ n_W) * n_W
+    u /= np.linalg.norm(u)
+    s = plant.state()
+    plant.set_state(RigidBodyState(s.p_W, 0.6 * u, s.q_WB, s.omega_B))
+    longest, peak = 0.0, 0.0
+    for _ in range(800):
+        plant.step()
+        longest, peak = max(longest, plant.cable_length), max(peak, plant.tension)
+    assert plant.cable_engaged and len(plant.hook.events) == 1
+    assert peak > 5.0  # stopped by the cable
+    assert longest < sc.tether.length + sc.tether.stretch(peak) + 2e-3
+
+
+def test_the_reverse_pass_releases_along_any_direction(directed_plant):
+    plant = directed_plant
+    _fly_pass(plant, across=0.0)
+    assert plant.cable_engaged
+    s = plant.state()
+    plant.set_state(RigidBodyState(s.p_W, -s.v_W, s.q_WB, s.omega_B))  # the unhooking pass
+    plant.step(round(0.15 / 0.3 / plant.dt))
+    assert not plant.cable_engaged
+    assert [e.kind for e in plant.hook.events] == [HookEventKind.ENGAGED, HookEventKind.RELEASED]
+    assert plant.hook.events[-1].distance < 1e-4  # a chain's weight pulls a little
+    plant.step(10)
+    assert plant.tension == 0.0
+
+
+def test_a_pass_beside_the_capture_disk_misses_along_any_direction(directed_plant):
+    plant = directed_plant
+    _fly_pass(plant, across=0.08)  # capture radius 0.05 m
+    assert not plant.cable_engaged
+    (event,) = plant.hook.events
+    assert event.kind is HookEventKind.MISSED and event.distance == pytest.approx(0.08, abs=1e-6)
+
+
+def test_hook_point_leads_the_attachment_along_n():
+    """The plant's hook model is mission.hooking's: hook = attachment + hook_drop n."""
+    from tetherland.mission.hooking import hook_offset
+
+    n = np.array([-3.0, 0.0, 4.0])  # not unit: the model normalises it
+    hook = Hook([1.0, 2.0, 3.0], n, capture_radius=0.05, hook_drop=0.3)
+    np.testing.assert_allclose(hook.offset_W, hook_offset(n / 5.0, 0.3), atol=1e-15)
+    p_att = np.array([1.5, 2.0, 2.2])
+    np.testing.assert_allclose(hook.hook_point(p_att), p_att + 0.3 * n / 5.0, atol=1e-15)
+    # side() is the signed distance of the hook point along n, and plane() agrees with it
+    expect = float((p_att + 0.3 * n / 5.0 - [1.0, 2.0, 3.0]) @ (n / 5.0))
+    assert hook.side(*p_att) == pytest.approx(expect, abs=1e-15)
+    nx, ny, nz, c = hook.plane
+    assert nx * p_att[0] + ny * p_att[1] + nz * p_att[2] - c == pytest.approx(expect, abs=1e-15)

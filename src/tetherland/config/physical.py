@@ -165,8 +165,10 @@ class TetherConfig(Section):
     Giving a ``linear_density > 0`` with ``segments = 0``, or ``segments >= 1`` with a
     zero density, is an error.
 
-    Hook model (simulation, chapter 6.6.1): the hook point is the attachment point lowered
-    by ``hook_drop`` along -z_W (the hook hanging under the vehicle). The cable engages when
+    Hook model (simulation, chapter 6.6.1): the hook point is the attachment point moved
+    by ``hook_drop`` along the approach direction n (for the default n = -z_W the hook
+    hanging under the vehicle; for another direction a hook held out along n, e.g.
+    horizontally toward a wall). The cable engages when
     the hook point crosses the capture disk (centre p_A, normal ``approach_direction``,
     radius ``capture_radius``) moving along the approach direction, and releases when it
     crosses the disk again the opposite way.
@@ -192,8 +194,8 @@ class TetherConfig(Section):
     """Direction in F_A in which the hook point must cross the capture disk to engage
     (default: lowered vertically onto the anchor); reversing through it releases [-]."""
     hook_drop: float = Field(0.5, ge=0, le=100)
-    """Distance of the hook point below the attachment point, along -z_W; 0 puts the hook
-    at the attachment point [m]."""
+    """Distance of the hook point from the attachment point, along the approach direction
+    (below it for the default approach); 0 puts the hook at the attachment point [m]."""
 
     @field_validator("approach_direction")
     @classmethod

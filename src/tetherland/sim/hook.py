@@ -1,9 +1,13 @@
 """Hook and anchoring mechanism (chapter 6.6.1-6.6.2): when the cable is engaged.
 
 The vehicle carries the hook; the anchoring mechanism sits at the anchor point p_A. The
-hook point is the cable attachment point lowered by ``hook_drop`` along -z_W (the hook
-hanging under the vehicle; ``hook_drop = 0`` puts it at the attachment point). The
-capture disk has centre p_A, unit normal n (the approach direction) and radius r_c.
+capture disk has centre p_A, unit normal n (the approach direction) and radius r_c. The
+hook point is the cable attachment point moved by ``hook_drop`` along n
+(:func:`tetherland.mission.hooking.hook_offset`, the one statement of the hook model that
+the mission plan, the clearance check and the design search also use): for the default
+n = -z_W the hook hanging under the vehicle, for any other direction a hook held out along
+n (on a short stiff arm), e.g. horizontally toward a wall or along the normal of a steep
+slope or an overhang. ``hook_drop = 0`` puts it at the attachment point.
 
 - Disengaged, the hook point crossing the disk's plane along +n at a distance <= r_c from
   p_A engages the cable (``ENGAGED``); the same crossing farther than r_c but within
@@ -25,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
+from tetherland.mission.hooking import hook_offset
 
 
 class HookState(IntEnum):
@@ -83,15 +88,15 @@ class Hook:
     capture_radius : float
         r_c [m].
     hook_drop : float
-        Hook point below the attachment point, along -z_W [m].
+        Distance of the hook point from the attachment point, along n [m].
     miss_radius : float
         Forward crossings with r_c < distance <= miss_radius are reported as ``MISSED`` [m].
     """
 
     __slots__ = (
-        "_drop",
         "_engaged",
         "_n",
+        "_offset",
         "_p_A",
         "_prev",
         "capture_radius",
@@ -113,9 +118,10 @@ class Hook:
             raise ValueError("approach direction must be non-zero")
         if capture_radius <= 0 or hook_drop < 0:
             raise ValueError("capture_radius must be > 0 and hook_drop >= 0")
-        self._n = tuple(float(x) for x in n / norm)
+        n_W = n / norm
+        self._n = tuple(float(x) for x in n_W)
         self._p_A = tuple(float(x) for x in np.asarray(anchor_W, dtype=float))
-        self._drop = float(hook_drop)
+        self._offset = tuple(float(x) for x in hook_offset(n_W, float(hook_drop)))
         self.capture_radius = float(capture_radius)
         self.miss_radius = float(miss_radius)
         self._engaged = False
@@ -137,18 +143,35 @@ class Hook:
         self._prev = None
         self.events.clear()
 
+    @property
+    def n_W(self) -> FloatArray:
+        """Unit approach direction n (the capture disk's normal) [-]."""
+        return np.array(self._n)
+
+    @property
+    def offset_W(self) -> FloatArray:
+        """Hook point minus attachment point, ``hook_drop`` n [m]."""
+        return np.array(self._offset)
+
+    @property
+    def plane(self) -> tuple[float, float, float, float]:
+        """(n_x, n_y, n_z, c) with :meth:`side` >= 0 exactly when n.p_att >= c, for a
+        caller that tests the attachment point itself [-, m]."""
+        n, p_A, off = self._n, self._p_A, self._offset
+        c = sum(n[i] * (p_A[i] - off[i]) for i in range(3))
+        return (n[0], n[1], n[2], c)
+
     def hook_point(self, p_att_W: ArrayLike) -> FloatArray:
         """Hook point for an attachment point [m]."""
-        p = np.asarray(p_att_W, dtype=float).copy()
-        p[2] -= self._drop
-        return p
+        return np.asarray(p_att_W, dtype=float) + self.offset_W
 
     def side(self, x: float, y: float, z: float) -> float:
         """Signed distance n.(p_hook - p_A) of the hook point for attachment point (x, y, z):
         negative before the capture plane (on the approach side) [m]."""
         nx, ny, nz = self._n
         ax, ay, az = self._p_A
-        return nx * (x - ax) + ny * (y - ay) + nz * (z - self._drop - az)
+        ox, oy, oz = self._offset
+        return nx * (x + ox - ax) + ny * (y + oy - ay) + nz * (z + oz - az)
 
     def update(self, t: float, x: float, y: float, z: float) -> HookEventKind | None:
         """Advance with the attachment point (x, y, z) in F_W at time ``t`` [s, m].
@@ -177,9 +200,9 @@ class Hook:
         if not ((forward and not self._engaged) or (backward and self._engaged)):
             return None
         lam = prev_s / (prev_s - s)
-        drop = self._drop
-        px, py, pz = prev[0], prev[1], prev[2] - drop
-        x, y, z = p[0], p[1], p[2] - drop
+        ox, oy, oz = self._offset
+        px, py, pz = prev[0] + ox, prev[1] + oy, prev[2] + oz
+        x, y, z = p[0] + ox, p[1] + oy, p[2] + oz
         ax, ay, az = self._p_A
         cx, cy, cz = px + lam * (x - px), py + lam * (y - py), pz + lam * (z - pz)
         dist = math.sqrt((cx - ax) ** 2 + (cy - ay) ** 2 + (cz - az) ** 2)

@@ -110,10 +110,8 @@ class Plant:
             scenario.tether.hook_drop,
             miss_radius=scenario.tether.length,
         )
-        n = self.layout.approach_W / np.linalg.norm(self.layout.approach_W)
         # hook.side(x, y, z) >= 0  <=>  n.(x, y, z) >= c0 (precomputed for the step loop)
-        c0 = float(n @ geo.p_A) + float(n[2]) * scenario.tether.hook_drop
-        self._hook_plane = (float(n[0]), float(n[1]), float(n[2]), c0)
+        self._hook_plane = self.hook.plane
         self._prev_att = (0.0, 0.0, 0.0)
         self._hook_side = False
         self._tick = 0

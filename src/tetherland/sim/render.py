@@ -5,7 +5,7 @@ start Python with ``MUJOCO_GL=egl`` (or ``osmesa``); MuJoCo picks its GL backend
 is first imported, so the variable must be set before. Videos are written with
 imageio-ffmpeg, atomically. The camera frames the slope, the anchor, the landing point,
 the start pad and the flown path, seen from the side of the slope's fall line. The
-engaged cable is the tendon; a disengaged hook is drawn hanging under the vehicle.
+engaged cable is the tendon; a disengaged hook is drawn from the attachment point to the hook point.
 """
 
 from __future__ import annotations
@@ -137,16 +137,16 @@ class SceneRenderer:
         r = self._renderer
         r.update_scene(plant.data, camera=self.camera, scene_option=self._opt)
         if not plant.cable_engaged:
-            self._draw_hanging_hook()
+            self._draw_hook()
         return r.render().copy()
 
-    def _draw_hanging_hook(self) -> None:
+    def _draw_hook(self) -> None:
         scene = self._renderer.scene
         drop = self.plant.scenario.tether.hook_drop
         if drop <= 0 or scene.ngeom >= scene.maxgeom:
             return
         top = self.plant.data.site_xpos[self._att_site]
-        bottom = top - np.array([0.0, 0.0, drop])
+        bottom = self.plant.hook.hook_point(top)  # hook_drop along the approach direction
         geom = scene.geoms[scene.ngeom]
         mujoco.mjv_initGeom(
             geom,
