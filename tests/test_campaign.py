@@ -16,6 +16,7 @@ import pytest
 
 from tetherland.campaign import (
     CampaignSpec,
+    Perturbation,
     ResultsStore,
     Sweep,
     apply_perturbation,
@@ -158,6 +159,27 @@ def test_belief_differs_from_truth_and_stays_consistent(slope50):
     )
     assert g_belief.surface.height(g_belief.p_A) == pytest.approx(slope50.anchor.h_A, abs=1e-9)
     assert 0 < np.linalg.norm(g_belief.p_A - g_true.p_A) < 0.1
+
+
+@pytest.mark.parametrize(
+    ("name", "error_deg"), [("wall90", 0.8), ("overhang93", 0.9), ("wall90", -0.7)]
+)
+def test_believed_slope_is_not_clamped_at_vertical(name, error_deg):
+    """Walls and overhangs: the believed slope is the true one plus the error on [0, 180]
+    (a clamp at 90 deg would hide the error of a wall that leans out), and the believed
+    anchor lies on the believed surface at the true h_A."""
+    truth = load_scenario(name)
+    plant, belief = apply_perturbation(truth, Perturbation(slope_error_deg=error_deg))
+    g_true, g_belief = LandingGeometry.from_scenario(plant), LandingGeometry.from_scenario(belief)
+    assert math.degrees(g_true.surface.slope) == pytest.approx(truth.surface.slope_deg)
+    assert math.degrees(g_belief.surface.slope) == pytest.approx(
+        truth.surface.slope_deg + error_deg, abs=1e-9
+    )
+    assert g_belief.surface.height(g_belief.p_A) == pytest.approx(truth.anchor.h_A, abs=1e-9)
+    # the anchor stays put up to the tilt of the believed surface about its origin
+    lever = float(np.linalg.norm(g_true.p_A - g_true.surface.origin))
+    shift = float(np.linalg.norm(g_belief.p_A - g_true.p_A))
+    assert shift == pytest.approx(lever * abs(math.sin(math.radians(error_deg))), rel=1e-6)
 
 
 # --- durability, resume, engines -------------------------------------------------------------

@@ -157,9 +157,9 @@ def test_predicted_clearance_matches_mujoco_distances_on_walls(slope, yaw):
     # First contact: 1 mm short of the predicted touching position no contact, 1 mm past
     # it one at 1 mm penetration.
     base = surf.origin + 0.4 * _UP
-    touching = base + (
-        0.5 - level_vehicle_distance(scenario, surf, base + 0.5 * surf.z_S, yaw)
-    ) * surf.z_S  # distance is affine along z_S for a plane: exactly 0 here
+    touching = (
+        base + (0.5 - level_vehicle_distance(scenario, surf, base + 0.5 * surf.z_S, yaw)) * surf.z_S
+    )  # distance is affine along z_S for a plane: exactly 0 here
     assert level_vehicle_distance(scenario, surf, touching, yaw) == pytest.approx(0.0, abs=1e-12)
     plant.set_state(_level_state(touching + 0.001 * surf.z_S, yaw))
     assert plant.data.ncon == 0 and plant.frame_contact_force == 0.0

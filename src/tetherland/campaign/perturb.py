@@ -147,7 +147,7 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
     v["motor_time_constant"] = truth.vehicle.motor_time_constant * p.motor_time_constant_factor
 
     geo = LandingGeometry.from_scenario(truth)
-    beta = min(max(math.degrees(geo.surface.slope) + p.slope_error_deg, 0.0), 90.0)
+    beta = min(max(math.degrees(geo.surface.slope) + p.slope_error_deg, 0.0), 180.0)
     az = truth.surface.azimuth_deg + p.azimuth_error_deg
     if truth.surface.normal is not None:
         n = np.asarray(truth.surface.normal, float)

@@ -36,5 +36,8 @@ class VerdictConfig(Section):
     (rotor spin-down, contact transient); the slip is measured over the whole rest [s]."""
     contact_force: float = Field(0.05, gt=0, le=100)
     """Touchdown: a normal force above this on a lander (or on the frame) [N]."""
+    return_position_m: float = Field(0.1, gt=0, le=10)
+    """Return: largest ||p_RL - pad|| at the end of the run; the cable must also be
+    unhooked by then [m]."""
     crash_force: float = Field(1e-6, gt=0, le=100)
     """Crash: a normal force above this on the hub or a rotor guard, at any time [N]."""

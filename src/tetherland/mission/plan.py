@@ -8,15 +8,16 @@ hooking pass. The supervisor (:mod:`tetherland.mission.supervisor`) only execute
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from tetherland.analysis.clearance import HookingClearance
+from tetherland.analysis.clearance import HookingClearance, level_vehicle_distance
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
-from tetherland.geometry import FloatArray, LandingGeometry, link_direction
+from tetherland.geometry import FloatArray, LandingGeometry, Surface, link_direction
 from tetherland.mission.hooking import check_pass, hooking_pass
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
@@ -25,6 +26,11 @@ from tetherland.state import RigidBodyState
 
 Z_W = np.array([0.0, 0.0, 1.0])
 Z_W.setflags(write=False)
+SLACK_MIN = 0.01
+"""Least slack of the take-up and release points, whatever the surface asks [m]."""
+LEG_SAMPLE_SPACING = 0.05
+"""Spacing of the points at which a leg's clearance from a pipe is evaluated [m] (a
+plane's distance is concave along a straight leg, so a leg's ends suffice)."""
 
 
 class MissionError(InfeasibleError):
@@ -43,9 +49,14 @@ class Waypoints:
         Ends of the straight hooking pass: the hook point ``approach_distance`` before and
         ``hook_overshoot`` beyond the anchor along the approach direction, in level flight.
     slack_out : (3,) array
-        Inside the cable length, on the line of the planned start elevation.
+        Inside the cable length (``mission.slack_out_distance``, or less where the frame
+        needs it to clear the surface), on the line of the planned start elevation.
     stretch : (3,) array
         Just beyond the cable length: the pull that makes the cable taut (phase (c)).
+    release_distance : float
+        Distance of the attachment point from the anchor at the end of the release leg,
+        along the cable: ``mission.release_slack`` inside the cable length, or less where
+        the frame needs it to clear the surface (short cables on walls) [m].
     z_safe : float
         Height of the transfers between the pad and the anchor [m].
     yaw : float
@@ -59,6 +70,7 @@ class Waypoints:
     hook_end: FloatArray
     slack_out: FloatArray
     stretch: FloatArray
+    release_distance: float
     z_safe: float
     yaw: float
     attachment_W: FloatArray
@@ -79,6 +91,9 @@ class MissionPlan:
     waypoints : Waypoints
     clearance : HookingClearance
         Clearance of the frame from the surface along the hooking pass.
+    leg_clearance_m : float
+        Smallest clearance of the level vehicle from the surface along the other
+        free-flight legs: approach, stretch, release and return [m].
     """
 
     start: RigidBodyState
@@ -87,6 +102,7 @@ class MissionPlan:
     takeoff: PlanResult
     waypoints: Waypoints
     clearance: HookingClearance
+    leg_clearance_m: float
 
     @property
     def landing_trajectory(self) -> Trajectory:
@@ -103,6 +119,57 @@ def _frozen(v: FloatArray) -> FloatArray:
     return a
 
 
+def _leg_points(surface: Surface, leg: list[FloatArray]) -> list[FloatArray]:
+    """The points of a polyline at which its clearance is evaluated (see
+    :data:`LEG_SAMPLE_SPACING`)."""
+    if surface.kind != "pipe":
+        return leg
+    points = [leg[0]]
+    for a, b in itertools.pairwise(leg):
+        count = max(1, math.ceil(float(np.linalg.norm(b - a)) / LEG_SAMPLE_SPACING))
+        points.extend(a + (b - a) * k / count for k in range(1, count + 1))
+    return points
+
+
+def _leg_clearance(
+    scenario: Scenario, surface: Surface, leg: list[FloatArray], yaw: float
+) -> float:
+    """Smallest distance of the level vehicle from the surface along a polyline of
+    centre-of-mass points [m]."""
+    return min(level_vehicle_distance(scenario, surface, p, yaw) for p in _leg_points(surface, leg))
+
+
+def _clear_radius(
+    scenario: Scenario,
+    geo: LandingGeometry,
+    d_W: FloatArray,
+    attachment_W: FloatArray,
+    yaw: float,
+    r_wanted: float,
+    margin: float,
+    r_max: float,
+) -> float | None:
+    """Distance r along the cable direction ``d_W`` for a waypoint p_A + r d - r_att: the
+    wanted ``r_wanted`` if the level vehicle there keeps ``margin`` from the surface, else
+    the smallest r up to ``r_max`` that does (bisection: the clearance grows along a
+    direction pointing away from the surface), None if none does [m]."""
+    length = r_max
+
+    def clear(r: float) -> bool:
+        p = geo.p_A + r * d_W - attachment_W
+        return level_vehicle_distance(scenario, geo.surface, p, yaw) >= margin
+
+    if clear(r_wanted):
+        return r_wanted
+    if not clear(length):
+        return None
+    lo, hi = r_wanted, length
+    while hi - lo > 1e-4:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if clear(mid) else (mid, hi)
+    return hi
+
+
 def plan_mission(
     scenario: Scenario, start: RigidBodyState, planner: Planner | None = None
 ) -> MissionPlan:
@@ -111,8 +178,10 @@ def plan_mission(
     Raises
     ------
     MissionError
-        No verified landing or takeoff plan, or a hooking pass that would hit the surface
-        (the message names the ``tether.hook_drop`` the surface needs).
+        No verified landing or takeoff plan, a hooking pass that would hit the surface
+        (the message names the ``tether.hook_drop`` the surface needs), or another
+        free-flight leg that would pass closer to the surface than
+        ``mission.hooking_clearance`` (the message names the leg).
     """
     cfg = scenario.mission
     v = scenario.vehicle
@@ -144,20 +213,91 @@ def plan_mission(
     length = scenario.tether.length
     phi0 = float(landing.require().output(0.0).phi[0])
     d0 = R_WA @ link_direction(phi0, 0.0)
+    takeoff_traj = takeoff.require()
+    d_T = R_WA @ link_direction(float(takeoff_traj.output(takeoff_traj.duration).phi[0]), 0.0)
     wn = scenario.controller.free_flight.position_frequency
     pull = scenario.planner.start_tension / (v.mass * wn * wn) + cfg.stretch_margin
+    # On short cables near walls the frame limits how far inside the cable length the
+    # take-up and the release may go (the default distances would put it into the wall):
+    # there they keep the clearance of the hooking pass's end (at least
+    # mission.hooking_clearance) and stop at least SLACK_MIN short of the cable length.
+    keep = max(clearance.clearance_m, cfg.hooking_clearance)
+    radii = []
+    for d_W, inside in ((d0, cfg.slack_out_distance), (d_T, cfg.release_slack)):
+        wanted = length - inside
+        r = _clear_radius(scenario, geo, d_W, attachment_W, yaw, wanted, keep, length - SLACK_MIN)
+        if r is None:
+            r = _clear_radius(
+                scenario, geo, d_W, attachment_W, yaw, wanted, cfg.hooking_clearance,
+                length - SLACK_MIN,
+            )  # fmt: skip
+        radii.append(r)
+    r_slack, r_release = radii
+    for r, what in ((r_slack, "cable take-up at the planned start"),
+                    (r_release, "release at the planned takeoff end")):  # fmt: skip
+        if r is None:
+            raise MissionError(
+                f"the {what} would bring the frame within mission.hooking_clearance = "
+                f"{cfg.hooking_clearance * 100:.0f} cm of the surface anywhere more than "
+                f"{SLACK_MIN * 100:.0f} cm inside the cable length {length:g} m"
+            )
+    assert r_slack is not None and r_release is not None
+    z_safe = max(float(hook_start[2]), float(p_start[2]) + cfg.takeoff_height)
+    z_safe += cfg.safe_height_margin
     waypoints = Waypoints(
         start=_frozen(p_start),
         hook_start=_frozen(hook_start),
         hook_end=_frozen(hook_end),
-        slack_out=_frozen(p_A + (length - cfg.slack_out_distance) * d0 - attachment_W),
+        slack_out=_frozen(p_A + r_slack * d0 - attachment_W),
         stretch=_frozen(p_A + (length + pull) * d0 - attachment_W),
-        z_safe=max(float(hook_start[2]), float(p_start[2]) + cfg.takeoff_height)
-        + cfg.safe_height_margin,
+        release_distance=r_release,
+        z_safe=z_safe,
         yaw=yaw,
         attachment_W=_frozen(attachment_W),
     )
+    leg_clearance = _check_legs(scenario, geo, waypoints, d_T)
     return MissionPlan(
-        start=start,
-        geometry=geo, landing=landing, takeoff=takeoff, waypoints=waypoints, clearance=clearance
-    )
+        start=start, geometry=geo, landing=landing, takeoff=takeoff, waypoints=waypoints,
+        clearance=clearance, leg_clearance_m=leg_clearance,
+    )  # fmt: skip
+
+
+def free_flight_legs(
+    scenario: Scenario, geo: LandingGeometry, wp: Waypoints, d_T_W: FloatArray
+) -> dict[str, list[FloatArray]]:
+    """The centre-of-mass polylines the supervisor flies in free flight, apart from the
+    hooking pass (its own check) and the tethered phases (the plans), F_W [m].
+
+    The release leg starts at its slack point, on the planned takeoff end direction
+    ``d_T_W`` (the supervisor uses the estimated direction there). The paths are those of
+    :mod:`tetherland.mission.supervisor`.
+    """
+    cfg = scenario.mission
+    top = wp.start + cfg.takeoff_height * Z_W
+    over_hook = np.array([*wp.hook_start[:2], wp.z_safe])
+    release = geo.p_A + wp.release_distance * d_T_W - wp.attachment_W
+    return {
+        "approach": [top, np.array([*top[:2], wp.z_safe]), over_hook, wp.hook_start],
+        "stretch": [wp.hook_end, wp.slack_out, wp.stretch],
+        "release": [release, wp.hook_end],
+        "return": [wp.hook_start, over_hook, np.array([*wp.start[:2], wp.z_safe]), top],
+    }
+
+
+def _check_legs(
+    scenario: Scenario, geo: LandingGeometry, wp: Waypoints, d_T_W: FloatArray
+) -> float:
+    """Smallest clearance over :func:`free_flight_legs`; raises :class:`MissionError`
+    naming the first leg below ``mission.hooking_clearance`` [m]."""
+    margin = scenario.mission.hooking_clearance
+    smallest = math.inf
+    for name, leg in free_flight_legs(scenario, geo, wp, d_T_W).items():
+        c = _leg_clearance(scenario, geo.surface, leg, wp.yaw)
+        if c < margin - 1e-9:
+            raise MissionError(
+                f"the {name} leg would pass {c * 100:.1f} cm from the surface (needs >= "
+                f"{margin * 100:.0f} cm, mission.hooking_clearance): move the start pad "
+                f"(sim.start_position) or raise mission.safe_height_margin"
+            )
+        smallest = min(smallest, c)
+    return smallest

@@ -7,8 +7,10 @@ transition with its reason). It sees only the estimate, never the plant's truth:
 - a hook is taken as caught when the estimated tension passes the threshold for the dwell
   time while stretching; without tension the hook counts as missed and is retried;
 - switches are bumpless (6.6.3): a tethered reference starts at the current output and
-  blends onto the plan; a free-flight reference after tethered flight starts where the
-  position error reproduces the cable pull (p + f_L d / (m k_x)), as in stretching;
+  blends onto the plan; the release after the takeoff starts at the current position with
+  the cable pull as a force feed-forward (the reference acceleration f_L d/m) that fades
+  out along the release leg; a safe hover from tethered flight starts where the position
+  error reproduces the pull (p + f_L d / (m k_x)), as in stretching;
 - an operator abort (``mission.abort_time``) or a fault (slack cable or large tracking error
   in a tethered phase, a non-finite estimate) moves to a safe state from any phase: hover
   in free flight, or stay put when the motors are already off on the surface.
@@ -121,7 +123,6 @@ class MissionSupervisor:
         self.cfg = cfg
         self.geo = plan.geometry
         self.mass = scenario.vehicle.mass
-        self.length = scenario.tether.length
         self.rate_hz = scenario.controller.rate_hz
         wn = scenario.controller.free_flight.position_frequency
         self.k_x = wn * wn
@@ -149,6 +150,7 @@ class MissionSupervisor:
         )
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
+        self._release_pull: tuple[float, float, np.ndarray] | None = None  # t0, T, a_W
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
             Phase.TAKEOFF: self._takeoff,
             Phase.APPROACH: self._approach,
@@ -185,9 +187,12 @@ class MissionSupervisor:
         self._phase_start = t
 
     def _free(self, t: float) -> Reference:
+        rows = self._path.sample(t)
+        if self._release_pull is not None:
+            t0, duration, a_W = self._release_pull
+            rows[2] += (1.0 - smoothstep9_scalar((t - t0) / duration, 0)[0]) * a_W
         return Reference(
-            t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=self._path.sample(t),
-            yaw=self.yaw,
+            t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
@@ -442,11 +447,18 @@ class MissionSupervisor:
         cfg = self.cfg
         if t >= self._track.track.t_end + cfg.settle_time:
             self.times["t_released"] = t
-            start = self._pull_point(est)
+            # The pull is handed over as a force feed-forward that fades out while the
+            # reference moves inside the cable length. (As a position offset, as in
+            # stretching, the free-flight position integral would wind up on it and keep
+            # the cable taut when the release leg is short: short cables near walls.)
             d = est.body.p_W - self.geo.p_A
             d /= np.linalg.norm(d)
-            slack = self.geo.p_A + (self.length - cfg.release_slack) * d - self.wp.attachment_W
-            self._path = self._new_path(t, start, cfg.hook_speed).to(slack, pause=cfg.settle_time)
+            slack = self.geo.p_A + self.wp.release_distance * d - self.wp.attachment_W
+            self._path = self._new_path(t, est.body.p_W, cfg.hook_speed).to(
+                slack, pause=cfg.settle_time
+            )
+            pull = max(est.tension or 0.0, 0.0) / self.mass * d
+            self._release_pull = (t, self._path.segments[0].duration, pull)
             self._track = None
             self._enter(
                 Phase.RELEASE, t, "takeoff trajectory completed: free flight, releasing tension"
@@ -461,6 +473,7 @@ class MissionSupervisor:
                 self._new_path(t, self._path.end, cfg.hook_speed)
                 .to(wp.hook_end).to(wp.hook_start, pause=cfg.settle_time)
             )  # fmt: skip
+            self._release_pull = None
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t)
 

@@ -166,9 +166,7 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
         rest_v_W=rest_v, tol=tol,
     )  # fmt: skip
     measures = {m.name: m.value for c in verdict.conditions for m in c.measures}
-    conditions = {
-        str(c.number): c.holds and (c.number != 5 or rested) for c in verdict.conditions
-    }
+    conditions = {str(c.number): c.holds and (c.number != 5 or rested) for c in verdict.conditions}
     required = record.expects.required_conditions
     tension: dict[str, float | None] = {"min_tension_N": None, "min_tension_all_N": None}
     if record.tension_phases:
@@ -235,10 +233,13 @@ def _return(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     z_B = _z_axes(log["q_WB"][-1:])[0]
     p_RL = log["p_W"][-1] - h_R * z_B
     pad = np.asarray(record.home_pad_W) - h_R * np.array([0.0, 0.0, 1.0])
+    error = float(np.linalg.norm(p_RL - pad))
+    unhooked = not bool(log["hook"][-1]) if "hook" in log else True
     return {
         "required": True,
-        "completed": True,
-        "position_error_m": float(np.linalg.norm(p_RL - pad)),
+        "completed": unhooked and error <= truth.verdict.return_position_m,
+        "unhooked": unhooked,
+        "position_error_m": error,
         "speed_mps": float(np.linalg.norm(log["v_W"][-1])),
     }
 
@@ -289,7 +290,16 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
     if landing.get("reached") and takeoff.get("required") and not takeoff.get("completed"):
         checks.append((Outcome.NO_TAKEOFF, "takeoff not completed"))
     if takeoff.get("completed") and ret.get("required") and not ret.get("completed"):
-        checks.append((Outcome.NO_RETURN, "return not completed"))
+        if not ret.get("unhooked", True):
+            why = "the cable is still hooked at the end"
+        elif "position_error_m" in ret:
+            why = (
+                f"ended {ret['position_error_m']:.3g} m from the start pad (tolerance "
+                f"{truth.verdict.return_position_m:g} m)"
+            )
+        else:
+            why = "not flown to the end"
+        checks.append((Outcome.NO_RETURN, f"return not completed: {why}"))
     if not record.finished and not checks:
         checks.append((Outcome.UNFINISHED, f"the run did not finish ({status.value})"))
     order = list(Outcome)
