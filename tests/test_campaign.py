@@ -296,3 +296,19 @@ def test_ray_gives_the_same_results(tmp_path: Path):
     assert comparable(ResultsStore(tmp_path / "a").load()) == comparable(
         ResultsStore(tmp_path / "r").load()
     )
+
+
+@pytest.mark.slow
+def test_contact_free_mission_job_flies_with_the_campaigns_tethered_controller_name():
+    """The campaign's --controller names the tethered law; a contact-free run of the same
+    campaign flies its own tracker (it used to be recorded as an error whenever its
+    perching plan existed)."""
+    from tetherland.campaign.jobs import Job, execute
+    from tetherland.campaign.spec import RunSpec
+
+    spec = RunSpec("free-flight-base-00000", "free-flight", 0, 5, None, None)
+    scenario = load_scenario("flat").model_dump(mode="json")
+    record = execute(Job(scenario, spec, kind="mission", controller="hierarchical"))
+    assert record["status"] == "ok", record["error"]
+    assert record["verdict"]["outcome"] != "no_run"  # planned and flown
+    assert record["verdict"]["sim_time_s"] > load_scenario("flat").perching.hover_time

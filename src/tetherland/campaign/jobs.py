@@ -87,7 +87,12 @@ def run_for_campaign(
     seed: int,
     controller: str = "hierarchical",
 ) -> dict[str, Any]:
-    """Fly one perturbed run of ``method`` (wind gusts on the plant) and keep its verdict."""
+    """Fly one perturbed run of ``method`` (wind gusts on the plant) and keep its verdict.
+
+    ``controller`` names the tethered law; the contact-free method flies its own tracker.
+    """
+    if method != "tethered":
+        controller = None
     period = 1.0 / plant.controller.rate_hz
     wind: list[WindGusts] = []
     result = run_mission(
