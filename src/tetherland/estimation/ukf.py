@@ -25,7 +25,6 @@ instead of re-propagating every IMU sample since the measurement.
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -148,11 +147,12 @@ class Ukf:
         wm[0] = lam / (n + lam)
         wc[0] = lam / (n + lam) + (1.0 - alpha * alpha + beta)
         self._wm, self._wc = wm, wc
-        self._R_diag = np.array([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
-        self._noise = np.array(
+        R_diag = np.array([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
+        process = np.array(
             [noise.accel_noise, noise.gyro_noise, noise.gyro_bias_walk, noise.accel_bias_walk,
              _NOISE_FLOOR]
         )  # fmt: skip
+        self._par = kernels.pack_params(self._gamma, process, R_diag)
         q0 = np.asarray(x0.q_WB, dtype=float)
         self._x = np.concatenate((x0.p_W, x0.v_W, q0 / np.linalg.norm(q0), x0.b_g, x0.b_a)).astype(
             float
@@ -161,11 +161,12 @@ class Ukf:
         if self._P.shape != (n, n):
             raise ValueError(f"P0 must be {n}x{n}, got {self._P.shape}")
         self._t = float(t0)
-        # mean-only history for delayed measurements: (t, p_W, q_WB)
-        self._hist: deque[tuple[float, FloatArray, FloatArray]] = deque(
-            maxlen=max(2, int(history * imu_rate_hz) + 2)
-        )
-        self._hist.append((self._t, self._x[0:3].copy(), self._x[6:10].copy()))
+        # mean-only history for delayed measurements: ring of rows [t, p_W, q_WB]
+        self._hist = np.zeros((max(2, int(history * imu_rate_hz) + 2), kernels.HIST_WIDTH))
+        self._ring = np.zeros(2, dtype=np.int64)  # [head, count]
+        self._hist[0, 0] = self._t
+        self._hist[0, 1:4], self._hist[0, 4:8] = self._x[0:3], self._x[6:10]
+        self._ring[1] = 1
         self.rejected_late = 0
         """Motion-capture samples older than the history (not fused)."""
         self._last_omega = np.zeros(3)
@@ -179,14 +180,23 @@ class Ukf:
 
     @property
     def covariance(self) -> FloatArray:
-        """Error covariance (15x15) in the order [p, v, theta_B, b_g, b_a]."""
-        return self._P
+        """Error covariance (15x15) in the order [p, v, theta_B, b_g, b_a] (a copy)."""
+        return self._P.copy()
 
     @property
     def x(self) -> FloatArray:
-        """The state vector [p_W, v_W, q_WB, b_g, b_a] (16,); replaced, never mutated, by
-        each step, so a reference to it stays valid."""
+        """The state vector [p_W, v_W, q_WB, b_g, b_a] (16,) (a copy)."""
+        return self._x.copy()
+
+    @property
+    def x_view(self) -> FloatArray:
+        """The live state vector (updated in place by every step: read, never keep or write)."""
         return self._x
+
+    @property
+    def last_omega_raw_B(self) -> FloatArray:
+        """Measured (not bias-corrected) rate of the last IMU sample [rad/s]."""
+        return self._last_omega
 
     @property
     def state(self) -> NavState:
@@ -224,21 +234,25 @@ class Ukf:
         times ``ts``), then mean and covariance are formed once; the process noise of each
         sample is added. Identical to :meth:`predict` for one sample.
         """
-        ts = np.ascontiguousarray(ts, dtype=float)
-        fs = np.ascontiguousarray(f_B, dtype=float)
-        ws = np.ascontiguousarray(omega_B, dtype=float)
+        ts = np.asarray(ts, dtype=float).reshape(-1)
         if ts[0] <= self._t or (ts.shape[0] > 1 and not np.all(ts[1:] > ts[:-1])):
             raise ValueError(f"IMU times must increase beyond t = {self._t}: got {ts}")
-        x, P, hist_p, hist_q = kernels.predict(
-            self._x, self._P, self._t, ts, fs, ws, self._wm, self._wc, self._gamma, self._noise
-        )
-        hist = self._hist
-        for j in range(ts.shape[0] - 1):
-            hist.append((float(ts[j]), hist_p[j], hist_q[j]))
-        self._x, self._P = x, P
-        self._t = float(ts[-1])
-        self._last_f, self._last_omega = fs[-1].copy(), ws[-1].copy()
-        hist.append((self._t, x[0:3].copy(), x[6:10].copy()))
+        imu = np.column_stack((ts, np.asarray(f_B, dtype=float), np.asarray(omega_B, float)))
+        self.predict_rows(imu, ts.shape[0])
+
+    def predict_rows(self, imu: FloatArray, n: int) -> None:
+        """:meth:`predict_many` on packed rows ``imu[:n]`` = [t, f_B (3), omega_B (3)].
+
+        The hot path of :class:`~tetherland.estimation.UkfEstimator`: the caller
+        guarantees C-contiguous float rows with times increasing beyond :attr:`t`.
+        """
+        kernels.predict_into(
+            self._x, self._P, self._t, imu, n, self._wm, self._wc, self._par, self._hist,
+            self._ring,
+        )  # fmt: skip
+        last = imu[n - 1]
+        self._t = float(last[0])
+        self._last_f, self._last_omega = last[1:4].copy(), last[4:7].copy()
 
     def update_pose(self, t_meas: float, p_W: ArrayLike, q_WB: ArrayLike) -> float:
         """Fuse a motion-capture pose measured at ``t_meas`` (possibly in the past).
@@ -251,19 +265,14 @@ class Ukf:
             The normalised innovation squared (chi-square with 6 dof when consistent);
             NaN if the measurement was older than the history and was not fused.
         """
-        hist = self._hist
-        if t_meas < hist[0][0] - 1e-9:
+        nis = kernels.update_pose_into(
+            self._x, self._P, float(t_meas),
+            np.ascontiguousarray(p_W, dtype=float), np.ascontiguousarray(q_WB, dtype=float),
+            self._wm, self._wc, self._par, self._hist, self._ring,
+        )  # fmt: skip
+        if nis == kernels.REJECTED:
             self.rejected_late += 1
             return math.nan
-        k = len(hist) - 1
-        while k > 0 and hist[k][0] > t_meas + 1e-9:
-            k -= 1
-        _, p_then, q_then = hist[k]
-        self._x, self._P, nis = kernels.update_pose(
-            self._x, self._P, p_then, q_then,
-            np.asarray(p_W, dtype=float), np.asarray(q_WB, dtype=float),
-            self._wm, self._wc, self._gamma, self._R_diag,
-        )  # fmt: skip
         return nis
 
     def error(self, truth: NavState) -> FloatArray:
