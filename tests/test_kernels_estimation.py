@@ -72,13 +72,15 @@ def test_compiled_predict_matches_the_reference(seed, k, definite):
     wm, wc, par = _filter_constants()
     x, P = _state(rng), _covariance(rng, definite)
     imu = _imu(rng, 1.0, k)
-    x_ref, P_ref, hist_ref = uk.predict_reference(x, P, 1.0, imu, wm, wc, par)
+    x_ref, P_ref, hist_ref, clock_ref = uk.predict_reference(x, P, 1.0, imu, wm, wc, par)
     hist, ring = _ring(3)  # smaller than k + 1 rows: the ring overwrites its oldest
     ring[:] = [0, 1]
     x_c, P_c = x.copy(), P.copy()
     buf = np.zeros((16, 7))
     buf[:k] = imu
-    uk.predict_into(x_c, P_c, 1.0, buf, k, wm, wc, par, hist, ring)
+    clock = np.concatenate(([1.0], rng.normal(size=9)))
+    uk.predict_into(x_c, P_c, clock, buf, k, wm, wc, par, hist, ring)
+    np.testing.assert_allclose(clock, clock_ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(x_c, x_ref, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(P_c, P_ref, rtol=0, atol=1e-9 * np.abs(P_ref).max())
     assert np.array_equal(P_c, P_c.T)
@@ -167,9 +169,10 @@ def test_compiled_estimate_matches_the_reference(seed, at_anchor):
     if at_anchor:  # no link direction: the tension is the norm of the residual force
         x[0:3] = p_A - _rot(x[6:10]) @ r_att
     geo = kernels.pack_geometry(r_att, p_A, R_WA)
-    omega, f_mean = rng.normal(0, 1, 3), rng.normal([0, 0, 9.81], 2, 3)
+    imu = np.concatenate(([1.0], rng.normal(0, 3, 3), rng.normal(0, 1, 3),
+                          rng.normal([0, 0, 9.81], 2, 3)))  # fmt: skip
     thrust, mass = rng.uniform(0, 30), rng.uniform(0.5, 3)
-    ref = kernels.estimate_reference(x, omega, f_mean, thrust, mass, geo)
+    ref = kernels.estimate_reference(x, imu, thrust, mass, geo)
     out = np.empty(kernels.WIDTH)
-    kernels.estimate_into(x, omega, f_mean, thrust, mass, geo, out)
+    kernels.estimate_into(x, imu, thrust, mass, geo, out)
     np.testing.assert_allclose(out, ref, rtol=1e-9, atol=1e-12, equal_nan=True)

@@ -85,7 +85,6 @@ class UkfEstimator:
         self._w_cmd = [float(w) for w in w0]
         self._buf = np.empty((_BUFFER, 7))  # rows [t, f_B (3), omega_B (3)]
         self._n = 0
-        self._f_mean = np.array([0.0, 0.0, 9.81])
         self.dropouts = 0
         """Invalid (dropped) motion-capture samples received."""
         self.last_nis = math.nan
@@ -126,9 +125,8 @@ class UkfEstimator:
         t = ukf.t
         out = np.empty(kernels.WIDTH)  # fresh: the record's arrays are views into it
         kernels.estimate_into(
-            ukf.x_view, ukf.last_omega_raw_B, self._f_mean, self._thrust_at(t), self.mass,
-            self._geo, out,
-        )  # fmt: skip
+            ukf.x_view, ukf.imu_view, self._thrust_at(t), self.mass, self._geo, out
+        )
         phi, delta, phi_dot, delta_dot = out[kernels.LINK].tolist()
         # tension: thrust (motor lag) and the specific force projected on the link
         tension = self.tension.filter(t, float(out[kernels.TENSION]))
@@ -163,7 +161,5 @@ class UkfEstimator:
         n = self._n
         if n == 0:
             return
-        buf = self._buf
-        self.ukf.predict_rows(buf, n)
-        self._f_mean = buf[0, 1:4].copy() if n == 1 else buf[:n, 1:4].sum(axis=0) / n
+        self.ukf.predict_rows(self._buf, n)
         self._n = 0

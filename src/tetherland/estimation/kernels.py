@@ -41,8 +41,7 @@ def pack_geometry(r_att_B: FloatArray, p_A: FloatArray, R_WA: FloatArray) -> Flo
 
 def estimate_reference(
     x: FloatArray,
-    omega_raw_B: FloatArray,
-    f_mean_B: FloatArray,
+    imu: FloatArray,
     thrust: float,
     mass: float,
     geo: FloatArray,
@@ -53,8 +52,9 @@ def estimate_reference(
     ----------
     x : (16,) array
         UKF state [p_W, v_W, q_WB, b_g, b_a].
-    omega_raw_B, f_mean_B : (3,) arrays
-        Last measured rate [rad/s] and mean measured specific force of the tick [m/s^2].
+    imu : (10,) array
+        The UKF's IMU record [t, f_B, omega_B of the last sample, mean f_B of the last
+        prediction] (measured) [s, m/s^2, rad/s, m/s^2].
     thrust : float
         Actual total rotor thrust (motor lag) [N].
     mass : float
@@ -63,7 +63,7 @@ def estimate_reference(
         See the module docstring.
     """
     p_W, v_W, q_WB, b_g, b_a = x[0:3], x[3:6], x[6:10], x[10:13], x[13:16]
-    omega_B = omega_raw_B - b_g
+    omega_B, f_mean_B = imu[4:7] - b_g, imu[7:10]
     r_att, p_A, R_WA = geo[0:3], geo[3:6], geo[6:15].reshape(3, 3)
     link, d_B = link_state_reference(np.concatenate((p_W, q_WB, v_W, omega_B)), r_att, p_A, R_WA)
     tension = tension_from_forces(thrust, f_mean_B - b_a, mass, d_B if d_B.any() else None)
@@ -73,8 +73,7 @@ def estimate_reference(
 @njit(cache=True)
 def estimate_into(
     x: FloatArray,
-    omega_raw_B: FloatArray,
-    f_mean_B: FloatArray,
+    imu: FloatArray,
     thrust: float,
     mass: float,
     geo: FloatArray,
@@ -86,16 +85,16 @@ def estimate_into(
     for i in range(4):
         out[6 + i] = x[6 + i]  # q_WB
     for i in range(3):
-        out[10 + i] = omega_raw_B[i] - x[10 + i]  # omega_B = omega_m - b_g
+        out[10 + i] = imu[4 + i] - x[10 + i]  # omega_B = omega_m - b_g
         out[13 + i] = x[13 + i]  # b_a
         out[16 + i] = x[10 + i]  # b_g
     R_WA = geo[6:15].reshape(3, 3)
     link_into(out[0:3], out[6:10], out[3:6], out[10:13], geo[0:3], geo[3:6], R_WA,
               out[19:23], out[23:26])  # fmt: skip
     # residual force f_R e3 - m (f_B - b_a) in F_B, projected on d_B (or its norm)
-    rx = -mass * (f_mean_B[0] - x[13])
-    ry = -mass * (f_mean_B[1] - x[14])
-    rz = thrust - mass * (f_mean_B[2] - x[15])
+    rx = -mass * (imu[7] - x[13])
+    ry = -mass * (imu[8] - x[14])
+    rz = thrust - mass * (imu[9] - x[15])
     dx, dy, dz = out[23], out[24], out[25]
     if dx != 0.0 or dy != 0.0 or dz != 0.0:
         out[TENSION] = dx * rx + dy * ry + dz * rz

@@ -160,23 +160,22 @@ class Ukf:
         self._P = np.array(P0, dtype=float)
         if self._P.shape != (n, n):
             raise ValueError(f"P0 must be {n}x{n}, got {self._P.shape}")
-        self._t = float(t0)
+        # [t, f_B and omega_B of the last IMU sample, mean f_B of the last prediction]
+        self._imu = np.concatenate(([float(t0)], -_G_W, np.zeros(3), -_G_W))
         # mean-only history for delayed measurements: ring of rows [t, p_W, q_WB]
         self._hist = np.zeros((max(2, int(history * imu_rate_hz) + 2), kernels.HIST_WIDTH))
         self._ring = np.zeros(2, dtype=np.int64)  # [head, count]
-        self._hist[0, 0] = self._t
+        self._hist[0, 0] = t0
         self._hist[0, 1:4], self._hist[0, 4:8] = self._x[0:3], self._x[6:10]
         self._ring[1] = 1
         self.rejected_late = 0
         """Motion-capture samples older than the history (not fused)."""
-        self._last_omega = np.zeros(3)
-        self._last_f = -_G_W.copy()
 
     # ---------------------------------------------------------------- accessors
     @property
     def t(self) -> float:
         """Time of the current estimate [s]."""
-        return self._t
+        return float(self._imu[0])
 
     @property
     def covariance(self) -> FloatArray:
@@ -194,9 +193,16 @@ class Ukf:
         return self._x
 
     @property
-    def last_omega_raw_B(self) -> FloatArray:
-        """Measured (not bias-corrected) rate of the last IMU sample [rad/s]."""
-        return self._last_omega
+    def imu_view(self) -> FloatArray:
+        """The live IMU record [t, f_B (3) and omega_B (3) of the last sample, mean f_B over
+        the samples of the last prediction (3)] (measured, not bias-corrected) [s, m/s^2,
+        rad/s]; updated in place by every prediction: read, never keep or write."""
+        return self._imu
+
+    @property
+    def mean_specific_force_B(self) -> FloatArray:
+        """Mean measured specific force over the samples of the last prediction [m/s^2]."""
+        return self._imu[7:10].copy()
 
     @property
     def state(self) -> NavState:
@@ -208,12 +214,12 @@ class Ukf:
     @property
     def omega_B(self) -> FloatArray:
         """Bias-corrected angular rate of the last IMU sample [rad/s]."""
-        return self._last_omega - self._x[10:13]
+        return self._imu[4:7] - self._x[10:13]
 
     @property
     def specific_force_B(self) -> FloatArray:
         """Bias-corrected specific force of the last IMU sample [m/s^2]."""
-        return self._last_f - self._x[13:16]
+        return self._imu[1:4] - self._x[13:16]
 
     # ---------------------------------------------------------------- public steps
     def predict(self, t: float, f_B: ArrayLike, omega_B: ArrayLike) -> None:
@@ -235,8 +241,8 @@ class Ukf:
         sample is added. Identical to :meth:`predict` for one sample.
         """
         ts = np.asarray(ts, dtype=float).reshape(-1)
-        if ts[0] <= self._t or (ts.shape[0] > 1 and not np.all(ts[1:] > ts[:-1])):
-            raise ValueError(f"IMU times must increase beyond t = {self._t}: got {ts}")
+        if ts[0] <= self.t or (ts.shape[0] > 1 and not np.all(ts[1:] > ts[:-1])):
+            raise ValueError(f"IMU times must increase beyond t = {self.t}: got {ts}")
         imu = np.column_stack((ts, np.asarray(f_B, dtype=float), np.asarray(omega_B, float)))
         self.predict_rows(imu, ts.shape[0])
 
@@ -247,12 +253,9 @@ class Ukf:
         guarantees C-contiguous float rows with times increasing beyond :attr:`t`.
         """
         kernels.predict_into(
-            self._x, self._P, self._t, imu, n, self._wm, self._wc, self._par, self._hist,
+            self._x, self._P, self._imu, imu, n, self._wm, self._wc, self._par, self._hist,
             self._ring,
         )  # fmt: skip
-        last = imu[n - 1]
-        self._t = float(last[0])
-        self._last_f, self._last_omega = last[1:4].copy(), last[4:7].copy()
 
     def update_pose(self, t_meas: float, p_W: ArrayLike, q_WB: ArrayLike) -> float:
         """Fuse a motion-capture pose measured at ``t_meas`` (possibly in the past).

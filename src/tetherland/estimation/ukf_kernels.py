@@ -18,6 +18,8 @@ e = [dp, dv, dtheta_B, db_g, db_a] (15); q_true = q_hat * exp(dtheta).
 Packed arguments of the kernels:
 
 - ``imu`` (m, 7): rows [t, f_B (3), omega_B (3)], the first ``n`` used;
+- ``clock`` (10,): [t, f_B (3) and omega_B (3) of the last sample, mean f_B of the last
+  prediction (3)], updated by :func:`predict_into`;
 - ``par`` (12,): [gamma, accel_noise, gyro_noise, gyro_bias_walk, accel_bias_walk, floor,
   R_diag (6)] (see :func:`pack_params`);
 - ``hist`` (H, 8): ring buffer of the mean history rows [t, p_W (3), q_WB (4)] and
@@ -148,13 +150,13 @@ def predict_reference(
     wm: np.ndarray,
     wc: np.ndarray,
     par: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Unscented prediction through the IMU rows ``imu`` (k, 7) = [t, f_B, omega_B].
 
     Every sigma point goes through every sample; mean and covariance are formed once and
-    the process noise of every sample is added. Returns the new x, P and the history rows
-    (k, 8) [t, p_W, q_WB]: the centre point after each sample but the last, the new mean
-    after the last.
+    the process noise of every sample is added. Returns the new x, P, the history rows
+    (k, 8) [t, p_W, q_WB] (the centre point after each sample but the last, the new mean
+    after the last) and the ``clock`` after the samples.
     """
     _, X = sigma_points_reference(x, P, par[0])
     Qd = np.zeros(N_ERR)
@@ -169,7 +171,8 @@ def predict_reference(
     x_new, P_new = unscented_mean_reference(X, wm, wc)
     P_new += np.diag(Qd)
     hist[-1, 1:4], hist[-1, 4:8] = x_new[0:3], x_new[6:10]
-    return x_new, 0.5 * (P_new + P_new.T), hist
+    clock = np.concatenate((imu[-1], imu[:, 1:4].mean(axis=0)))
+    return x_new, 0.5 * (P_new + P_new.T), hist, clock
 
 
 def update_pose_reference(
@@ -327,7 +330,7 @@ def _ring_push(hist: np.ndarray, ring: np.ndarray, t: float, px: float, py: floa
 def predict_into(
     x: np.ndarray,
     P: np.ndarray,
-    t_prev: float,
+    clock: np.ndarray,
     imu: np.ndarray,
     n: int,
     wm: np.ndarray,
@@ -336,8 +339,8 @@ def predict_into(
     hist: np.ndarray,
     ring: np.ndarray,
 ) -> None:
-    """Compiled :func:`predict_reference` over ``imu[:n]``: x, P updated in place and the
-    history rows pushed to the ring (``hist``, ``ring``)."""
+    """Compiled :func:`predict_reference` over ``imu[:n]`` from ``clock[0]``: x, P and
+    ``clock`` updated in place and the history rows pushed to the ring (``hist``, ``ring``)."""
     D = np.empty((N_SIG, N_ERR))
     _sigma_offsets_into(P, par[0], D)
     X = np.empty((N_SIG, 16))
@@ -350,7 +353,8 @@ def predict_into(
         X[s, 6], X[s, 7], X[s, 8], X[s, 9] = _qmul(qw0, qx0, qy0, qz0, ew, ex, ey, ez)
     Qd = np.zeros(N_ERR)
     fl = par[5] * par[5]
-    t_last = t_prev
+    t_last = clock[0]
+    f_sum = np.zeros(3)
     for j in range(n):
         t = imu[j, 0]
         dt = t - t_last
@@ -370,6 +374,9 @@ def predict_into(
             Qd[12 + i] += q_ba
         fx, fy, fz = imu[j, 1], imu[j, 2], imu[j, 3]
         ox, oy, oz = imu[j, 4], imu[j, 5], imu[j, 6]
+        f_sum[0] += fx
+        f_sum[1] += fy
+        f_sum[2] += fz
         h = 0.5 * dt * dt
         for s in range(N_SIG):
             w, qx, qy, qz = X[s, 6], X[s, 7], X[s, 8], X[s, 9]
@@ -425,6 +432,10 @@ def predict_into(
         x[10 + i] = mean[9 + i]
     x[6], x[7], x[8], x[9] = qw / nq, qx / nq, qy / nq, qz / nq
     _ring_push(hist, ring, t_last, x[0], x[1], x[2], x[6], x[7], x[8], x[9])
+    for i in range(7):
+        clock[i] = imu[n - 1, i]
+    for i in range(3):
+        clock[7 + i] = f_sum[i] / n
 
 
 @njit(cache=True)
