@@ -6,7 +6,11 @@ failing reasons, the touchdown measures). With ``--compare FILE`` it compares th
 against an earlier record and exits 1 when any outcome changed (float differences allowed).
 
 Run: .venv/bin/python benchmarks/check_verdicts.py --out /tmp/verdicts.jsonl
-     .venv/bin/python benchmarks/check_verdicts.py --out now.jsonl --compare before.jsonl
+     .venv/bin/python benchmarks/check_verdicts.py --out /tmp/now.jsonl \
+         --compare benchmarks/verdicts_d57bf1a.jsonl
+
+``verdicts_d57bf1a.jsonl`` is the record of commit d57bf1a (before the compiled loop of
+issue 13). About 2 minutes at 20x real time (20 missions of 60-80 s).
 """
 
 from __future__ import annotations
@@ -47,6 +51,11 @@ def _record(summary: dict) -> dict:
     }
 
 
+def _num(rec: dict | None, key: str, scale: float) -> str:
+    value = None if rec is None else rec.get(key)
+    return "-" if value is None else f"{value * scale:.2f}"
+
+
 def _key(r: dict) -> tuple:
     return (r["scenario"], r["controller"], r["seed"])
 
@@ -74,7 +83,8 @@ def main() -> int:
         return 0
     before = {_key(r): r for r in map(json.loads, args.compare.read_text().splitlines())}
     changed = 0
-    print(f"\n{'case':34s} {'before':28s} {'after':28s}")
+    print(f"\n{'case':30s} {'before':10s} {'after':10s} position error [mm] / touchdown "
+          "speed [mm/s] / min tension [N], before -> after")  # fmt: skip
     for rec in records:
         old = before.get(_key(rec))
         same = old is not None and (old["success"], old["reason"], old["conditions"]) == (
@@ -82,7 +92,12 @@ def main() -> int:
         )  # fmt: skip
         changed += not same
         case = f"{rec['scenario']} {rec['controller']} seed {rec['seed']}"
-        print(f"{case:34s} {old['reason'] if old else '-':28s} {rec['reason']:28s}"
+        floats = " / ".join(
+            f"{_num(old, key, scale)} -> {_num(rec, key, scale)}"
+            for key, scale in (("position_error_m", 1e3), ("touchdown_speed_mps", 1e3),
+                               ("min_tension_N", 1.0))
+        )  # fmt: skip
+        print(f"{case:30s} {old['reason'] if old else '-':10s} {rec['reason']:10s} {floats}"
               f"{'' if same else '  CHANGED'}")  # fmt: skip
     print(f"\n{changed} changed outcome(s) of {len(records)}")
     return 1 if changed else 0
