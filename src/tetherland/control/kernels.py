@@ -122,9 +122,11 @@ def mix_into(
     lo, hi = mix[MIX_F_MIN], mix[MIX_F_MAX]
     w = np.array([f_R, tx, ty, tz])
     f = np.empty(4)
+    f_lo, f_hi = math.inf, -math.inf
     for i in range(4):
         f[i] = Gi[i, 0] * w[0] + Gi[i, 1] * w[1] + Gi[i, 2] * w[2] + Gi[i, 3] * w[3]
-    if f.min() >= lo - _BOUND_TOL and f.max() <= hi + _BOUND_TOL:  # the common case
+        f_lo, f_hi = min(f_lo, f[i]), max(f_hi, f[i])
+    if f_lo >= lo - _BOUND_TOL and f_hi <= hi + _BOUND_TOL:  # the common case
         level = 0.0
         for i in range(4):
             out[4 + i] = w[i]
@@ -534,7 +536,8 @@ def hierarchical_into(
             for i in range(9):
                 R_d[i // 3, i % 3] = state[5 + i]
         else:
-            R_d[:, :] = R
+            for i in range(9):
+                R_d[i // 3, i % 3] = R[i // 3, i % 3]
         f_R = state[3]
     else:
         zx, zy, zz = F0 / F_norm, F1 / F_norm, F2 / F_norm  # attitude_from_thrust_axis
@@ -780,7 +783,9 @@ def dfl_into(
     rows = 1.0
     for i in range(4):
         rows *= math.sqrt(A[i, 0] ** 2 + A[i, 1] ** 2 + A[i, 2] ** 2 + A[i, 3] ** 2)
-    det, u = _lu4_solve(A, v - terms[28:32])
+    for j in range(4):
+        v[j] -= terms[28 + j]  # v - b
+    det, u = _lu4_solve(A, v)
     ratio = abs(det) / rows
     singular = not ratio >= HADAMARD_MIN
     if singular:  # hold f_R'' = 0 and the last torque

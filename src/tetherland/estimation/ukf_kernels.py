@@ -263,7 +263,11 @@ def _sqrt_factor_into(P: np.ndarray, S: np.ndarray) -> None:
         for k in range(j):
             d -= S[j, k] * S[j, k]
         if not d > 0.0:  # not positive definite (or NaN): LAPACK's potrf fails here too
-            w, V = np.linalg.eigh(0.5 * (P + P.T))
+            Ps = np.empty((n, n))
+            for a in range(n):
+                for b in range(n):
+                    Ps[a, b] = 0.5 * (P[a, b] + P[b, a])
+            w, V = np.linalg.eigh(Ps)
             for c in range(n):
                 r = math.sqrt(max(w[c], 1e-15))
                 for i in range(n):
@@ -510,8 +514,12 @@ def update_pose_into(
     # K = Pxz S^-1 by the Cholesky factor of the SPD innovation covariance S
     Ls = np.empty((6, 6))
     _sqrt_factor_into(S, Ls)
-    Kt = Pxz.T.copy()  # solve S K^T = Pxz^T, column by column
-    sol = innov.copy()  # and S y = nu for the NIS
+    Kt = np.empty((6, N_ERR))  # solve S K^T = Pxz^T, column by column
+    sol = np.empty(6)  # and S y = nu for the NIS
+    for i in range(6):
+        sol[i] = innov[i]
+        for a in range(N_ERR):
+            Kt[i, a] = Pxz[a, i]
     _chol_solve_columns(Ls, Kt)
     _chol_solve_vector(Ls, sol)
     nis = 0.0
