@@ -26,14 +26,10 @@ def controller():
 def _state_vector(rng: np.random.Generator) -> np.ndarray:
     """[phi, delta, phi', delta', theta_e, roll, psi, omega (3), f_R, f_R'] away from the
     model's singularities (cos(delta) = 0, roll = 90 deg)."""
-    return np.concatenate(
-        (
-            [rng.uniform(-1.5, 1.5), rng.uniform(-1.2, 1.2)],
-            rng.normal(0, 1, 2),
-            [rng.uniform(-1.5, 1.5), rng.uniform(-1.2, 1.2), rng.uniform(-3, 3)],
-            rng.normal(0, 2, 3), [rng.uniform(1, 25), rng.normal(0, 10)],
-        )  # fmt: skip
-    )
+    link = [rng.uniform(-1.5, 1.5), rng.uniform(-1.2, 1.2), *rng.normal(0, 1, 2)]
+    attitude = [rng.uniform(-1.5, 1.5), rng.uniform(-1.2, 1.2), rng.uniform(-3, 3)]
+    thrust = [rng.uniform(1, 25), rng.normal(0, 10)]
+    return np.array([*link, *attitude, *rng.normal(0, 2, 3), *thrust])
 
 
 @settings(max_examples=100, deadline=None)
