@@ -114,5 +114,5 @@ def test_compiled_hierarchical_matches_the_reference(scenario, seed, feedforward
 def test_remainder_matches_math_remainder():
     rng = np.random.default_rng(7)
     for x in np.concatenate((rng.uniform(-20, 20, 2000), np.arange(-7, 8) * math.pi)):
-        assert math.isclose(kernels._remainder(x, 2 * math.pi), math.remainder(x, 2 * math.pi),
+        assert math.isclose(kernels.remainder(x, 2 * math.pi), math.remainder(x, 2 * math.pi),
                             abs_tol=1e-12)  # fmt: skip

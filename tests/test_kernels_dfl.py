@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tetherland.config import load_scenario
-from tetherland.control import DflController, kernels
+from tetherland.control import DflController, dfl_kernels
 from tetherland.control.dfl import dfl_function
 from tetherland.control.dfl_terms import dfl_terms_into
 from tetherland.rotations import exp_so3, rotmat_to_quat
@@ -58,20 +58,21 @@ def test_compiled_dfl_matches_the_reference(controller, seed, first, taut):
         R_AB = exp_so3([0.0, x[4], 0.0]) @ exp_so3([math.pi / 2, 0.0, 0.0])
     q = rotmat_to_quat(controller.R_WA @ R_AB)
     Y = np.vstack((x[[0, 1, 4, 6]] + rng.normal(0, 0.1, 4), rng.normal(0, 1, (4, 4))))
-    state = kernels.dfl_state()
+    state = dfl_kernels.dfl_state()
     state[0], state[1] = x[10], x[11]
     if not first:  # an earlier update: its time, input and integrals
         state[2], state[3:7], state[7:11] = 0.998, rng.normal(0, 1, 4), rng.normal(0, 0.1, 4)
     tension = rng.uniform(0, 8) if taut else 0.0
     s_ref = state.copy()
     mixer = controller.mixer
-    expected = kernels.dfl_reference(1.0, link, q, x[7:10], Y, tension, s_ref,
+    expected = dfl_kernels.dfl_reference(1.0, link, q, x[7:10], Y, tension, s_ref,
                                      controller._par, mixer.layout, mixer.rotors)  # fmt: skip
-    out = np.empty(kernels.DFL_OUT_WIDTH)
-    kernels.dfl_into(1.0, link, q, x[7:10], Y, tension, state, controller._par, mixer.packed,
-                     out)  # fmt: skip
-    np.testing.assert_allclose(out[kernels.DFL_RATIO], expected[kernels.DFL_RATIO], rtol=1e-9,
-                               atol=1e-12)  # fmt: skip
-    assert out[kernels.DFL_SINGULAR] == expected[kernels.DFL_SINGULAR]
+    out = np.empty(dfl_kernels.DFL_OUT_WIDTH)
+    dfl_kernels.dfl_into(
+        1.0, link, q, x[7:10], Y, tension, state, controller._par, mixer.packed, out
+    )
+    ratio = dfl_kernels.DFL_RATIO
+    np.testing.assert_allclose(out[ratio], expected[ratio], rtol=1e-9, atol=1e-12)
+    assert out[dfl_kernels.DFL_SINGULAR] == expected[dfl_kernels.DFL_SINGULAR]
     np.testing.assert_allclose(out, expected, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(state, s_ref, rtol=1e-9, atol=1e-9)

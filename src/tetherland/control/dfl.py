@@ -23,7 +23,7 @@ and generated into a numba kernel, :mod:`tetherland.control.dfl_terms`.
 The extension states f_R, f_R' live in the controller and are integrated at the control
 rate; :meth:`DflController.reset` starts them at a given thrust (bumpless switching).
 Singular where A is (nearly) singular, i.e. its Hadamard ratio is below
-:data:`tetherland.control.kernels.HADAMARD_MIN` (the hierarchical controller's
+:data:`tetherland.control.dfl_kernels.HADAMARD_MIN` (the hierarchical controller's
 singularities plus roll = 90 deg): detected, reported in the diagnostics and handled by
 holding f_R'' = 0 and the last torque.
 """
@@ -38,12 +38,12 @@ import numpy as np
 
 from tetherland import GRAVITY
 from tetherland.config import Scenario
-from tetherland.control import kernels
+from tetherland.control import dfl_kernels, kernels
 from tetherland.control.common import Mixer, command_from
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, Reference, StateEstimate
 
-_RELATIVE_DEGREES = kernels.DFL_RELATIVE_DEGREES
+_RELATIVE_DEGREES = dfl_kernels.DFL_RELATIVE_DEGREES
 _ERROR_NAMES = ("e_phi", "e_delta", "e_theta_A", "e_psi")
 MODEL_PARAMETERS = ("mass", "length", "J_xx", "J_yy", "J_zz", "g")
 """The symbolic parameters p of :func:`dfl_expression`, in order [kg, m, kg m^2 (3), m/s^2]."""
@@ -125,7 +125,7 @@ def _poly_gains(pole: float, order: int) -> np.ndarray:
 class DflController:
     """Gamma_DFL^b for y^b = [phi, delta, theta_A, psi] (implements Controller).
 
-    The update is one compiled call, :func:`tetherland.control.kernels.dfl_into`, with the
+    The update is one compiled call, :func:`tetherland.control.dfl_kernels.dfl_into`, with the
     Lie derivatives generated from :func:`dfl_expression` (plain reference with the CasADi
     function: ``dfl_reference``).
 
@@ -158,20 +158,20 @@ class DflController:
         self.control_dt = (
             control_dt if control_dt is not None else 1.0 / scenario.controller.rate_hz
         )
-        self._par = kernels.pack_dfl(
+        self._par = dfl_kernels.pack_dfl(
             self.mass, self.integral, self.integral_max, self.compensate_offset, self.control_dt,
             self.r_att_B, self.R_WA, [k[extra:] for k in full], k_int,
             self.mixer.layout.allocation_inverse[:, 0],  # dF_i/df_R: the thrust share
             self.model,
         )  # fmt: skip
         # [f_R, f_R', t_last, last u (4), error integrals (4)]
-        self._state = kernels.dfl_state()
+        self._state = dfl_kernels.dfl_state()
 
     def reset(self, thrust: float | None = None, thrust_rate: float = 0.0) -> None:
         """Restart the thrust extension at ``thrust`` [N] and ``thrust_rate`` [N/s]
         (None: the reference's nominal thrust at the next update)."""
         last_u = self._state[3:7].copy()  # the held torque survives a restart
-        self._state[:] = kernels.dfl_state()
+        self._state[:] = dfl_kernels.dfl_state()
         self._state[3:7] = last_u
         if thrust is not None:
             self._state[0], self._state[1] = thrust, thrust_rate
@@ -199,14 +199,14 @@ class DflController:
             state[1] = ff.f_R_dot if ff is not None else 0.0
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
         body = estimate.body
-        out = np.empty(kernels.DFL_OUT_WIDTH)
-        kernels.dfl_into(
+        out = np.empty(dfl_kernels.DFL_OUT_WIDTH)
+        dfl_kernels.dfl_into(
             t, np.array((link.phi, link.delta, link.phi_dot, link.delta_dot)), body.q_WB,
             body.omega_B, Y, float(tension), state, self._par, self.mixer.packed, out,
         )  # fmt: skip
-        diag = dict(zip(_ERROR_NAMES, out[kernels.DFL_ERRORS].tolist(), strict=True))
-        diag["singular"] = float(out[kernels.DFL_SINGULAR])
-        diag["decoupling_ratio"] = float(out[kernels.DFL_RATIO])
+        diag = dict(zip(_ERROR_NAMES, out[dfl_kernels.DFL_ERRORS].tolist(), strict=True))
+        diag["singular"] = float(out[dfl_kernels.DFL_SINGULAR])
+        diag["decoupling_ratio"] = float(out[dfl_kernels.DFL_RATIO])
         diag["ff_tension"] = ff.tension if ff is not None else math.nan
         diag["saturation"] = float(out[kernels.OUT_SATURATION])
         return command_from(out, diag)
