@@ -2,10 +2,12 @@
 
 Implements :class:`tetherland.interfaces.Estimator` and ``CommandAware``. IMU samples are
 buffered by :meth:`UkfEstimator.predict` and integrated together (every sample, one
-unscented transform, :meth:`Ukf.predict_many`) when an estimate or a motion-capture
-update needs them, i.e. at the control rate. The cable tension is estimated from the
-rotors' actual thrust (commanded speeds through the motor lag) and the bias-corrected
-specific force, projected on the estimated link direction.
+unscented transform, one compiled call: :meth:`Ukf.predict_rows`) when an estimate or a
+motion-capture update needs them, i.e. at the control rate. The cable tension is
+estimated from the rotors' actual thrust (commanded speeds through the motor lag) and the
+bias-corrected specific force, projected on the estimated link direction; the link state
+and the tension of an estimate come from one compiled call as well
+(:func:`tetherland.estimation.kernels.estimate_into`).
 """
 
 from __future__ import annotations
