@@ -1,23 +1,24 @@
 """Hot-path workloads for instruction counts (valgrind callgrind): load-independent speed.
 
 Wall-clock timings on the shared 2-core machine vary by 30 % and more; instruction counts
-do not. Each workload runs its hot path ``n`` times after a warm-up; the difference of two
-counts (n and 2n) divided by n is the cost of one call, without imports and set-up:
+do not. Each workload runs its hot path ``n`` times after a warm-up, inside a call of
+``math.fsum`` (a C function nothing else here uses), so that callgrind counts only the
+hot path with ``--toggle-collect=math_fsum``:
 
-    valgrind --tool=callgrind --callgrind-out-file=/dev/null \\
+    valgrind --tool=callgrind --toggle-collect=math_fsum --callgrind-out-file=/dev/null \\
         .venv/bin/python benchmarks/hotpaths.py WORKLOAD N
 
 Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
 ``estimator`` (one control tick: two IMU samples, the estimate, a mocap update every 4th
-tick), ``mission`` (a slope50 mission cut at N seconds of simulated time; prints its
-number of control ticks). ``benchmarks/bench_callgrind.sh`` runs them all and prints
-instructions per call (per control tick for the mission: the full mission less its first
-4 s, so that set-up and planning cancel).
+tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
+prints the number of ticks). ``benchmarks/bench_callgrind.sh`` runs them all and prints
+instructions per call.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 import sys
 
 import numpy as np
@@ -88,24 +89,43 @@ def _estimator():
     return call
 
 
+def _counted(fn) -> None:
+    """Run ``fn()`` inside math.fsum: the region callgrind collects."""
+    math.fsum(map(lambda _: fn() or 0.0, range(1)))
+
+
 def main() -> None:
     name, n = sys.argv[1], int(sys.argv[2])
     if name == "mission":
         from tetherland.mission import run_mission
         from tetherland.mission.run import with_overrides
         from tetherland.planning import Planner
+        from tetherland.sim.runner import Runner
 
         planner = Planner()
-        run_mission(with_overrides(load_scenario("slope50"), ["mission.max_duration=2"]),
-                    planner=planner)  # warm-up  # fmt: skip
-        sc = with_overrides(load_scenario("slope50"), [f"mission.max_duration={n}"])
-        print(f"ticks={len(run_mission(sc, planner=planner).log)}")
+        sc = load_scenario("slope50")
+        run_mission(with_overrides(sc, ["mission.max_duration=2"]), planner=planner)  # warm-up
+        run = Runner.run
+        logs = []
+
+        def counted_run(self, *args, **kwargs):
+            _counted(lambda: logs.append(run(self, *args, **kwargs)))
+            return logs[-1]
+
+        Runner.run = counted_run
+        for seed in range(n):
+            run_mission(sc, seed=seed, planner=planner)
+        print(f"ticks={sum(len(log) for log in logs)}")
         return
     call = _estimator() if name == "estimator" else _controllers(name)
     for _ in range(50):
         call()
-    for _ in range(n):
-        call()
+
+    def calls() -> None:
+        for _ in range(n):
+            call()
+
+    _counted(calls)
 
 
 if __name__ == "__main__":

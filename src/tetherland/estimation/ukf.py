@@ -227,11 +227,13 @@ class Ukf:
 
         All 31 sigma points are propagated through the sample (unscented transform).
         """
-        self.predict_many(
-            np.array([t], dtype=float),
-            np.asarray(f_B, dtype=float)[None, :],
-            np.asarray(omega_B, dtype=float)[None, :],
-        )
+        if not t > self.t:
+            raise ValueError(f"IMU times must increase beyond t = {self.t}: got {t}")
+        row = np.empty((1, 7))
+        row[0, 0] = t
+        row[0, 1:4] = f_B
+        row[0, 4:7] = omega_B
+        self.predict_rows(row, 1)
 
     def predict_many(self, ts: ArrayLike, f_B: ArrayLike, omega_B: ArrayLike) -> None:
         """Integrate several IMU samples in one unscented transform.
