@@ -64,8 +64,9 @@ class TrajectoryTrack:
             t0=self.t0,
             dt=dt,
             outputs=outputs,
-            omega_B=nominal["omega_B"],
-            omega_dot_B=nominal["omega_dot_B"],
+            # C-contiguous rows: the compiled controllers take them as they are
+            omega_B=np.ascontiguousarray(nominal["omega_B"], dtype=float),
+            omega_dot_B=np.ascontiguousarray(nominal["omega_dot_B"], dtype=float),
             f_R=np.column_stack((nominal["f_R"], nominal["f_R_dot"], nominal["f_R_ddot"])),
             tension=nominal["tension"],
             rotor_thrusts=s.thrusts,
