@@ -53,8 +53,6 @@ _NAN3 = np.full(3, np.nan)
 _NAN3.setflags(write=False)
 _NAN4 = np.full(4, np.nan)
 _NAN4.setflags(write=False)
-_NAN7 = np.full(7, np.nan)
-_NAN7.setflags(write=False)
 
 Observer = Callable[[float, Plant], None]
 """Called at every control tick after the command, with (t_k, plant); e.g. a video recorder."""
@@ -248,9 +246,11 @@ class Runner:
         imu_truth = sd[0:6]
         sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["frame_touch"].stop]
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
-        rotor_buf, bias_buf, scalars = np.zeros(8), np.zeros(6), np.zeros(9)
-        imu_y = np.full(6, np.nan)
-        mocap_pq = _NAN7.copy()
+        rotor_buf, scalars = np.zeros(8), np.zeros(9)
+        # the measurement columns, contiguous in the row: last IMU sample, its true biases,
+        # last delivered mocap pose
+        meas = np.full(19, np.nan)
+        imu_y, bias_buf, mocap_pq = meas[0:6], meas[6:12], meas[12:19]
         mocap_t, mocap_valid = math.nan, math.nan
         queue: deque[tuple[int, MocapSample]] = deque()
         j_mocap, next_mocap = 0, 0
@@ -280,8 +280,8 @@ class Runner:
         hook = plant.hook
         # the row's parts, in schema order: fixed buffers refilled in place every tick and
         # slots for the estimate, reference and command (see _write_row)
-        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, imu_y, bias_buf,
-                                   mocap_pq, *([_NAN3] * 11)]  # fmt: skip
+        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, meas,
+                                   *([_NAN3] * 11)]  # fmt: skip
         diag_buf = np.empty(len(diag_keys))
         if diag_keys:
             parts.append(diag_buf)
@@ -373,7 +373,7 @@ class Runner:
             math.nan if cmd.thrust is None else cmd.thrust,
         )
         b = est.body
-        parts[8:19] = (
+        parts[6:17] = (
             b.p_W,
             b.v_W,
             b.q_WB,
