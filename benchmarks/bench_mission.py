@@ -17,12 +17,12 @@ import sys
 import time
 from collections import defaultdict
 
-from tetherland.config import load_scenario
+from tetherland.config import load_scenario, with_overrides
 from tetherland.control import SwitchingController
 from tetherland.estimation import UkfEstimator
-from tetherland.mission import MissionSupervisor, run_mission
-from tetherland.mission.run import with_overrides
-from tetherland.planning import Planner
+from tetherland.methods import Planners
+from tetherland.mission import MissionSupervisor
+from tetherland.runs import run_mission
 from tetherland.sim.plant import Plant
 from tetherland.sim.runner import Runner
 from tetherland.sim.sensors import Imu, Mocap
@@ -75,15 +75,15 @@ def main() -> None:
     runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
     controllers = sys.argv[3:] or ["hierarchical", "dfl"]
     scenario = load_scenario(name)
-    planner = Planner()
+    planners = Planners()
     # first run in a process: numba loads its cached kernels (see bench_control_estimation)
     t0 = time.perf_counter()
-    run_mission(with_overrides(scenario, ["mission.max_duration=1"]), planner=planner)
+    run_mission(with_overrides(scenario, ["mission.max_duration=1"]), planners=planners)
     print(f"warm-up (kernel loading, planner compilation): {time.perf_counter() - t0:.2f} s")
     for controller in controllers:
         rtfs = []
         for seed in range(runs):
-            s = run_mission(scenario, controller=controller, seed=seed, planner=planner).summary
+            s = run_mission(scenario, controller=controller, seed=seed, planners=planners).summary
             rtfs.append(s["real_time_factor"])
             print(
                 f"{controller} seed {seed}: success={s['success']} sim {s['sim_time_s']:.1f} s, "
@@ -100,11 +100,11 @@ def main() -> None:
     acc: dict[str, float] = defaultdict(float)
     for cls, method, key in ROLES:
         _timed(cls, method, key, acc)
-    result = run_mission(scenario, seed=0, planner=planner)
+    result = run_mission(scenario, seed=0, planners=planners)
     ticks = len(result.log)
     print(f"\nwall time per 2 ms control tick (hierarchical, seed 0, {ticks} ticks, "
           f"timers add about 0.3 us per call):")  # fmt: skip
-    rest = result.wall_time_s - sum(acc.values())
+    rest = result.record.wall_time_s - sum(acc.values())
     rows = [*((key, value / ticks * 1e6) for key, value in acc.items()),
             ("runner (scheduling, the rest)", rest / ticks * 1e6)]  # fmt: skip
     print(f"  {'':50s} {'now':>8s} {BEFORE_COMMIT:>8s}")

@@ -21,8 +21,8 @@ import sys
 from pathlib import Path
 
 from tetherland.config import load_scenario
-from tetherland.mission import run_mission
-from tetherland.planning import Planner
+from tetherland.methods import Planners
+from tetherland.runs import run_mission
 
 CASES = (
     ("slope50", "hierarchical"),
@@ -65,14 +65,14 @@ def main() -> int:
     ap.add_argument("--out", type=Path, required=True, help="JSON-lines record to write")
     ap.add_argument("--compare", type=Path, help="earlier record to compare the outcomes with")
     args = ap.parse_args()
-    planners: dict[str, Planner] = {}
+    by_scenario: dict[str, Planners] = {}
     records = []
     with args.out.open("w") as fh:
         for name, controller in CASES:
             sc = load_scenario(name)
-            planner = planners.setdefault(name, Planner())
+            planners = by_scenario.setdefault(name, Planners())
             for seed in SEEDS:
-                s = run_mission(sc, controller=controller, seed=seed, planner=planner).summary
+                s = run_mission(sc, controller=controller, seed=seed, planners=planners).summary
                 rec = _record(s)
                 records.append(rec)
                 fh.write(json.dumps(rec) + "\n")

@@ -97,14 +97,14 @@ def _counted(fn) -> None:
 def main() -> None:
     name, n = sys.argv[1], int(sys.argv[2])
     if name == "mission":
-        from tetherland.mission import run_mission
-        from tetherland.mission.run import with_overrides
-        from tetherland.planning import Planner
+        from tetherland.config import with_overrides
+        from tetherland.methods import Planners
+        from tetherland.runs import run_mission
         from tetherland.sim.runner import Runner
 
-        planner = Planner()
+        planners = Planners()
         sc = load_scenario("slope50")
-        run_mission(with_overrides(sc, ["mission.max_duration=2"]), planner=planner)  # warm-up
+        run_mission(with_overrides(sc, ["mission.max_duration=2"]), planners=planners)  # warm-up
         run = Runner.run
         logs = []
 
@@ -114,7 +114,7 @@ def main() -> None:
 
         Runner.run = counted_run
         for seed in range(n):
-            run_mission(sc, seed=seed, planner=planner)
+            run_mission(sc, seed=seed, planners=planners)
         print(f"ticks={sum(len(log) for log in logs)}")
         return
     call = _estimator() if name == "estimator" else _controllers(name)

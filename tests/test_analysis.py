@@ -203,7 +203,7 @@ def test_tethered_slope_limit_with_the_cable_at_the_centre_of_mass():
     # no cable torque: equal rotor thrusts, f_R(beta) = m g cos(beta - gamma)/cos(gamma)
     # = n (f_min + margin) solved for beta
     expected = gamma + math.acos(lim.min_controllable_thrust * math.cos(gamma) / (lim.mass * g))
-    assert a.tethered.max_slope_rad == pytest.approx(min(expected, math.pi / 2), abs=1e-8)
+    assert a.tethered.max_slope_rad == pytest.approx(expected, abs=1e-8)
     np.testing.assert_allclose(a.tethered.hover_rotor_thrusts, a.tethered.hover_thrust / 4)
 
 

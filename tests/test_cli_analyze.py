@@ -92,7 +92,8 @@ def test_show_prints_loadable_toml(capsys, tmp_path: Path):
         (["analyze", "slope50", "--set", "vehicle.mas=1"], "vehicle.mas: unknown key"),
         (["analyze", "slope50", "--set", "vehicle.mass=-1"], "allowed range (0, 100]"),
         (["analyze", "slope50", "--set", "vehicle.mass=nan"], "vehicle.mass"),
-        (["analyze", "slope50", "--set", "surface.slope_deg=91"], "allowed range [0, 90]"),
+        (["analyze", "slope50", "--set", "surface.slope_deg=181"], "allowed range [0, 180]"),
+        (["analyze", "slope50", "--set", "surface.slope_deg=nan"], "allowed range [0, 180]"),
         (
             ["analyze", "slope50", "--set", "vehicle.h_R=0.9", "--set", "tether.length=0.8"],
             "tether.length = 0.8 m",
@@ -123,7 +124,7 @@ def test_invalid_toml_exit_2(capsys, tmp_path: Path):
 def test_console_script_reports_without_traceback():
     exe = Path(sys.executable).with_name("tetherland")
     proc = subprocess.run(
-        [str(exe), "analyze", "slope50", "--set", "surface.slope_deg=120"],
+        [str(exe), "analyze", "slope50", "--set", "surface.slope_deg=190"],
         capture_output=True,
         text=True,
         check=False,

@@ -107,8 +107,10 @@ BAD_OVERRIDES = [
     (["vehicle.mass=-1"], r"vehicle\.mass: .*greater than 0.*allowed range \(0, 100\]"),
     (["vehicle.mass=nan"], r"vehicle\.mass: .*finite.*allowed range"),
     (["vehicle.mass=inf"], r"vehicle\.mass: .*finite"),
-    (["surface.slope_deg=95"], r"surface\.slope_deg: .*allowed range \[0, 90\]"),
-    (["surface.slope_deg=-1"], r"surface\.slope_deg: .*allowed range \[0, 90\]"),
+    (["surface.slope_deg=185"], r"surface\.slope_deg: .*allowed range \[0, 180\]"),
+    (["surface.slope_deg=-1"], r"surface\.slope_deg: .*allowed range \[0, 180\]"),
+    (["surface.slope_deg=nan"], r"surface\.slope_deg: .*finite.*allowed range \[0, 180\]"),
+    (["surface.slope_deg=inf"], r"surface\.slope_deg: .*finite.*allowed range \[0, 180\]"),
     (
         ["vehicle.h_R=0.9", "tether.length=0.8"],
         r"tether\.length = 0\.8 m must be > \|h_att - anchor\.h_A\|",

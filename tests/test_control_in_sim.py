@@ -96,7 +96,7 @@ def test_ukf_tension_estimate_within_10_percent_while_taut(tethered_landing):
 def test_integral_action_removes_the_thrust_model_error(slope50):
     """The controller believes c_f 5 % too high (it under-spins the rotors): without
     integral action the hover would sag by about 5 % m g / (m k_x) = 8 cm."""
-    from tetherland.mission import with_overrides
+    from tetherland.config import with_overrides
 
     belief = with_overrides(slope50, [f"vehicle.thrust_coefficient={1.05e-5}"])
     plant = Plant(slope50)

@@ -25,11 +25,12 @@ from tetherland.geometry import (
     normal_from_slope,
     pipe_sag,
     surface_frame,
+    surface_frame_from_slope,
     theta_A_from_z_B,
 )
 
 angles = st.floats(-math.pi, math.pi, allow_nan=False)
-slopes = st.floats(0.0, math.pi / 2, allow_nan=False)
+slopes = st.floats(0.0, math.pi, allow_nan=False)  # walls at pi/2, overhangs beyond
 coords = st.floats(-5.0, 5.0, allow_nan=False)
 unit_c = st.floats(-0.95, 0.95, allow_nan=False)
 
@@ -51,7 +52,57 @@ def test_surface_frame_of_50_degree_slope():
 
 def test_horizontal_surface_frame_is_world():
     np.testing.assert_array_equal(surface_frame([0, 0, 3.0]), np.eye(3))
-    np.testing.assert_array_equal(surface_frame([0, 0, -1.0]), np.eye(3))  # sign flipped up
+    np.testing.assert_array_equal(surface_frame_from_slope(0.0, 0.0), np.eye(3))
+
+
+def test_a_downward_normal_is_a_ceiling_not_flipped_up():
+    """n_S is the outward normal: -z_W is a ceiling (slope pi), the limit of azimuth 0."""
+    R = surface_frame([0, 0, -2.0])
+    np.testing.assert_array_equal(R, np.diag([-1.0, 1.0, -1.0]))
+    np.testing.assert_allclose(R, surface_frame_from_slope(math.pi, 0.0), atol=1e-15)
+    assert Surface(origin=np.zeros(3), R_WS=R).slope == pytest.approx(math.pi)
+
+
+@pytest.mark.parametrize("beta_deg", [90.0, 100.0, 135.0])
+def test_surface_frame_past_vertical(beta_deg: float):
+    """A wall faces horizontally, an overhang faces down; x_S still points down the surface."""
+    beta, az = math.radians(beta_deg), math.radians(30.0)
+    R = surface_frame_from_slope(beta, az)
+    x_S, y_S, z_S = R.T
+    assert_rotation(R)
+    assert z_S[2] == pytest.approx(math.cos(beta), abs=1e-15)  # < 0 past vertical
+    assert x_S[2] == pytest.approx(-math.sin(beta), abs=1e-15)
+    assert y_S[2] == 0.0
+    horizontal = np.array([math.cos(az), math.sin(az), 0.0])
+    assert z_S @ horizontal == pytest.approx(math.sin(beta))  # faces out along the azimuth
+    assert x_S @ horizontal == pytest.approx(math.cos(beta))  # <= 0: recedes under past 90
+    np.testing.assert_allclose(R, surface_frame(normal_from_slope(beta, az)), atol=1e-12)
+    assert Surface(origin=np.zeros(3), R_WS=R).slope == pytest.approx(beta, abs=1e-12)
+
+
+@pytest.mark.parametrize("azimuth_deg", [0.0, -70.0, 145.0])
+def test_surface_and_anchor_frames_are_continuous_through_vertical(azimuth_deg: float):
+    """F_S turns about y_S by the slope change (||dR||_F = sqrt(2) dbeta); F_A is the same
+    frame for every slope of one azimuth (it depends only on y_S)."""
+    az = math.radians(azimuth_deg)
+    betas = np.linspace(0.0, math.pi, 1801)
+    frames = np.array([surface_frame_from_slope(b, az) for b in betas])
+    steps = np.linalg.norm(np.diff(frames, axis=0), axis=(1, 2))
+    np.testing.assert_allclose(steps, math.sqrt(2) * 2 * math.sin((betas[1] - betas[0]) / 2))
+    anchors = np.array([anchor_frame(R) for R in frames])
+    np.testing.assert_allclose(anchors, np.broadcast_to(anchors[0], anchors.shape), atol=1e-15)
+    y_S = [-math.sin(az), math.cos(az), 0.0]
+    np.testing.assert_allclose(anchors[0], np.column_stack(([y_S[1], -y_S[0], 0], y_S, [0, 0, 1])))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(1e-6, math.pi - 1e-6), angles)
+def test_frame_from_normal_equals_frame_from_slope(beta: float, azimuth: float):
+    np.testing.assert_allclose(
+        surface_frame(normal_from_slope(beta, azimuth)),
+        surface_frame_from_slope(beta, azimuth),
+        atol=1e-9,
+    )
 
 
 def test_zero_normal_is_singular():
@@ -62,16 +113,17 @@ def test_zero_normal_is_singular():
 @settings(max_examples=200, deadline=None)
 @given(slopes, angles)
 def test_surface_and_anchor_frames_are_rotations(beta: float, azimuth: float):
-    R_WS = surface_frame(normal_from_slope(beta, azimuth))
+    R_WS = surface_frame_from_slope(beta, azimuth)
     R_WA = anchor_frame(R_WS)
     assert_rotation(R_WS)
     assert_rotation(R_WA)
     assert R_WS[2, 0] <= 1e-12  # x_S never points uphill
-    assert R_WS[2, 2] >= -1e-12  # z_S . z_W >= 0
+    assert R_WS[2, 2] == pytest.approx(math.cos(beta))  # z_S . z_W = cos(beta), < 0 past 90
     np.testing.assert_allclose(R_WA[:, 2], [0, 0, 1])
     np.testing.assert_allclose(R_WA[:, 1], R_WS[:, 1])
     assert R_WA[2, 0] == pytest.approx(0.0, abs=1e-12)  # x_A horizontal
-    assert R_WA[:, 0] @ R_WS[:, 0] >= -1e-12  # x_A downhill like x_S
+    assert R_WA[:, 0] @ R_WS[:, 0] == pytest.approx(math.cos(beta))  # downhill below 90 deg
+    assert R_WA[:, 0] @ R_WS[:, 2] == pytest.approx(math.sin(beta))  # x_A points off the surface
 
 
 @settings(max_examples=200, deadline=None)
@@ -160,9 +212,9 @@ def test_inclined_landing_point_properties(beta, azimuth, x, y, c, length, h_R):
 
 
 @settings(max_examples=100, deadline=None)
-@given(st.floats(0.01, 1.5), st.floats(0.0, 0.5), st.floats(0.0, 0.5), st.floats(0.6, 2.0))
+@given(st.floats(0.01, 3.1), st.floats(0.0, 0.5), st.floats(0.0, 0.5), st.floats(0.6, 2.0))
 def test_landing_geometry_from_anchor_and_from_point_agree(beta, h_R, h_A, length):
-    surface = Surface(origin=np.zeros(3), R_WS=surface_frame(normal_from_slope(beta)))
+    surface = Surface(origin=np.zeros(3), R_WS=surface_frame_from_slope(beta, 0.4))
     by_point = landing_geometry(
         surface, length=length, h_R=h_R, h_A=h_A, landing_point=[1.0, 2.0, 0.0]
     )
@@ -175,6 +227,32 @@ def test_landing_geometry_from_anchor_and_from_point_agree(beta, h_R, h_A, lengt
     np.testing.assert_allclose(
         by_point.link_end(by_point.phi_star, 0.0), by_point.p_att_landed, atol=1e-9
     )
+    # phi* = gamma - beta and theta_A* = beta on every slope, overhangs included
+    assert by_point.phi_star == pytest.approx(by_point.gamma - beta, abs=1e-12)
+    assert by_point.theta_A_star == pytest.approx(beta, abs=1e-12)
+    z_B_A = [math.sin(by_point.theta_A_star), 0.0, math.cos(by_point.theta_A_star)]
+    np.testing.assert_allclose(by_point.R_WA @ z_B_A, surface.z_S, atol=1e-12)
+
+
+@pytest.mark.parametrize("beta_deg", [90.0, 100.0])
+def test_inclined_hover_landing_point_on_a_wall_and_an_overhang(beta_deg: float):
+    """(6.8)-(6.13) past vertical: cable at the CoM, l = 0.4 m, h_R = 0.1 m, h_A = 0:
+    gamma = asin(0.25) = 14.48 deg, phi* = gamma - beta, d~ at gamma above the surface."""
+    beta = math.radians(beta_deg)
+    surface = Surface(origin=np.zeros(3), R_WS=surface_frame_from_slope(beta))
+    geo = landing_geometry(surface, length=0.4, h_R=0.1, h_A=0.0)
+    gamma = math.asin(0.25)
+    assert math.degrees(geo.gamma) == pytest.approx(14.4775, abs=1e-4)
+    assert geo.phi_star == pytest.approx(gamma - beta, abs=1e-12)
+    # d~ in F_W (the plane x_W-z_W): elevation gamma - beta from the horizontal x_A = x_W
+    np.testing.assert_allclose(
+        geo.d_tilde, [math.cos(gamma - beta), 0.0, math.sin(gamma - beta)], atol=1e-12
+    )
+    assert geo.d_tilde @ surface.z_S == pytest.approx(math.sin(gamma), abs=1e-12)
+    # the anchor sits on the surface, uphill of the landing point at cable length
+    assert surface.height(geo.p_A) == pytest.approx(0.0, abs=1e-12)
+    assert geo.p_A[2] > geo.p_L[2]
+    assert np.linalg.norm(geo.p_att_landed - geo.p_A) == pytest.approx(0.4, abs=1e-12)
 
 
 def test_hover_cosine_rejects_long_offsets():

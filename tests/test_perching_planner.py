@@ -13,6 +13,7 @@ from tetherland import GRAVITY as g
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry
+from tetherland.models.airframe import PROP_RADIUS_FRACTION
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.models.rigid_body import RigidBodyParams, rigid_body_rhs
 from tetherland.planning.perching import (
@@ -25,7 +26,6 @@ from tetherland.planning.perching import (
 )
 from tetherland.planning.perching.model import GUARD_RADIUS_FRACTION
 from tetherland.rotations import quat_to_rotmat, rotation_from_z_and_yaw, rotmat_to_quat
-from tetherland.sim.mjcf import PROP_RADIUS_FRACTION
 
 
 @pytest.fixture(scope="module")

@@ -5,17 +5,17 @@ from __future__ import annotations
 import numpy as np
 
 from tetherland import state, warmup
-from tetherland.config import load_scenario
+from tetherland.config import load_scenario, with_overrides
 from tetherland.control import DflController, HierarchicalController, dfl_kernels, kernels
 from tetherland.estimation import UkfEstimator, ukf_kernels
 from tetherland.estimation import kernels as estimation_kernels
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import ImuSample
-from tetherland.mission import run_mission
-from tetherland.mission.run import with_overrides
+from tetherland.methods import Planners
 from tetherland.planning import Planner
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import rotmat_to_quat
+from tetherland.runs import run_mission
 from tetherland.sim.analytic import estimate_of
 
 KERNELS = (
@@ -38,11 +38,11 @@ def test_the_loop_needs_no_specialisation_beyond_the_warm_up():
     warmed = _signatures()
     assert all(warmed.values())  # every kernel compiled (or loaded from the cache)
     sc = load_scenario("slope50")
-    planner = Planner()
+    planners = Planners()
     # free flight, the estimator and mocap in the mission loop ...
-    run_mission(with_overrides(sc, ["mission.max_duration=0.5"]), planner=planner)
+    run_mission(with_overrides(sc, ["mission.max_duration=0.5"]), planners=planners)
     # ... and the tethered controllers on a planned track's references, from the estimator
-    traj = planner.plan(sc, "landing").require()
+    traj = Planner().plan(sc, "landing").require()
     track = TrajectoryTrack(traj, 0.0, sc.controller.rate_hz)
     nom, out = traj.nominal(1.0), traj.output(1.0)
     x = np.concatenate(([out.phi[0], 0.0, out.phi[1], 0.0], rotmat_to_quat(nom.R_WB), nom.omega_B))

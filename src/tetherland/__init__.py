@@ -1,7 +1,7 @@
 """tetherland: tethered landing and takeoff of aerial robots on steep slopes.
 
 Conventions (see ``docs/theory.md`` section 2): SI units inside the code, degrees only at the
-user boundary; world frame z_W up; body frame FLU with z_B the thrust axis (the seed
+user boundary; world frame z_W up; body frame FLU with z_B the thrust axis (the
 chapter's z_R = -z_B); quaternions scalar-first (w, x, y, z); ``R_XY`` maps coordinates in
 frame Y to frame X.
 """

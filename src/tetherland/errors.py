@@ -21,3 +21,14 @@ class SingularityError(TetherlandError, ArithmeticError):
 
 class SimulationError(TetherlandError, RuntimeError):
     """The physics simulation diverged or was driven with an invalid input."""
+
+
+class InfeasibleError(TetherlandError):
+    """A valid request that cannot be met (no plan, no design, a surface out of reach).
+
+    The command line reports it on one line with exit code 1 (invalid input is 2).
+    """
+
+
+class MissingDependencyError(TetherlandError, ImportError):
+    """An optional dependency (an extra such as ``tetherland[viz]``) is not installed."""

@@ -37,25 +37,53 @@ def unit(v: ArrayLike, what: str = "vector") -> FloatArray:
 
 
 def normal_from_slope(slope: float, azimuth: float = 0.0) -> FloatArray:
-    """Unit normal n_S of a surface with slope angle ``slope`` whose downhill direction
-    has azimuth ``azimuth`` (from x_W towards y_W) [rad]."""
+    """Outward unit normal n_S of a surface with slope angle ``slope`` in [0, pi] whose
+    downhill direction has azimuth ``azimuth`` (from x_W towards y_W) [rad].
+
+    n_S = [sin(beta) cos(az), sin(beta) sin(az), cos(beta)]: past vertical (beta > pi/2)
+    the surface faces down and n_S . z_W = cos(beta) < 0 (an overhang).
+    """
     s = math.sin(slope)
     return np.array([s * math.cos(azimuth), s * math.sin(azimuth), math.cos(slope)])
+
+
+def surface_frame_from_slope(slope: float, azimuth: float = 0.0) -> FloatArray:
+    """R_WS = [x_S y_S z_S] of a surface given by its slope angle and downhill azimuth.
+
+    With beta = ``slope`` in [0, pi] and az = ``azimuth`` [rad]:
+      z_S = n_S = [sin(beta) cos(az), sin(beta) sin(az), cos(beta)]  (outward normal)
+      y_S = [-sin(az), cos(az), 0]                                    (horizontal)
+      x_S = y_S x z_S = [cos(beta) cos(az), cos(beta) sin(az), -sin(beta)]  (downhill)
+    so x_S . z_W = -sin(beta), z_S . z_W = cos(beta), y_S . z_W = 0 for every slope,
+    walls (beta = pi/2) and overhangs (beta > pi/2) included; the frame is smooth in
+    beta. For 0 < beta < pi it equals :func:`surface_frame` of n_S (section 6.2:
+    y_S = z_W x z_S / ||.||); at beta = 0 x_S points along ``azimuth`` (F_S = F_W for
+    azimuth 0, the chapter's horizontal case).
+    """
+    cb, sb = math.cos(slope), math.sin(slope)
+    ca_, sa = math.cos(azimuth), math.sin(azimuth)
+    x_S = np.array([cb * ca_, cb * sa, -sb])
+    y_S = np.array([-sa, ca_, 0.0])
+    z_S = np.array([sb * ca_, sb * sa, cb])
+    return np.column_stack((x_S, y_S, z_S))
 
 
 def surface_frame(n_S: ArrayLike) -> FloatArray:
     """Rotation R_WS = [x_S y_S z_S] of the surface frame (section 6.2).
 
-    z_S = n_S (flipped so that z_S . z_W >= 0); if the surface is horizontal F_S = F_W;
-    otherwise y_S = z_W x z_S / ||.|| and x_S = y_S x z_S, so x_S points downhill.
+    z_S = n_S, the outward normal (the side the vehicle lands on; z_S . z_W < 0 for an
+    overhang). If z_S = z_W the surface is horizontal and F_S = F_W; if z_S = -z_W (a
+    ceiling) F_S = F_W turned by pi about y_W (x_S = -x_W, y_S = y_W), the limit of a
+    slope of azimuth 0; otherwise y_S = z_W x z_S / ||.|| and x_S = y_S x z_S, so x_S
+    points downhill (x_S . z_W = -sin(beta) <= 0).
     """
     z_S = unit(n_S, "surface normal")
-    if z_S @ Z_W < 0:
-        z_S = -z_S
     cross = np.cross(Z_W, z_S)
     norm = float(np.linalg.norm(cross))
     if norm < HORIZONTAL_TOL:
-        return np.eye(3)
+        if z_S @ Z_W > 0:
+            return np.eye(3)
+        return np.diag([-1.0, 1.0, -1.0])
     y_S = cross / norm
     x_S = np.cross(y_S, z_S)
     x_S /= np.linalg.norm(x_S)
@@ -63,7 +91,11 @@ def surface_frame(n_S: ArrayLike) -> FloatArray:
 
 
 def anchor_frame(R_WS: FloatArray) -> FloatArray:
-    """Rotation R_WA of the anchor frame: z_A = z_W, y_A = y_S, x_A = y_A x z_A."""
+    """Rotation R_WA of the anchor frame: z_A = z_W, y_A = y_S, x_A = y_A x z_A.
+
+    y_S is horizontal for every slope (0 to pi), so x_A is the horizontal direction of
+    the slope's azimuth: downhill for beta < pi/2, away from the surface for an overhang.
+    """
     y_A = R_WS[:, 1]
     x_A = np.cross(y_A, Z_W)
     x_A /= np.linalg.norm(x_A)
@@ -71,7 +103,7 @@ def anchor_frame(R_WS: FloatArray) -> FloatArray:
 
 
 def slope_angle(R_WS: FloatArray) -> float:
-    """Slope angle beta = acos(z_S . z_W) [rad], in [0, pi/2]."""
+    """Slope angle beta = acos(z_S . z_W) [rad], in [0, pi] (past pi/2: an overhang)."""
     return math.acos(min(1.0, max(-1.0, float(R_WS[2, 2]))))
 
 
@@ -229,7 +261,8 @@ class Surface:
 
     @property
     def is_horizontal(self) -> bool:
-        return bool(np.allclose(self.R_WS, np.eye(3)))
+        """z_S = z_W (facing up; x_S may point along any azimuth)."""
+        return bool(self.R_WS[2, 2] > 1.0 - 1e-12)
 
     def height(self, p: ArrayLike) -> float:
         """Signed distance of ``p`` above P_S along z_S [m] (h_A for the anchor)."""
@@ -358,8 +391,13 @@ def landing_geometry(
         p_A = anchor_for_landing_point(p_L, R_WS, c, length, h_att)
     R_WA = anchor_frame(R_WS)
     d_tilde = inclined_hover_direction(R_WS, c)
-    phi_star, delta_star = link_angles(R_WA.T @ d_tilde)
-    theta_A_star = math.atan2(R_WA[:, 0] @ surface.z_S, R_WA[:, 2] @ surface.z_S)
+    # In F_A, x_S = [cos(beta), 0, -sin(beta)] and z_S = [sin(beta), 0, cos(beta)], so
+    # d~ = [cos(gamma - beta), 0, sin(gamma - beta)]: phi* = gamma - beta, delta* = 0
+    # (section 6.5.1), taken on this branch rather than atan2's (-pi, pi] so that it stays
+    # continuous past beta = pi/2 + gamma; theta_A* = beta in [0, pi].
+    beta = surface.slope
+    phi_star, delta_star = math.asin(c) - beta, 0.0
+    theta_A_star = beta
     return LandingGeometry(
         surface=surface,
         R_WA=R_WA,
@@ -381,12 +419,12 @@ def surface_from_config(scenario: Scenario) -> Surface:
     """The :class:`Surface` described by a scenario's ``[surface]`` section."""
     cfg = scenario.surface
     if cfg.normal is not None:
-        n_S = np.asarray(cfg.normal, dtype=float)
+        R_WS = surface_frame(np.asarray(cfg.normal, dtype=float))
     else:
-        n_S = normal_from_slope(math.radians(cfg.slope_deg), math.radians(cfg.azimuth_deg))
+        R_WS = surface_frame_from_slope(math.radians(cfg.slope_deg), math.radians(cfg.azimuth_deg))
     return Surface(
         origin=np.asarray(cfg.origin, dtype=float),
-        R_WS=surface_frame(n_S),
+        R_WS=R_WS,
         kind=cfg.kind,
         pipe_radius=cfg.pipe_radius if cfg.kind == "pipe" else 0.0,
         friction=cfg.friction,

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from tetherland.errors import ConfigError
+
 
 def _umask() -> int:
     mask = os.umask(0)
@@ -94,3 +96,24 @@ def dumps_json(obj: Any) -> str:
 def atomic_write_json(path: str | os.PathLike[str], obj: Any) -> Path:
     """Write ``obj`` as JSON to ``path`` atomically."""
     return atomic_write_text(path, dumps_json(obj))
+
+
+def prepare_output_dir(directory: str | Path, option: str = "--out") -> Path:
+    """Create ``directory`` and check it is writable, before any work is done.
+
+    Raises
+    ------
+    ConfigError
+        One line naming ``option`` when the directory cannot be created or written.
+    """
+    path = Path(directory)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".write-test-", dir=path)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as err:
+        raise ConfigError(
+            f"{option}: cannot write the output directory '{directory}' ({err.strerror or err})"
+        ) from None
+    return path

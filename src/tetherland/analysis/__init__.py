@@ -16,13 +16,20 @@ from tetherland.analysis.conditions import (
     touchdown_index,
 )
 from tetherland.analysis.feasibility import (
+    Check,
     ContactFreeAnalysis,
+    Infeasibility,
+    LandedHover,
+    SlopeLimit,
     TetheredAnalysis,
     VehicleLimits,
     analyze_free_flight,
     analyze_tethered,
+    landed_hover,
+    landed_hover_at,
     landed_hover_rotor_reason,
     max_feasible_slope,
+    tethered_slope_limit,
 )
 from tetherland.analysis.report import LandingAnalysis, TableRow, analyze
 from tetherland.analysis.statics import (
@@ -37,13 +44,17 @@ from tetherland.analysis.statics import (
 )
 
 __all__ = [
+    "Check",
     "ConditionResult",
     "ContactForces",
     "ContactFreeAnalysis",
+    "Infeasibility",
+    "LandedHover",
     "LandingAnalysis",
     "LandingTolerances",
     "LandingVerdict",
     "Measure",
+    "SlopeLimit",
     "TableRow",
     "TetheredAnalysis",
     "VehicleLimits",
@@ -62,10 +73,13 @@ __all__ = [
     "free_flight_max_touchdown_thrust",
     "hover_tilt_for_tension",
     "inclined_hover",
+    "landed_hover",
+    "landed_hover_at",
     "landed_hover_rotor_reason",
     "landing_hover",
     "max_feasible_slope",
     "tethered_max_touchdown_thrust",
     "tethered_rest_tension",
+    "tethered_slope_limit",
     "touchdown_index",
 ]

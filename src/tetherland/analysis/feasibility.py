@@ -8,6 +8,7 @@ slope the vehicle can take, counting rotor limits f_min <= f_i <= f_max with the
 
 from __future__ import annotations
 
+import enum
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -29,8 +30,7 @@ from tetherland.geometry import (
     LandingGeometry,
     Surface,
     inclined_hover_direction,
-    normal_from_slope,
-    surface_frame,
+    surface_frame_from_slope,
 )
 from tetherland.models.quadrotor import RotorLayout
 
@@ -106,6 +106,189 @@ class VehicleLimits:
         return self.allocation_inverse @ np.array([f_R, *tau])
 
 
+class Infeasibility(enum.Enum):
+    """Why a landing is infeasible: the requirement that fails (docs/theory.md sections 5, 13).
+
+    Tethered landing at p~_L, in the order in which they bind (the first one failing is
+    :attr:`TetheredAnalysis.binding`):
+    """
+
+    NO_INCLINED_HOVER = "no_inclined_hover"
+    """beta >= 90 deg + gamma: the landed inclined hover would need f_R =
+    m g cos(beta - gamma)/cos(gamma) <= 0, so none exists."""
+    ROTOR_FLOOR = "rotor_floor"
+    """The landed hover thrust per rotor f_R/n is below f_min + control_margin (too small
+    or negative): slope too steep for this vehicle."""
+    ROTOR_CEILING = "rotor_ceiling"
+    """The landed hover thrust per rotor is above f_max - control_margin."""
+    OFFSET_TORQUE = "offset_torque"
+    """The thrust fits on average, but cancelling the cable-offset torque
+    r_att x (f_L d) (6.6.5) pushes a rotor out of [f_min + margin, f_max - margin]."""
+    NORMAL_FORCE = "normal_force"
+    """Motors off: the surface would have to pull, f_N < f_N_min."""
+    FRICTION_MOTORS_OFF = "friction_motors_off"
+    """Motors off: the shear force exceeds mu (f_N - f_N_min), the robot slides."""
+    NO_CONDITION_4 = "no_condition_4"
+    """Contact-free only: condition (4) cannot hold on a sloped surface (section 6.4.1)."""
+    TOUCHDOWN_THRUST = "touchdown_thrust"
+    """Contact-free only: condition (5) needs a touchdown thrust below the least
+    controllable thrust n (f_min + margin)."""
+
+
+@dataclass(frozen=True)
+class Check:
+    """One feasibility requirement, its signed margin and a one-line explanation.
+
+    Attributes
+    ----------
+    reason : Infeasibility
+        What fails when the margin is negative.
+    margin : float
+        Signed margin of the requirement [N]; >= 0 when it holds (inf: nothing to check,
+        e.g. no cable-offset torque).
+    message : str
+        Numbers behind the check (one line).
+    """
+
+    reason: Infeasibility
+    margin: float
+    message: str
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.margin >= -_TOL)
+
+
+@dataclass(frozen=True)
+class LandedHover:
+    """The landed inclined hover at p~_L and the rest with the motors off, checked.
+
+    Attributes
+    ----------
+    slope, c, gamma : float
+        beta [rad], c = (h_att - h_A)/l [-] and gamma = asin(c) [rad].
+    thrust, tension : float
+        f_R = m g cos(beta - gamma)/cos(gamma), f_L = m g sin(beta)/cos(gamma) [N].
+    rotor_thrusts : (n,) array
+        Rotor thrusts of that hover, cancelling the cable-offset torque [N].
+    rest_tension, rest_normal_force, rest_friction_margin : float
+        Motors off: f_L (6.14), f_N and f_S_max - ||f_S|| [N] (the friction check uses
+        mu max(f_N - f_N_min, 0): a surface that would have to pull fails on its normal force).
+    checks : tuple of Check
+        Every requirement in :data:`binding order <Infeasibility>`.
+    """
+
+    slope: float
+    c: float
+    gamma: float
+    thrust: float
+    tension: float
+    rotor_thrusts: FloatArray
+    rest_tension: float
+    rest_normal_force: float
+    rest_friction_margin: float
+    checks: tuple[Check, ...]
+
+    @property
+    def findings(self) -> tuple[Check, ...]:
+        """The failed checks, the binding one first (empty when feasible)."""
+        return tuple(c for c in self.checks if not c.ok)
+
+    @property
+    def feasible(self) -> bool:
+        return not self.findings
+
+    @property
+    def binding(self) -> Infeasibility | None:
+        """The requirement that binds (None when feasible)."""
+        failed = self.findings
+        return failed[0].reason if failed else None
+
+    @property
+    def margin(self) -> float:
+        """Smallest signed margin of all checks [N] (>= 0 when feasible)."""
+        return min(c.margin for c in self.checks)
+
+
+def landed_hover(
+    surface: Surface, c: float, limits: VehicleLimits, g: float = GRAVITY
+) -> LandedHover:
+    """Check the landed inclined hover at p~_L on ``surface`` for any slope in [0, pi].
+
+    With the cable in the fall-line plane (d = d~, c = sin(gamma)), the landed hover
+    needs f_R = m g cos(beta - gamma)/cos(gamma) and f_L = m g sin(beta)/cos(gamma); with
+    the motors off f_N = f_R (the same number, (6.14)) and the shear force is zero, so
+    both exist exactly while beta < 90 deg + gamma (docs/theory.md section 13).
+    """
+    beta = surface.slope
+    gamma = math.asin(c)
+    f_R, f_L = landing_hover(beta, c, limits.mass, g)
+    d = inclined_hover_direction(surface.R_WS, c)
+    rest_tension = tethered_rest_tension(surface, d, limits.mass, g)
+    rest = contact_forces(surface, limits.mass, 0.0, surface.z_S, rest_tension, d, g)
+    rotors = limits.landed_hover_rotor_thrusts(c, f_R, f_L)
+    lo, hi = limits.f_min + limits.margin, limits.f_max - limits.margin
+    even = f_R / limits.n_rotors
+    shear = float(np.linalg.norm(rest.f_S))
+    b, lim = math.degrees(beta), math.degrees(math.pi / 2 + gamma)
+    checks = (
+        Check(
+            Infeasibility.NO_INCLINED_HOVER,
+            f_R,
+            f"beta = {b:.1f} deg >= 90 deg + gamma = {lim:.1f} deg: no inclined hover exists "
+            f"at the landing point (it would need f_R = {f_R:.2f} N <= 0)",
+        ),
+        Check(
+            Infeasibility.ROTOR_FLOOR,
+            even - lo,
+            f"inclined hovering at the landing point needs f_R = {f_R:.2f} N, {even:.3f} N per "
+            f"rotor, below f_min + control_margin = {lo:.3f} N: slope too steep for this vehicle",
+        ),
+        Check(
+            Infeasibility.ROTOR_CEILING,
+            hi - even,
+            f"inclined hovering at the landing point needs f_R = {f_R:.2f} N, {even:.3f} N per "
+            f"rotor, above f_max - control_margin = {hi:.3f} N: rotor f_max too low",
+        ),
+        Check(
+            Infeasibility.OFFSET_TORQUE,
+            # without a torque (r_att parallel to d~, or at the CoM) the split is even and
+            # the floor and ceiling checks already say everything: nothing to add
+            min(float(rotors.min()) - lo, hi - float(rotors.max()))
+            if float(np.ptp(rotors)) > 1e-12
+            else math.inf,
+            f"cancelling the cable-offset torque at the landing point needs rotor thrusts "
+            f"{rotors.min():.3f}..{rotors.max():.3f} N (f_R = {f_R:.2f} N) outside "
+            f"[f_min + control_margin, f_max - control_margin] = [{lo:.3f}, {hi:.3f}] N: "
+            "slope too steep for this cable attachment",
+        ),
+        Check(
+            Infeasibility.NORMAL_FORCE,
+            rest.f_N - surface.f_N_min,
+            f"with the motors off the surface would have to pull: f_N = {rest.f_N:.3f} N < "
+            f"f_N_min = {surface.f_N_min:g} N",
+        ),
+        Check(
+            Infeasibility.FRICTION_MOTORS_OFF,
+            surface.friction * max(rest.f_N - surface.f_N_min, 0.0) - shear,
+            f"with the motors off the robot slides: shear {shear:.3f} N > "
+            f"f_S_max = {rest.f_S_max:.3f} N",
+        ),
+    )
+    return LandedHover(
+        slope=beta,
+        c=c,
+        gamma=gamma,
+        thrust=f_R,
+        tension=f_L,
+        rotor_thrusts=rotors,
+        rest_tension=rest_tension,
+        rest_normal_force=rest.f_N,
+        rest_friction_margin=rest.friction_margin,
+        checks=checks,
+    )
+
+
 @dataclass(frozen=True)
 class TetheredAnalysis:
     """Tethered landing at the inclined-hovering point p~_L (6.8)-(6.16).
@@ -113,11 +296,11 @@ class TetheredAnalysis:
     Attributes
     ----------
     c, gamma : float
-        c = (h_R - h_A)/l (6.9) and gamma = asin(c) [rad].
+        c = (h_att - h_A)/l (6.9) and gamma = asin(c) [rad].
     d_tilde, landing_point, anchor_point : (3,) arrays
         d~ (6.12), p~_L and p_A in F_W [-, m, m].
     phi_star, theta_A_star : float
-        Final output: link elevation and robot tilt at landing [rad].
+        Final output: link elevation gamma - beta and robot tilt beta at landing [rad].
     hover_thrust, hover_tension : float
         Inclined hovering at p~_L: f_R and f_L [N].
     hover_rotor_thrusts : (n,) array
@@ -127,17 +310,19 @@ class TetheredAnalysis:
     rest_tension, rest_normal_force : float
         f_L (6.14) and f_N with the motors off [N].
     condition4_possible : bool
-        Inclined hovering exists at p~_L with f_L >= 0.
+        Inclined hovering exists at p~_L (f_R > 0, f_L >= 0).
     condition5_holds : bool
         Condition (5) with the motors off, by force balance.
     thrust_within_limits : bool
-        The hover thrust per rotor lies in [f_min + margin, f_max - margin].
+        The hover rotor thrusts lie in [f_min + margin, f_max - margin].
     feasible : bool
         All of the above.
     max_slope_rad : float or None
-        Steepest slope for which the tethered landing is feasible (None: none is).
-    reasons : tuple of str
-        Why it is infeasible (empty when feasible).
+        Steepest slope in [0, pi] for which the tethered landing is feasible (None: none is).
+    max_slope_binding : Infeasibility or None
+        What binds just beyond ``max_slope_rad`` (None: feasible up to pi, or nowhere).
+    checks : tuple of Check
+        Every requirement with its signed margin, in binding order.
     """
 
     c: float
@@ -158,7 +343,24 @@ class TetheredAnalysis:
     thrust_within_limits: bool
     feasible: bool
     max_slope_rad: float | None
-    reasons: tuple[str, ...]
+    max_slope_binding: Infeasibility | None
+    checks: tuple[Check, ...]
+
+    @property
+    def findings(self) -> tuple[Check, ...]:
+        """The failed checks, the binding one first (empty when feasible)."""
+        return tuple(c for c in self.checks if not c.ok)
+
+    @property
+    def binding(self) -> Infeasibility | None:
+        """The requirement that binds here (None when feasible)."""
+        failed = self.findings
+        return failed[0].reason if failed else None
+
+    @property
+    def reasons(self) -> tuple[str, ...]:
+        """One line per failed check, the binding one first (empty when feasible)."""
+        return tuple(c.message for c in self.findings)
 
 
 @dataclass(frozen=True)
@@ -180,7 +382,9 @@ class ContactFreeAnalysis:
         The least controllable touchdown thrust keeps condition (5).
     max_slope_rad : float or None
         Steepest feasible slope for this vehicle and friction.
-    reasons : tuple of str
+    findings : tuple of Check
+        What fails (condition (4) on a slope is listed but does not decide ``feasible``:
+        the perching comparison lands without it); the binding one first.
     """
 
     condition4_possible: bool
@@ -189,13 +393,23 @@ class ContactFreeAnalysis:
     min_touchdown_thrust: float
     feasible: bool
     max_slope_rad: float | None
-    reasons: tuple[str, ...]
+    findings: tuple[Check, ...]
+
+    @property
+    def binding(self) -> Infeasibility | None:
+        """What makes the contact-free landing infeasible (None when feasible)."""
+        fatal = [c for c in self.findings if c.reason is not Infeasibility.NO_CONDITION_4]
+        return fatal[0].reason if fatal and not self.feasible else None
+
+    @property
+    def reasons(self) -> tuple[str, ...]:
+        return tuple(c.message for c in self.findings)
 
 
 def _surface_at(template: Surface, slope: float, azimuth: float = 0.0) -> Surface:
     return Surface(
         origin=template.origin,
-        R_WS=surface_frame(normal_from_slope(slope, azimuth)),
+        R_WS=surface_frame_from_slope(slope, azimuth),
         kind=template.kind,
         pipe_radius=template.pipe_radius,
         friction=template.friction,
@@ -203,30 +417,11 @@ def _surface_at(template: Surface, slope: float, azimuth: float = 0.0) -> Surfac
     )
 
 
-def _tethered_margins(
-    surface: Surface, c: float, limits: VehicleLimits, g: float
-) -> dict[str, float]:
-    """Signed margins (>= 0 feasible) of every tethered requirement [N]."""
-    beta = surface.slope
-    f_R, f_L = landing_hover(beta, c, limits.mass, g)
-    d = inclined_hover_direction(surface.R_WS, c)
-    rest = contact_forces(
-        surface,
-        limits.mass,
-        0.0,
-        surface.z_S,
-        tethered_rest_tension(surface, d, limits.mass, g),
-        d,
-        g,
-    )
-    rotors = limits.landed_hover_rotor_thrusts(c, f_R, f_L)
-    return {
-        "rotor_low": float(rotors.min()) - (limits.f_min + limits.margin),
-        "rotor_high": (limits.f_max - limits.margin) - float(rotors.max()),
-        "tension": f_L,
-        "normal": rest.f_N - surface.f_N_min,
-        "friction": rest.friction_margin,
-    }
+def landed_hover_at(
+    template: Surface, slope: float, c: float, limits: VehicleLimits, g: float = GRAVITY
+) -> LandedHover:
+    """:func:`landed_hover` on a copy of ``template`` tilted to ``slope`` in [0, pi] [rad]."""
+    return landed_hover(_surface_at(template, slope), c, limits, g)
 
 
 def _free_flight_margin(surface: Surface, limits: VehicleLimits, g: float) -> float:
@@ -234,48 +429,79 @@ def _free_flight_margin(surface: Surface, limits: VehicleLimits, g: float) -> fl
     return -math.inf if bound is None else bound - limits.min_controllable_thrust
 
 
+_ROTOR_REASONS = (
+    Infeasibility.NO_INCLINED_HOVER,
+    Infeasibility.ROTOR_FLOOR,
+    Infeasibility.ROTOR_CEILING,
+    Infeasibility.OFFSET_TORQUE,
+)
+
+
 def landed_hover_rotor_reason(scenario: Scenario, g: float = GRAVITY) -> str | None:
     """Why the rotors cannot hold the landed inclined hover (cable torque included), or None.
 
-    The same check as :func:`analyze_tethered`, without the slope search: used by the
-    planner so that planning and analysis agree on what is feasible.
+    The rotor checks of :func:`landed_hover` (no hover, rotor floor and ceiling, offset
+    torque), without the slope search: used by the planner so that planning and analysis
+    agree on what is feasible.
     """
     geometry = LandingGeometry.from_scenario(scenario)
-    limits = VehicleLimits.from_scenario(scenario)
-    f_R, f_L = landing_hover(geometry.surface.slope, geometry.c, limits.mass, g)
-    rotors = limits.landed_hover_rotor_thrusts(geometry.c, f_R, f_L)
-    if rotors.min() < limits.f_min + limits.margin - _TOL:
-        return (
-            f"the landed inclined hover needs a rotor thrust of {rotors.min():.3f} N (thrust "
-            f"{f_R:.2f} N, cable-offset torque cancelled) < vehicle.f_min + control_margin = "
-            f"{limits.f_min + limits.margin:.3f} N: slope too steep for this vehicle"
-        )
-    if rotors.max() > limits.f_max - limits.margin + _TOL:
-        return (
-            f"the landed inclined hover needs a rotor thrust of {rotors.max():.3f} N > "
-            f"vehicle.f_max - control_margin = {limits.f_max - limits.margin:.3f} N: "
-            "rotor f_max too low for this slope"
-        )
+    hover = landed_hover(geometry.surface, geometry.c, VehicleLimits.from_scenario(scenario), g)
+    for check in hover.findings:
+        if check.reason in _ROTOR_REASONS:
+            return check.message
     return None
 
 
-def max_feasible_slope(margin: Callable[[float], float], samples: int = 181) -> float | None:
-    """Steepest slope in [0, pi/2] with ``margin(slope) >= 0`` [rad], or None.
+@dataclass(frozen=True)
+class SlopeLimit:
+    """Steepest feasible slope and what binds beyond it.
 
-    The margin is sampled on a grid and the last sign change refined with Brent's method.
+    Attributes
+    ----------
+    max_slope_rad : float or None
+        Steepest slope in [0, pi] with a non-negative margin [rad]; None if none has.
+    binding : Infeasibility or None
+        The binding reason just beyond ``max_slope_rad`` (None when it is pi or None).
     """
-    grid = np.linspace(0.0, math.pi / 2, samples)
+
+    max_slope_rad: float | None
+    binding: Infeasibility | None
+
+
+def max_feasible_slope(
+    margin: Callable[[float], float], samples: int = 181, upper: float = math.pi
+) -> float | None:
+    """Steepest slope in [0, ``upper``] with ``margin(slope) >= 0`` [rad], or None.
+
+    The margin is sampled on a grid (every degree by default) and the last sign change
+    refined with Brent's method.
+    """
+    grid = np.linspace(0.0, upper, samples)
     values = np.array([margin(float(b)) for b in grid])
     ok = np.flatnonzero(values >= -_TOL)
     if ok.size == 0:
         return None
     k = int(ok[-1])
     if k == samples - 1:
-        return math.pi / 2
+        return upper
     lo, hi = float(grid[k]), float(grid[k + 1])
     if not np.isfinite(values[k + 1]):
         return lo
-    return float(brentq(margin, lo, hi, xtol=1e-10))
+    # margin + tol changes sign on [lo, hi] (a margin of exactly zero, such as the shear
+    # of a frictionless tethered rest, counts as met up to rounding)
+    return float(brentq(lambda b: margin(b) + _TOL, lo, hi, xtol=1e-10))
+
+
+def tethered_slope_limit(
+    template: Surface, c: float, limits: VehicleLimits, g: float = GRAVITY
+) -> SlopeLimit:
+    """Steepest slope in [0, pi] at which the landed hover of :func:`landed_hover` is
+    feasible for this cable geometry (c) and vehicle, and what binds beyond it."""
+    beta = max_feasible_slope(lambda b: landed_hover_at(template, b, c, limits, g).margin)
+    if beta is None or beta >= math.pi - 1e-12:
+        return SlopeLimit(beta, None)
+    beyond = landed_hover_at(template, min(beta + 1e-6, math.pi), c, limits, g)
+    return SlopeLimit(beta, beyond.binding)
 
 
 def analyze_tethered(
@@ -283,91 +509,104 @@ def analyze_tethered(
 ) -> TetheredAnalysis:
     """Feasibility of the tethered landing at p~_L for this geometry and vehicle."""
     surface = geometry.surface
-    beta = surface.slope
-    f_R, f_L = landing_hover(beta, geometry.c, limits.mass, g)
-    d = geometry.d_tilde
-    rest_tension = tethered_rest_tension(surface, d, limits.mass, g)
-    rest = contact_forces(surface, limits.mass, 0.0, surface.z_S, rest_tension, d, g)
-    margins = _tethered_margins(surface, geometry.c, limits, g)
-    reasons = []
-    rotors = limits.landed_hover_rotor_thrusts(geometry.c, f_R, f_L)
-    if margins["rotor_low"] < -_TOL:
-        reasons.append(
-            f"inclined hovering at the landing point needs a rotor thrust of {rotors.min():.3f} N"
-            f" (thrust {f_R:.2f} N, cable-offset torque cancelled), below f_min + control_margin"
-            f" = {limits.f_min + limits.margin:.3f} N: slope too steep for this vehicle"
-        )
-    if margins["rotor_high"] < -_TOL:
-        reasons.append(
-            f"inclined hovering at the landing point needs a rotor thrust of {rotors.max():.3f} N,"
-            f" above f_max - control_margin = {limits.f_max - limits.margin:.3f} N:"
-            " rotor f_max too low"
-        )
-    if f_L < -_TOL:
-        reasons.append("inclined hovering needs a negative cable tension")
-    if not rest.holds:
-        reasons.append(
-            f"with the motors off the contact forces are not admissible (f_N = {rest.f_N:.3f} N,"
-            f" friction margin {rest.friction_margin:.3f} N)"
-        )
-    thrust_ok = margins["rotor_low"] >= -_TOL and margins["rotor_high"] >= -_TOL
-    cond4 = f_L >= -_TOL
+    hover = landed_hover(surface, geometry.c, limits, g)
+    by_reason = {c.reason: c for c in hover.checks}
+    thrust_ok = all(by_reason[r].ok for r in _ROTOR_REASONS[1:])
+    cond4 = by_reason[Infeasibility.NO_INCLINED_HOVER].ok and hover.tension >= -_TOL
+    cond5 = (
+        by_reason[Infeasibility.NORMAL_FORCE].ok and by_reason[Infeasibility.FRICTION_MOTORS_OFF].ok
+    )
+    limit = tethered_slope_limit(surface, geometry.c, limits, g)
     return TetheredAnalysis(
         c=geometry.c,
         gamma=geometry.gamma,
-        d_tilde=d,
+        d_tilde=geometry.d_tilde,
         landing_point=geometry.p_L,
         anchor_point=geometry.p_A,
         phi_star=geometry.phi_star,
         theta_A_star=geometry.theta_A_star,
-        hover_thrust=f_R,
-        hover_tension=f_L,
-        hover_rotor_thrusts=rotors,
-        max_touchdown_thrust=tethered_max_touchdown_thrust(surface, d, limits.mass, g),
-        rest_tension=rest_tension,
-        rest_normal_force=rest.f_N,
-        condition4_possible=cond4,
-        condition5_holds=rest.holds,
-        thrust_within_limits=thrust_ok,
-        feasible=thrust_ok and cond4 and rest.holds,
-        max_slope_rad=max_feasible_slope(
-            lambda b: min(
-                _tethered_margins(_surface_at(surface, b), geometry.c, limits, g).values()
-            )
+        hover_thrust=hover.thrust,
+        hover_tension=hover.tension,
+        hover_rotor_thrusts=hover.rotor_thrusts,
+        max_touchdown_thrust=tethered_max_touchdown_thrust(
+            surface, geometry.d_tilde, limits.mass, g
         ),
-        reasons=tuple(reasons),
+        rest_tension=hover.rest_tension,
+        rest_normal_force=hover.rest_normal_force,
+        condition4_possible=cond4,
+        condition5_holds=cond5,
+        thrust_within_limits=thrust_ok,
+        feasible=hover.feasible,
+        max_slope_rad=limit.max_slope_rad,
+        max_slope_binding=limit.binding,
+        checks=hover.checks,
     )
 
 
 def analyze_free_flight(
     surface: Surface, limits: VehicleLimits, g: float = GRAVITY
 ) -> ContactFreeAnalysis:
-    """Feasibility of a contact-free (perching) landing on this surface."""
+    """Feasibility of a contact-free (perching) landing on this surface (any slope in [0, pi])."""
     bound = free_flight_max_touchdown_thrust(surface, limits.mass, g)
-    motors_off = contact_forces(surface, limits.mass, 0.0, surface.z_S, g=g).holds
-    reasons = []
+    motors_off = contact_forces(surface, limits.mass, 0.0, surface.z_S, g=g)
+    findings = []
     horizontal = surface.is_horizontal or surface.slope < 1e-9
     if not horizontal:
-        reasons.append("condition (4) cannot hold on a sloped surface without a tether")
+        findings.append(
+            Check(
+                Infeasibility.NO_CONDITION_4,
+                -math.inf,
+                "condition (4) cannot hold on a sloped surface without a tether",
+            )
+        )
+    m_g = limits.mass * g
+    if motors_off.f_N < surface.f_N_min - _TOL:
+        findings.append(
+            Check(
+                Infeasibility.NORMAL_FORCE,
+                motors_off.f_N - surface.f_N_min,
+                f"the surface faces down: with the motors off f_N = m g z_S.z_W = "
+                f"{motors_off.f_N:.3f} N < f_N_min = {surface.f_N_min:g} N",
+            )
+        )
     if bound is None:
-        reasons.append("frictionless sloped surface: nothing holds the robot after touchdown")
+        findings.append(
+            Check(
+                Infeasibility.FRICTION_MOTORS_OFF,
+                -m_g * abs(float(surface.x_S[2])),
+                "frictionless sloped surface: nothing holds the robot after touchdown",
+            )
+        )
         feasible = False
     else:
         feasible = bound >= limits.min_controllable_thrust - _TOL
+        if not motors_off.holds and motors_off.f_N >= surface.f_N_min - _TOL:
+            findings.append(
+                Check(
+                    Infeasibility.FRICTION_MOTORS_OFF,
+                    motors_off.friction_margin,
+                    "it slides even with the motors off: m g |x_S.z_W| = "
+                    f"{np.linalg.norm(motors_off.f_S):.3f} N > "
+                    f"f_S_max = {motors_off.f_S_max:.3f} N",
+                )
+            )
         if not feasible:
-            reasons.append(
-                f"condition (5) needs f_R(t_L+) <= {bound:.3f} N but the least controllable"
-                f" thrust is {limits.min_controllable_thrust:.3f} N"
-                + (" (it slides even with the motors off)" if not motors_off else "")
+            findings.append(
+                Check(
+                    Infeasibility.TOUCHDOWN_THRUST,
+                    bound - limits.min_controllable_thrust,
+                    f"condition (5) needs f_R(t_L+) <= {bound:.3f} N but the least controllable"
+                    f" thrust is {limits.min_controllable_thrust:.3f} N",
+                )
             )
     return ContactFreeAnalysis(
         condition4_possible=horizontal,
-        condition5_holds_motors_off=motors_off,
+        condition5_holds_motors_off=motors_off.holds,
         max_touchdown_thrust=bound,
         min_touchdown_thrust=limits.min_controllable_thrust,
         feasible=feasible,
         max_slope_rad=max_feasible_slope(
             lambda b: _free_flight_margin(_surface_at(surface, b), limits, g)
         ),
-        reasons=tuple(reasons),
+        findings=tuple(findings),
     )

@@ -9,6 +9,7 @@ from typing import Any
 from tetherland import GRAVITY
 from tetherland.analysis.feasibility import (
     ContactFreeAnalysis,
+    Infeasibility,
     TetheredAnalysis,
     VehicleLimits,
     analyze_free_flight,
@@ -49,8 +50,9 @@ class LandingAnalysis:
             else f"{f.max_touchdown_thrust:.2f} N"
         )
 
-        def slope(value: float | None) -> str:
-            return "none" if value is None else f"{math.degrees(value):.1f} deg"
+        def slope(value: float | None, binding: Infeasibility | None = None) -> str:
+            text = "none" if value is None else f"{math.degrees(value):.1f} deg"
+            return text if binding is None else f"{text} (then {binding.value})"
 
         return [
             TableRow("Surface slope", f"{beta:.1f} deg", f"{beta:.1f} deg"),
@@ -62,7 +64,7 @@ class LandingAnalysis:
             TableRow(
                 "Surface orientations",
                 f"|x_S.z_W| m g <= f_S_max: {abs(s.x_S[2]) * m_g:.2f} N vs "
-                f"{s.friction * (m_g * s.z_S[2] - s.f_N_min):.2f} N (motors off)",
+                f"{s.friction * max(m_g * s.z_S[2] - s.f_N_min, 0.0):.2f} N (motors off)",
                 "any (y_S.d~ = 0, so (6.16) always holds)",
             ),
             TableRow("Anchor position", "-", "any: p_A = p*_L + h_att z_S - l d~ (6.13)"),
@@ -82,7 +84,11 @@ class LandingAnalysis:
                 yes[f.condition5_holds_motors_off],
                 yes[t.condition5_holds] + f" (f_N = {t.rest_normal_force:.2f} N)",
             ),
-            TableRow("Steepest feasible slope", slope(f.max_slope_rad), slope(t.max_slope_rad)),
+            TableRow(
+                "Steepest feasible slope",
+                slope(f.max_slope_rad),
+                slope(t.max_slope_rad, t.max_slope_binding),
+            ),
             TableRow("Feasible here", yes[f.feasible], yes[t.feasible]),
         ]
 
@@ -124,7 +130,13 @@ class LandingAnalysis:
                 "thrust_within_limits": t.thrust_within_limits,
                 "feasible": t.feasible,
                 "max_slope_rad": t.max_slope_rad,
+                "max_slope_binding": t.max_slope_binding,
+                "binding": t.binding,
                 "reasons": list(t.reasons),
+                "checks": [
+                    {"reason": c.reason, "margin_N": c.margin, "ok": c.ok, "message": c.message}
+                    for c in t.checks
+                ],
             },
             "free_flight": {
                 "condition4_possible": f.condition4_possible,
@@ -133,6 +145,7 @@ class LandingAnalysis:
                 "min_touchdown_thrust": f.min_touchdown_thrust,
                 "max_slope_rad": f.max_slope_rad,
                 "feasible": f.feasible,
+                "binding": f.binding,
                 "reasons": list(f.reasons),
             },
             "vehicle": {

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 import traceback
 from dataclasses import dataclass
@@ -14,6 +15,9 @@ from tetherland.campaign.perturb import Perturbation, apply_perturbation, sample
 from tetherland.campaign.spec import RunSpec
 from tetherland.config import Scenario, apply_overrides, scenario_from_dict
 from tetherland.errors import TetherlandError
+from tetherland.methods import Planners
+from tetherland.runs import run_mission
+from tetherland.sim.disturbances import WindGusts
 
 
 @dataclass(frozen=True)
@@ -41,14 +45,57 @@ def _analysis_verdict(plant: Scenario, belief: Scenario, method: str) -> dict[st
     return {"success": bool(part.feasible), "max_slope_rad": part.max_slope_rad}
 
 
-def _mission_verdict(
-    plant: Scenario, belief: Scenario, perturbation: Perturbation, job: Job
-) -> dict[str, Any]:
-    from tetherland.mission.campaign_entry import run_for_campaign  # imported lazily
+_LANDING_KEYS = (
+    "position_error_m", "attitude_error_rad", "touchdown_speed_mps",
+    "touchdown_angular_rate_rps", "touchdown_accel_mps2", "slip_m", "min_tension_N",
+)  # fmt: skip
+_local = threading.local()
 
-    return run_for_campaign(
-        plant, belief, perturbation, job.run.method, job.run.seed, job.controller
-    )
+
+def worker_planners() -> Planners:
+    """This worker thread's compiled planners, built once and reused by every run."""
+    planners = getattr(_local, "planners", None)
+    if planners is None:
+        planners = _local.planners = Planners()
+    return planners
+
+
+def campaign_fields(summary: dict[str, Any]) -> dict[str, Any]:
+    """The verdict fields a campaign keeps of a run's ``summary.json`` (any method)."""
+    landing = summary.get("landing", {})
+    return {
+        "success": summary["success"],
+        "outcome": summary["outcome"],
+        "reason": summary["reason"],
+        "aborted": summary["aborted"],
+        "abort_reason": summary["abort_reason"],
+        "crashed": summary["crashed"],
+        "landing": {k: landing.get(k) for k in _LANDING_KEYS}
+        | {"conditions": landing.get("conditions")},
+        "takeoff_completed": summary["takeoff"].get("completed", False),
+        "return_completed": summary["return"].get("completed", False),
+        "sim_time_s": summary["sim_time_s"],
+        "real_time_factor": summary["real_time_factor"],
+    }
+
+
+def run_for_campaign(
+    plant: Scenario,
+    belief: Scenario,
+    perturbation: Perturbation,
+    method: str,
+    seed: int,
+    controller: str = "hierarchical",
+) -> dict[str, Any]:
+    """Fly one perturbed run of ``method`` (wind gusts on the plant) and keep its verdict."""
+    period = 1.0 / plant.controller.rate_hz
+    wind: list[WindGusts] = []
+    result = run_mission(
+        plant, belief, method=method, controller=controller, seed=seed,
+        planners=worker_planners(), observers=wind,
+        plant_setup=lambda p: wind.append(WindGusts(p, perturbation.gusts, period)),
+    )  # fmt: skip
+    return campaign_fields(result.summary)
 
 
 def execute(job: Job) -> dict[str, Any]:
@@ -75,7 +122,9 @@ def execute(job: Job) -> dict[str, Any]:
         if job.kind == "analysis":
             verdict = _analysis_verdict(plant, belief, run.method)
         else:
-            verdict = _mission_verdict(plant, belief, perturbation, job)
+            verdict = run_for_campaign(
+                plant, belief, perturbation, run.method, run.seed, job.controller
+            )
         record.update(status="ok", error=None, verdict=verdict)
     except TetherlandError as err:
         record.update(status="error", error=str(err), verdict={"success": False})
@@ -84,3 +133,14 @@ def execute(job: Job) -> dict[str, Any]:
         record.update(status="error", error=f"internal error: {last}", verdict={"success": False})
     record["wall_time_s"] = time.perf_counter() - start
     return record
+
+
+def lost_record(job: Job, error: BaseException) -> dict[str, Any]:
+    """The record of a run whose worker was lost for good (the engine gave up on it)."""
+    run = job.run
+    return {
+        "run_id": run.run_id, "method": run.method, "index": run.index, "seed": run.seed,
+        "sweep_key": run.sweep_key, "sweep_value": run.sweep_value, "status": "error",
+        "error": f"worker lost: {type(error).__name__}: {error}", "verdict": {"success": False},
+        "wall_time_s": 0.0,
+    }  # fmt: skip

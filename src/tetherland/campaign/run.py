@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from tetherland.campaign.executors import Executor
-from tetherland.campaign.jobs import Job, execute
+from tetherland.campaign.jobs import Job, execute, lost_record
 from tetherland.campaign.spec import CampaignSpec
 from tetherland.campaign.stats import RateSummary, summarize
 from tetherland.campaign.store import ResultsStore
@@ -71,8 +71,12 @@ def run_campaign(
         on_start(total, total - len(jobs))
     new = 0
     interrupted = False
+    seen = store.done_ids()
     try:
-        for record in executor.map_unordered(execute, jobs):
+        for record in executor.map_unordered(execute, jobs, lost=lost_record):
+            if record["run_id"] in seen:  # an engine that retried a lost worker's run
+                continue
+            seen.add(record["run_id"])
             store.append(record)
             new += 1
             if on_result:

@@ -10,8 +10,9 @@ from typing import Any
 import numpy as np
 
 from tetherland.errors import ConfigError
+from tetherland.methods import method_names
 
-METHODS = ("tethered", "free-flight")
+METHODS = method_names()
 JOBS = ("mission", "analysis")
 
 

@@ -20,10 +20,13 @@ from typer.exceptions import TyperException
 from tetherland import __version__
 from tetherland.cli.analyze import analyze
 from tetherland.cli.campaign import campaign
+from tetherland.cli.design import design
+from tetherland.cli.export import export
+from tetherland.cli.judge import judge
 from tetherland.cli.mission import mission
 from tetherland.cli.plan import plan
 from tetherland.cli.scenarios import scenarios, show
-from tetherland.errors import TetherlandError
+from tetherland.errors import InfeasibleError, TetherlandError
 
 app = typer.Typer(
     name="tetherland",
@@ -54,7 +57,10 @@ app.command()(scenarios)
 app.command()(show)
 app.command()(analyze)
 app.command()(campaign)
+app.command()(design)
 app.command()(mission)
+app.command()(judge)
+app.command()(export)
 app.command()(plan)
 
 
@@ -62,6 +68,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``tetherland`` script; returns the exit code."""
     try:
         result = app(args=argv, prog_name="tetherland", standalone_mode=False)
+    except InfeasibleError as err:
+        typer.echo(f"error: {err}", err=True)
+        return 1
     except TetherlandError as err:
         typer.echo(f"error: {err}", err=True)
         return 2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from tetherland.analysis import analyze as run_analysis
@@ -41,7 +42,7 @@ def analyze(scenario: ScenarioArg, overrides: SetOption = None, json: JsonOption
     geo.add_row("anchor p_A", vec(t.anchor_point) + " m")
     geo.add_row("landing point p~_L", vec(t.landing_point) + " m")
     geo.add_row("d~", vec(t.d_tilde))
-    geo.add_row("c = (h_R - h_A)/l", f"{t.c:.4f}")
+    geo.add_row("c = (h_att - h_A)/l", f"{t.c:.4f}")
     geo.add_row("phi*, theta_A*", f"{deg(t.phi_star)}, {deg(t.theta_A_star)}")
     geo.add_row(
         "inclined hover f_R, f_L",
@@ -58,4 +59,7 @@ def analyze(scenario: ScenarioArg, overrides: SetOption = None, json: JsonOption
     console.print(table)
     for name, reasons in (("contact-free", result.free_flight.reasons), ("tethered", t.reasons)):
         for reason in reasons:
-            console.print(f"[yellow]{name}:[/yellow] {reason}")
+            console.print(f"[yellow]{name}:[/yellow] {escape(reason)}")
+    for name, binding in (("contact-free", result.free_flight.binding), ("tethered", t.binding)):
+        if binding is not None:
+            console.print(f"[bold]{name} infeasible here, binding: {binding.value}[/bold]")

@@ -15,6 +15,7 @@ from tetherland.campaign import CampaignSpec, Sweep, make_executor, open_store, 
 from tetherland.campaign.plots import plot_errors, plot_success
 from tetherland.cli.common import ScenarioArg, SetOption, console, resolve_scenario
 from tetherland.errors import ConfigError
+from tetherland.io import prepare_output_dir
 from tetherland.provenance import provenance
 
 
@@ -73,7 +74,7 @@ def campaign(
     if spec.sweep is not None:  # validate every swept value up front: fail fast, one line
         for value in spec.sweep.values:
             resolve_scenario(scenario, [*(overrides or []), f"{spec.sweep.key}={value!r}"])
-    directory = out or Path("out") / sc.name / "campaign"
+    directory = prepare_output_dir(out or Path("out") / sc.name / "campaign")
     record = provenance(sc, seed=seed, extra={"engine": engine, "workers": workers})
     store = open_store(spec, directory, resume=resume, provenance=record)
     executor = make_executor(engine, workers or os.cpu_count() or 1, address)

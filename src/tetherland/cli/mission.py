@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -12,9 +11,10 @@ from rich.table import Table
 
 from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
 from tetherland.errors import ConfigError
-from tetherland.io import atomic_write_json, dumps_json
+from tetherland.io import dumps_json, prepare_output_dir
+from tetherland.methods import get_method, method_names
+from tetherland.runs import run_mission, save_run
 
-METHODS = ("tethered", "free-flight")
 CONTROLLERS = ("hierarchical", "dfl")
 
 
@@ -32,64 +32,28 @@ class _ProgressObserver:
             self.progress.update(self.task, description=f"t = {t:6.2f} s  {phase}")
 
 
-def _write_tethered(result: Any, out: Path, video: bool) -> dict[str, Path]:
-    from tetherland.report import save_figures
+def _start_live(sc: Any, speed: float, port: int, rate: float, quiet: bool) -> Any:
+    from tetherland.cli.common import err_console
+    from tetherland.viz.live import LiveView
 
-    files = {"log": out / "log.npz", "summary": out / "summary.json"}
-    result.log.save(files["log"])
-    sup = result.supervisor
-    files["landing_trajectory"] = sup.landing_traj.save_csv(out / "landing_trajectory.csv")
-    files["takeoff_trajectory"] = sup.takeoff_traj.save_csv(out / "takeoff_trajectory.csv")
-    figure_65, path_3d = save_figures(result, out)
-    files["figure_6_5"], files["path_3d"] = figure_65, path_3d
-    if video:
-        from tetherland.sim.render import render_log
+    view = LiveView(sc, port=port, speed=speed, rate_hz=rate)
+    pace = f"{speed:g}x real time" if speed > 0 else "unpaced"
+    (err_console if quiet else console).print(
+        f"live view on {view.url} ({pace}): in Foxglove, Open connection > Foxglove WebSocket"
+    )
+    return view
 
-        files["video"] = render_log(
-            result.log, out / "mission.mp4", scenario=result.plant_scenario
-        ).path
+
+def _add_mcap(result: Any, directory: Path, files: dict[str, Path]) -> None:
+    """Write run.mcap and list it in summary.json."""
+    from tetherland.io import atomic_write_json
+    from tetherland.viz import run_data_from_result
+    from tetherland.viz.mcap import write_mcap
+
+    files["mcap"] = write_mcap(run_data_from_result(result), directory / "run.mcap").path
     atomic_write_json(
         files["summary"], {**result.summary, "files": {k: str(v) for k, v in files.items()}}
     )
-    return files
-
-
-def _run_free_flight(
-    sc: Any, seed: int, out: Path, video: bool, observers: list
-) -> tuple[dict, dict]:
-    from tetherland.estimation import UkfEstimator
-    from tetherland.perching import run_perching
-    from tetherland.provenance import provenance
-
-    t0 = time.perf_counter()
-    log, verdict = run_perching(
-        sc, sc, seed, lambda b, x0, t, w0: UkfEstimator(b, x0, t, rotor_speeds0=w0),
-        observers=observers,
-    )  # fmt: skip
-    wall = time.perf_counter() - t0
-    v = verdict.to_dict()
-    sim_time = float(log["t"][-1]) if log is not None and len(log) else 0.0
-    summary = {
-        "success": v["success"],
-        "method": "free-flight",
-        "scenario": sc.name,
-        "seed": seed,
-        "reason": v["reason"],
-        "landing": {k: v[k] for k in v if k not in ("success", "reason")},
-        "sim_time_s": sim_time,
-        "wall_time_s": wall,
-        "real_time_factor": sim_time / wall if wall > 0 else None,
-        "provenance": provenance(sc, seed=seed, extra={"method": "free-flight"}),
-    }
-    files: dict[str, Path] = {"summary": out / "summary.json"}
-    if log is not None:
-        files["log"] = log.save(out / "log.npz") or out / "log.npz"
-        if video:
-            from tetherland.sim.render import render_log
-
-            files["video"] = render_log(log, out / "mission.mp4", scenario=sc).path
-    atomic_write_json(files["summary"], {**summary, "files": {k: str(p) for k, p in files.items()}})
-    return summary, files
 
 
 def mission(
@@ -99,7 +63,8 @@ def mission(
         str | None, typer.Option("--controller", help="Tethered controller: hierarchical or dfl.")
     ] = None,
     method: Annotated[
-        str, typer.Option("--method", help="tethered (the chapter's) or free-flight (perching).")
+        str,
+        typer.Option("--method", help=f"Landing method: {', '.join(method_names())}."),
     ] = "tethered",
     seed: Annotated[int, typer.Option("--seed", help="Seed of sensor noise and disturbances.")] = 0,
     out: Annotated[Path | None, typer.Option("--out", help="Output directory.")] = None,
@@ -107,50 +72,68 @@ def mission(
     video: Annotated[
         bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
     ] = False,
+    mcap: Annotated[
+        bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")
+    ] = False,
+    live: Annotated[
+        bool, typer.Option("--live", help="Stream the mission to Foxglove while it runs.")
+    ] = False,
+    live_speed: Annotated[
+        float,
+        typer.Option("--live-speed", help="With --live: sim seconds per second (0: unpaced)."),
+    ] = 1.0,
+    live_port: Annotated[
+        int, typer.Option("--live-port", help="With --live: WebSocket port (0: any free one).")
+    ] = 8765,
+    live_rate: Annotated[
+        float, typer.Option("--live-rate", help="With --live: messages per second per topic.")
+    ] = 100.0,
 ) -> None:
     """Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, controllers, supervisor).
 
     Writes the log, summary.json, the figure 6.5 plots and the 3D path (and an mp4 with
-    --video) into --out. Exit code 0 when the mission succeeded, 1 when it failed.
+    --video, run.mcap for Foxglove or Rerun with --mcap) into --out; --live streams the
+    run to Foxglove while it flies. Exit code 0 when the mission succeeded, 1 when it failed.
     """
     sc = resolve_scenario(scenario, overrides)
-    if method not in METHODS:
-        raise ConfigError(f"--method must be one of {', '.join(METHODS)} (got {method!r})")
+    how = get_method(method, "--method")
     if controller is not None and controller not in CONTROLLERS:
         raise ConfigError(
             f"--controller must be one of {', '.join(CONTROLLERS)} (got {controller!r})"
         )
     if seed < 0:
         raise ConfigError(f"--seed must be >= 0 (got {seed})")
-    directory = out or Path("out") / sc.name / ("mission" if method == "tethered" else "perching")
-    directory.mkdir(parents=True, exist_ok=True)
+    if mcap:
+        from tetherland.optional import require
+
+        require("foxglove", package="foxglove-sdk", extra="viz", feature="--mcap")
+    default = "mission" if how.name == "tethered" else "perching"
+    directory = prepare_output_dir(out or Path("out") / sc.name / default)
+    view = _start_live(sc, live_speed, live_port, live_rate, json) if live else None
     with Progress(
         SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
         console=console, transient=True, disable=json,
     ) as progress:  # fmt: skip
         task = progress.add_task("planning", total=None)
-        if method == "tethered":
-            from tetherland.mission import run_mission
+        holder: dict[str, Any] = {}
 
-            holder: dict[str, Any] = {}
+        def phase_of() -> str:
+            phase = getattr(holder.get("reference"), "phase", None)
+            return phase.name.lower() if phase is not None else ""
 
-            def phase_of() -> str:
-                sup = holder.get("sup")
-                return sup.phase.name.lower() if sup is not None else ""
-
-            obs = _ProgressObserver(progress, task, phase_of)
-            result = run_mission(
-                sc, controller=controller, seed=seed, observers=[obs],
-                plant_setup=lambda p: None,
-            )  # fmt: skip
-            holder["sup"] = result.supervisor
-            progress.update(task, description="writing results")
-            files = _write_tethered(result, directory, video)
-            summary = result.summary
-        else:
-            summary, files = _run_free_flight(
-                sc, seed, directory, video, [_ProgressObserver(progress, task)]
-            )
+        result = run_mission(
+            sc, method=how.name, controller=controller, seed=seed,
+            observers=[_ProgressObserver(progress, task, phase_of), *([view] if view else [])],
+            on_flight=lambda flight: holder.update(reference=flight.reference),
+        )  # fmt: skip
+        if view is not None:
+            view.finish(result.summary)
+            view.close()
+        progress.update(task, description="writing results")
+        files = save_run(result, directory, video=video)
+        if mcap and result.log is not None:
+            _add_mcap(result, directory, files)
+        summary = result.summary
     if json:
         typer.echo(
             dumps_json({**summary, "files": {k: str(v) for k, v in files.items()}}), nl=False

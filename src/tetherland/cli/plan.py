@@ -11,7 +11,7 @@ import typer
 from rich.table import Table
 
 from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
-from tetherland.io import atomic_write_json, dumps_json
+from tetherland.io import atomic_write_json, dumps_json, prepare_output_dir
 from tetherland.planning import Maneuver, Planner, PlanningError, PlanResult
 from tetherland.planning.plot import save_plan_figure
 from tetherland.provenance import provenance
@@ -105,13 +105,13 @@ def plan(
     failure), with 2 on bad input.
     """
     sc = resolve_scenario(scenario, overrides)
+    out_dir = prepare_output_dir(out if out is not None else Path("out") / sc.name / "plan")
     result = Planner().plan(
         sc,
         Maneuver(maneuver.value),
         method=None if method is None else method.value,
         solver=None if solver is None else solver.value,
     )
-    out_dir = out if out is not None else Path("out") / sc.name / "plan"
     summary = result.summary()
     doc: dict[str, Any] = {"scenario": sc.name, **summary}
     files: dict[str, str] = {}

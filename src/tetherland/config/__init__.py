@@ -17,6 +17,7 @@ from tetherland.config.loader import (
     parse_override,
     scenario_from_dict,
     scenario_to_toml,
+    with_overrides,
 )
 from tetherland.config.mission import MissionConfig
 from tetherland.config.perching import PerchingConfig, PerchingWeights
@@ -26,6 +27,7 @@ from tetherland.config.planning import PlannerConfig, PlannerWeights
 from tetherland.config.scenario import Scenario
 from tetherland.config.sensors import ImuConfig, MocapConfig, SensorsConfig
 from tetherland.config.simulation import SimConfig
+from tetherland.config.verdict import VerdictConfig
 
 __all__ = [
     "AnchorConfig",
@@ -49,6 +51,7 @@ __all__ = [
     "TetheredGains",
     "Vec3",
     "VehicleConfig",
+    "VerdictConfig",
     "apply_overrides",
     "builtin_scenarios",
     "format_validation_error",
@@ -56,4 +59,5 @@ __all__ = [
     "parse_override",
     "scenario_from_dict",
     "scenario_to_toml",
+    "with_overrides",
 ]

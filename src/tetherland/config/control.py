@@ -38,7 +38,8 @@ class FreeFlightGains(Section):
 
 
 class TetheredGains(Section):
-    """Tethered controllers: hierarchical Gamma_HC^b and DFL Gamma_DFL^b (docs/theory.md section 7)."""
+    """Tethered controllers: hierarchical Gamma_HC^b and DFL Gamma_DFL^b
+    (docs/theory.md section 7)."""
 
     link_frequency: float = Field(3.0, gt=0, le=50)
     """Hierarchical outer loop: natural frequency of the phi and delta errors [rad/s]."""

@@ -202,6 +202,16 @@ def load_scenario(source: str | Path, overrides: Sequence[str] = ()) -> Scenario
     return scenario_from_dict(apply_overrides(data, overrides), default_name=stem)
 
 
+def with_overrides(scenario: Scenario, overrides: Sequence[str]) -> Scenario:
+    """A validated copy of ``scenario`` with ``section.key=value`` overrides applied."""
+    if not overrides:
+        return scenario
+    return scenario_from_dict(
+        apply_overrides(scenario.model_dump(mode="python", exclude_none=True), overrides),
+        scenario.name,
+    )
+
+
 def scenario_to_toml(scenario: Scenario) -> str:
     """Render a scenario as TOML (every field, including defaults), loadable again."""
     dumped = scenario.model_dump(mode="json", exclude_none=True)

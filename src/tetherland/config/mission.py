@@ -73,5 +73,33 @@ class MissionConfig(Section):
     """How long the cable may look slack in a tethered phase before a fault [s]."""
     fault_tracking_deg: float = Field(15.0, gt=0, le=90)
     """Tethered phases: link-angle tracking error that counts as a fault [deg]."""
+    waypoint_tolerance: float = Field(0.1, gt=0, le=5)
+    """Distance from the end of the climb within which the takeoff counts as done [m]."""
+    hook_start_tolerance: float = Field(0.05, gt=0, le=1)
+    """Distance from the hooking start within which the hooking pass begins [m]."""
+    phase_timeout: float = Field(5.0, gt=0, le=120)
+    """Free-flight legs (climb, approach): time past the planned arrival before a fault [s]."""
+    hooking_clearance: float = Field(0.02, ge=0, le=1)
+    """Least distance of the frame from the surface along the hooking pass (checked before
+    the mission flies) [m]."""
+    slack_out_distance: float = Field(0.15, gt=0, le=5)
+    """After the hooking pass: how far inside the cable length the vehicle goes before the
+    gentle pull that takes up the cable [m]."""
+    take_up_speed_factor: float = Field(0.5, gt=0, le=1)
+    """Speed from the end of the hooking pass to the take-up point, as a fraction of
+    ``cruise_speed`` [-]."""
+    safe_height_margin: float = Field(0.3, ge=0, le=10)
+    """Transfers between the pad and the anchor fly this much above the higher of the
+    hooking start and the climb height [m]."""
+    takeoff_fault_delay: float = Field(0.5, ge=0, le=10)
+    """Tethered takeoff: slack-cable and tracking faults are checked from this long after
+    the takeoff trajectory starts (the cable takes up the load) [s]."""
+    touchdown_search_grace: float = Field(1.0, ge=0, le=60)
+    """Guarded touchdown: time past the full search depth before 'no contact' is a fault [s]."""
+    pad_press_depth: float = Field(0.02, ge=0, le=0.5)
+    """Landing on the start pad: the reference ends this far below the pad so that the
+    landers settle on it [m]."""
+    done_hold_time: float = Field(0.5, ge=0, le=10)
+    """Simulated time with the motors off on the pad before the run ends [s]."""
     max_duration: float = Field(180.0, gt=0, le=3600)
     """The run ends (failed) if the mission has not finished by then [s]."""

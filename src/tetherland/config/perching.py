@@ -70,9 +70,6 @@ class PerchingConfig(Section):
     contact_grace: float = Field(0.1, ge=0, le=5)
     """Longest flight past the planned touchdown time, holding the touchdown thrust and
     attitude, while waiting for (estimated) contact; then the motors go off anyway [s]."""
-    settle_time: float = Field(0.3, ge=0, le=10)
-    """Time after the motors go off before slip is measured (rotors spin down, contact
-    transient) [s]."""
     lag_compensation: bool = True
     """Lead the rotor-speed commands by the motor lag along the planned thrust profile."""
     weights: PerchingWeights = PerchingWeights()

@@ -129,12 +129,14 @@ class SurfaceConfig(Section):
 
     kind: Literal["plane", "pipe"] = "plane"
     """Surface type."""
-    slope_deg: float = Field(50.0, ge=0, le=90)
-    """Slope angle beta between the surface and the horizontal [deg]."""
+    slope_deg: float = Field(50.0, ge=0, le=180)
+    """Slope angle beta between the surface and the horizontal [deg]: 90 is a vertical wall,
+    above 90 an overhang (the surface faces down, n_S . z_W = cos(beta) < 0)."""
     azimuth_deg: float = Field(0.0, ge=-360, le=360)
     """Azimuth of the downhill direction x_S in the horizontal plane, from x_W towards y_W [deg]."""
     normal: Vec3 | None = None
-    """Alternative to slope/azimuth: the surface normal n_S in F_W (any length, not zero)."""
+    """Alternative to slope/azimuth: the outward surface normal n_S in F_W, pointing to the
+    side the vehicle lands on (any length, not zero; a negative z component is an overhang)."""
     origin: Vec3 = (0.0, 0.0, 0.0)
     """A point O_S on the surface (the top line for a pipe), in F_W [m]."""
     friction: float = Field(0.6, ge=0, le=10)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pydantic import Field, model_validator
 
+from tetherland import geometry as geo
 from tetherland.config.base import Section
 from tetherland.config.control import ControllerConfig
 from tetherland.config.mission import MissionConfig
@@ -13,6 +14,7 @@ from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig
 from tetherland.config.planning import PlannerConfig
 from tetherland.config.sensors import SensorsConfig
 from tetherland.config.simulation import SimConfig
+from tetherland.config.verdict import VerdictConfig
 
 ON_SURFACE_TOL = 1e-3
 """Tolerance for a point to count as lying on (or at height h_A above) the surface [m]."""
@@ -37,12 +39,10 @@ class Scenario(Section):
     sim: SimConfig = SimConfig()
     perturbation: PerturbationConfig = PerturbationConfig()
     perching: PerchingConfig = PerchingConfig()
+    verdict: VerdictConfig = VerdictConfig()
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:
-        # Imported here: geometry depends on nothing in config, config validates with it.
-        from tetherland import geometry as geo
-
         v, s, a, l = self.vehicle, self.surface, self.anchor, self.tether.length
         h_R = v.h_R
         if s.kind == "pipe":

@@ -17,7 +17,7 @@ from tetherland.config import Scenario
 from tetherland.control.dfl import DflController
 from tetherland.control.free_flight import FreeFlightController
 from tetherland.control.hierarchical import HierarchicalController
-from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
+from tetherland.interfaces import Command, Controller, ControlMode, Reference, StateEstimate
 
 
 @dataclass(frozen=True)
@@ -42,8 +42,11 @@ class SwitchRecord:
     rotor_speed_jump: float
 
 
-def make_tethered_controller(scenario: Scenario, kind: str | None = None):
-    """The tethered controller named by ``kind`` (default ``scenario.controller.kind``)."""
+def make_tethered_controller(scenario: Scenario, kind: str | Controller | None = None):
+    """The tethered controller named by ``kind`` (default ``scenario.controller.kind``), or
+    ``kind`` itself when it is already a :class:`~tetherland.interfaces.Controller`."""
+    if isinstance(kind, Controller):
+        return kind
     kind = kind or scenario.controller.kind
     if kind == "hierarchical":
         return HierarchicalController(scenario)
@@ -59,11 +62,13 @@ class SwitchingController:
     ----------
     scenario : Scenario
         Believed scenario.
-    tethered : str, optional
-        ``"hierarchical"`` or ``"dfl"`` (default: ``scenario.controller.kind``).
+    tethered : str or Controller, optional
+        ``"hierarchical"`` or ``"dfl"`` (default: ``scenario.controller.kind``), or your own
+        tethered controller (any :class:`~tetherland.interfaces.Controller`; a ``reset()``
+        method, if it has one, is called when tethered control starts).
     """
 
-    def __init__(self, scenario: Scenario, tethered: str | None = None):
+    def __init__(self, scenario: Scenario, tethered: str | Controller | None = None):
         self.free_flight = FreeFlightController(scenario)
         self.tethered = make_tethered_controller(scenario, tethered)
         self.mode: ControlMode | None = None
@@ -81,7 +86,7 @@ class SwitchingController:
                     # the thrust is zero, where A is singular: start from the plan's nominal
                     flying = self.mode != ControlMode.MOTORS_OFF and self.last is not None
                     self.tethered.reset(self.last.thrust if flying else None)
-                else:
+                elif hasattr(self.tethered, "reset"):
                     self.tethered.reset()
         if mode == ControlMode.MOTORS_OFF:
             cmd = Command.motors_off()

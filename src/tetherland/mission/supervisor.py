@@ -12,11 +12,17 @@ transition with its reason). It sees only the estimate, never the plant's truth:
 - an operator abort (``mission.abort_time``) or a fault (slack cable or large tracking error
   in a tethered phase, a non-finite estimate) moves to a safe state from any phase: hover
   in free flight, or stay put when the motors are already off on the surface.
+
+The plan (trajectories, waypoints, clearance) is made before by
+:func:`~tetherland.mission.plan.plan_mission`; the phases and their allowed successors are
+the explicit table :data:`TRANSITIONS`, and every threshold is a ``[mission]`` field.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
 
 import numpy as np
 
@@ -24,22 +30,41 @@ from tetherland.config import Scenario
 from tetherland.control.common import heading_of
 from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
-from tetherland.geometry import LandingGeometry, link_direction, theta_A_from_z_B
+from tetherland.geometry import theta_A_from_z_B
 from tetherland.interfaces import ControlMode, EventRecord, Reference, StateEstimate
-from tetherland.mission.clearance import hooking_clearance
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
-from tetherland.planning import Planner
+from tetherland.mission.plan import Z_W, MissionPlan
 from tetherland.planning.spline import smoothstep9_scalar
 from tetherland.planning.tracking import TrajectoryTrack
-from tetherland.rotations import quat_to_rotmat, rotation_from_z_and_yaw
-from tetherland.state import RigidBodyState
+from tetherland.rotations import quat_to_rotmat
 
-_Z = np.array([0.0, 0.0, 1.0])
+_P = Phase
+TRANSITIONS: Mapping[Phase, frozenset[Phase]] = MappingProxyType({
+    _P.TAKEOFF: frozenset({_P.APPROACH, _P.SAFE_HOVER}),
+    _P.APPROACH: frozenset({_P.HOOKING, _P.SAFE_HOVER}),
+    _P.HOOKING: frozenset({_P.STRETCH, _P.SAFE_HOVER}),
+    _P.STRETCH: frozenset({_P.TETHERED_LANDING, _P.RETRY, _P.SAFE_HOVER}),
+    _P.RETRY: frozenset({_P.HOOKING, _P.SAFE_HOVER}),
+    _P.TETHERED_LANDING: frozenset({_P.TOUCHDOWN, _P.SAFE_HOVER}),
+    _P.TOUCHDOWN: frozenset({_P.MOTORS_OFF, _P.SAFE_HOVER}),
+    _P.MOTORS_OFF: frozenset({_P.SPIN_UP, _P.ABORTED}),
+    _P.SPIN_UP: frozenset({_P.TETHERED_TAKEOFF, _P.SAFE_HOVER}),
+    _P.TETHERED_TAKEOFF: frozenset({_P.RELEASE, _P.SAFE_HOVER}),
+    _P.RELEASE: frozenset({_P.UNHOOK, _P.SAFE_HOVER}),
+    _P.UNHOOK: frozenset({_P.RETURN, _P.SAFE_HOVER}),
+    _P.RETURN: frozenset({_P.LAND, _P.SAFE_HOVER}),
+    _P.LAND: frozenset({_P.DONE, _P.SAFE_HOVER}),
+    _P.SAFE_HOVER: frozenset({_P.ABORTED}),
+    _P.DONE: frozenset(),
+    _P.ABORTED: frozenset(),
+})  # fmt: skip
+"""Every phase and the phases it may move to. An abort moves to SAFE_HOVER (hover in
+free flight), or to ABORTED directly when the motors are off on the surface."""
 
 
-class MissionError(TetherlandError):
-    """The mission cannot start (e.g. no feasible landing or takeoff plan)."""
+class TransitionError(TetherlandError):
+    """The supervisor tried a phase change that :data:`TRANSITIONS` does not allow."""
 
 
 class BlendedTrack:
@@ -79,67 +104,32 @@ class BlendedTrack:
 
 
 class MissionSupervisor:
-    """Runs the mission of section 6.6 on the believed scenario.
+    """Executes a :class:`~tetherland.mission.plan.MissionPlan` (section 6.6).
 
     Parameters
     ----------
     scenario : Scenario
-        The believed scenario (geometry, vehicle, planner, mission settings).
-    start : RigidBodyState
-        The vehicle on the start pad.
-    planner : Planner, optional
-        A planner to reuse (its compiled solvers are cached).
-    controller_kind : str
-        Logged only (the controller is chosen by the mission runner).
+        The believed scenario (mission thresholds, vehicle mass, controller rate).
+    plan : MissionPlan
+        What to fly: trajectories, waypoints (see :func:`~tetherland.mission.plan_mission`).
     """
 
-    def __init__(self, scenario: Scenario, start: RigidBodyState, planner: Planner | None = None):
+    def __init__(self, scenario: Scenario, plan: MissionPlan):
         self.scenario = scenario
+        self.plan = plan
         cfg = scenario.mission
         self.cfg = cfg
-        v = scenario.vehicle
-        self.geo = LandingGeometry.from_scenario(scenario)
-        self.mass = v.mass
+        self.geo = plan.geometry
+        self.mass = scenario.vehicle.mass
         self.length = scenario.tether.length
         self.rate_hz = scenario.controller.rate_hz
         wn = scenario.controller.free_flight.position_frequency
         self.k_x = wn * wn
-        R_WA = self.geo.R_WA
-        self.yaw = math.atan2(R_WA[1, 0], R_WA[0, 0])
-        planner = planner or Planner()
-        self.landing_plan = planner.plan(scenario, "landing")
-        self.takeoff_plan = planner.plan(scenario, "takeoff")
-        for plan in (self.landing_plan, self.takeoff_plan):
-            if plan.trajectory is None or plan.status.value != "solved":
-                raise MissionError(f"no {plan.maneuver.value} plan: {plan.message}")
-        self.landing_traj = self.landing_plan.require()
-        self.takeoff_traj = self.takeoff_plan.require()
-        # key points (centre of mass, level flight with heading yaw)
-        R_level = rotation_from_z_and_yaw(_Z, self.yaw)
-        self._att_offset = R_level @ np.asarray(v.cable_attachment, dtype=float)
-        n = R_WA @ np.asarray(scenario.tether.approach_direction, dtype=float)
-        n /= np.linalg.norm(n)
-        p_A = self.geo.p_A
-        self.p_start = np.asarray(start.p_W, dtype=float).copy()
-        self.p_pre = self._com_for_hook(p_A - cfg.approach_distance * n)
-        self.p_hook = self._com_for_hook(p_A + cfg.hook_overshoot * n)
-        check = hooking_clearance(scenario, self.geo.surface, (self.p_pre, self.p_hook), self.yaw)
-        if not check.ok:
-            t = scenario.tether
-            raise MissionError(
-                f"tether.hook_drop = {t.hook_drop:g} m is too short for this "
-                f"{math.degrees(self.geo.surface.slope):.1f} deg surface: the frame would pass "
-                f"{check.clearance_m * 100:.1f} cm from it while hooking (needs >= "
-                f"{check.margin_m * 100:.0f} cm); use hook_drop >= "
-                f"{check.required_hook_drop_m:.2f} m with hook_drop + capture_radius < "
-                f"length = {t.length:g} m"
-            )
-        phi0 = float(self.landing_traj.output(0.0).phi[0])
-        d0 = R_WA @ link_direction(phi0, 0.0)
-        pull = scenario.planner.start_tension / (self.mass * self.k_x) + cfg.stretch_margin
-        self.p_stretch = p_A + (self.length + pull) * d0 - self._att_offset
-        self.p_slack_out = p_A + (self.length - 0.15) * d0 - self._att_offset
-        self.z_safe = max(self.p_pre[2], self.p_start[2] + cfg.takeoff_height) + 0.3
+        self.landing_traj = plan.landing_trajectory
+        self.takeoff_traj = plan.takeoff_trajectory
+        wp = plan.waypoints
+        self.wp = wp
+        self.yaw = wp.yaw
         # state
         self.phase = Phase.TAKEOFF
         self._phase_start = 0.0
@@ -154,23 +144,41 @@ class MissionSupervisor:
         self._contact_rule = ThresholdDwell(math.radians(cfg.contact_error_deg), cfg.contact_dwell)
         self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)
-        self._path = Path(0.0, self.p_start, cfg.cruise_speed, cfg.cruise_accel).to(
-            self.p_start + cfg.takeoff_height * _Z, pause=cfg.settle_time
+        self._path = self._new_path(0.0, wp.start).to(
+            wp.start + cfg.takeoff_height * Z_W, pause=cfg.settle_time
         )
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
+        self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
+            Phase.TAKEOFF: self._takeoff,
+            Phase.APPROACH: self._approach,
+            Phase.RETRY: self._approach,
+            Phase.HOOKING: self._hooking,
+            Phase.STRETCH: self._stretch,
+            Phase.TETHERED_LANDING: self._tethered_landing,
+            Phase.TOUCHDOWN: self._touchdown,
+            Phase.MOTORS_OFF: self._motors_off,
+            Phase.SPIN_UP: self._spin_up,
+            Phase.TETHERED_TAKEOFF: self._tethered_takeoff,
+            Phase.RELEASE: self._release,
+            Phase.UNHOOK: self._unhook,
+            Phase.RETURN: self._return,
+            Phase.LAND: self._land,
+            Phase.DONE: self._motors_off_hold,
+            Phase.SAFE_HOVER: self._safe_hover,
+            Phase.ABORTED: self._motors_off_hold,
+        }
         self._event(0.0, "phase", f"start: {self.phase.name.lower()}")
 
     # ------------------------------------------------------------------ helpers
-    def _com_for_hook(self, hook_point: np.ndarray) -> np.ndarray:
-        """Centre of mass that puts the hook point at ``hook_point`` in level flight."""
-        attachment = hook_point + self.scenario.tether.hook_drop * _Z
-        return attachment - self._att_offset
-
     def _event(self, t: float, kind: str, message: str) -> None:
         self.events.append(EventRecord(t=t, source="mission", kind=kind, message=message))
 
     def _enter(self, phase: Phase, t: float, reason: str) -> None:
+        if phase not in TRANSITIONS[self.phase]:
+            raise TransitionError(
+                f"mission phase {self.phase.name.lower()} cannot move to {phase.name.lower()}"
+            )
         self.records.append(PhaseRecord(self.phase, self._phase_start, t, reason))
         self._event(t, "phase", f"{self.phase.name.lower()} -> {phase.name.lower()}: {reason}")
         self.phase = phase
@@ -225,7 +233,7 @@ class MissionSupervisor:
             return
         active = self.phase == Phase.TETHERED_LANDING or (
             self.phase == Phase.TETHERED_TAKEOFF and self._track is not None
-            and t > self._track.track.t0 + 0.5
+            and t > self._track.track.t0 + self.cfg.takeoff_fault_delay
         )  # fmt: skip
         if not active or est.link is None or self._track is None:
             self._slack.reset()
@@ -256,72 +264,74 @@ class MissionSupervisor:
         abort_time = self.cfg.abort_time
         if abort_time is not None and t >= abort_time and self.abort_reason is None:
             self.abort(t, estimate, f"operator abort at t = {abort_time:g} s")
-        ref = getattr(self, f"_phase_{self.phase.name.lower()}")(t, estimate)
+        ref = self._handlers[self.phase](t, estimate)
         phase = self.phase
         self._check_faults(t, estimate, ref)
         if self.phase != phase:  # a fault moved to the safe state: its reference instead
-            ref = getattr(self, f"_phase_{self.phase.name.lower()}")(t, estimate)
+            ref = self._handlers[self.phase](t, estimate)
         return ref
 
     # ------------------------------------------------------------------ phases
-    def _phase_takeoff(self, t: float, est: StateEstimate) -> Reference:
-        if t >= self._path.t_end and self._close(est, self._path.end, 0.1):
-            up = np.array([*self._path.end[:2], self.z_safe])
-            above = np.array([*self.p_pre[:2], self.z_safe])
+    def _takeoff(self, t: float, est: StateEstimate) -> Reference:
+        wp, cfg = self.wp, self.cfg
+        if t >= self._path.t_end and self._close(est, self._path.end, cfg.waypoint_tolerance):
+            up = np.array([*self._path.end[:2], wp.z_safe])
+            above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
                 self._new_path(t, self._path.end)
                 .to(up)
                 .to(above)
-                .to(self.p_pre, pause=self.cfg.settle_time)
+                .to(wp.hook_start, pause=cfg.settle_time)
             )
             self._enter(Phase.APPROACH, t, "takeoff height reached")
-        elif t > self._path.t_end + 5.0:
+        elif t > self._path.t_end + cfg.phase_timeout:
             self.abort(t, est, "fault: takeoff height not reached")
         return self._free(t)
 
-    def _phase_approach(self, t: float, est: StateEstimate) -> Reference:
-        if t >= self._path.t_end and self._close(est, self.p_pre, 0.05):
-            self._path = self._new_path(t, self.p_pre, self.cfg.hook_speed).to(
-                self.p_hook, pause=self.cfg.settle_time
+    def _approach(self, t: float, est: StateEstimate) -> Reference:
+        wp, cfg = self.wp, self.cfg
+        if t >= self._path.t_end and self._close(est, wp.hook_start, cfg.hook_start_tolerance):
+            self._path = self._new_path(t, wp.hook_start, cfg.hook_speed).to(
+                wp.hook_end, pause=cfg.settle_time
             )
             self.hook_attempts += 1
             self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
-        elif t > self._path.t_end + 5.0:
+        elif t > self._path.t_end + cfg.phase_timeout:
             self.abort(t, est, "fault: hooking start not reached")
         return self._free(t)
 
-    _phase_retry = _phase_approach
-
-    def _phase_hooking(self, t: float, est: StateEstimate) -> Reference:
+    def _hooking(self, t: float, est: StateEstimate) -> Reference:
+        wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
             self._path = (
-                self._new_path(t, self.p_hook, 0.5 * self.cfg.cruise_speed)
-                .to(self.p_slack_out)
-                .to(self.p_stretch, speed=self.cfg.stretch_speed)
+                self._new_path(t, wp.hook_end, cfg.take_up_speed_factor * cfg.cruise_speed)
+                .to(wp.slack_out)
+                .to(wp.stretch, speed=cfg.stretch_speed)
             )
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t)
 
-    def _phase_stretch(self, t: float, est: StateEstimate) -> Reference:
+    def _stretch(self, t: float, est: StateEstimate) -> Reference:
+        wp, cfg = self.wp, self.cfg
         if self._taut.update(t, est.tension or 0.0) and est.link is not None:
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
-            self._track = BlendedTrack(track, self._output_now(est), t, self.cfg.blend_time)
+            self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
             self._enter(
                 Phase.TETHERED_LANDING, t,
-                f"estimated tension {est.tension:.2f} N above {self.cfg.tension_threshold} N "
-                f"for {self.cfg.tension_dwell} s: cable taut, tethered control",
+                f"estimated tension {est.tension:.2f} N above {cfg.tension_threshold} N "
+                f"for {cfg.tension_dwell} s: cable taut, tethered control",
             )  # fmt: skip
             return self._track.reference(t, self.phase)
-        if t > self._path.t_end + self.cfg.stretch_timeout:
+        if t > self._path.t_end + cfg.stretch_timeout:
             self._event(t, "hook", f"missed hook (attempt {self.hook_attempts}): no tension")
-            if self.hook_attempts >= self.cfg.max_hook_attempts:
+            if self.hook_attempts >= cfg.max_hook_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
                 return self._free(t)
-            above = np.array([*self.p_pre[:2], self.z_safe])
+            above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
-                self._new_path(t, est.body.p_W).to(above).to(self.p_pre, pause=self.cfg.settle_time)
+                self._new_path(t, est.body.p_W).to(above).to(wp.hook_start, pause=cfg.settle_time)
             )
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t)
@@ -354,7 +364,7 @@ class MissionSupervisor:
         gate = math.radians(self.cfg.contact_gate_deg)
         return est.link is not None and est.link.phi - self.geo.phi_star < gate
 
-    def _phase_tethered_landing(self, t: float, est: StateEstimate) -> Reference:
+    def _tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         track = self._track.track
         ref = self._track.reference(t, self.phase)
@@ -385,18 +395,19 @@ class MissionSupervisor:
             thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
         )  # fmt: skip
 
-    def _phase_touchdown(self, t: float, est: StateEstimate) -> Reference:
+    def _touchdown(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
+        cfg = self.cfg
         if self._hold is None:  # searching for the surface
             ref = self._search_reference(t)
             if self._touching(t, est, ref):
                 return self._contact(t, est, ref, "contact during the guarded descent (t_L)")
-            limit = self.cfg.touchdown_search_deg / self.cfg.touchdown_rate_deg + 1.0
+            limit = cfg.touchdown_search_deg / cfg.touchdown_rate_deg + cfg.touchdown_search_grace
             if t > self._search_start + limit:
                 self.abort(t, est, "fault: no contact within touchdown_search_deg beyond phi*")
                 return self._free(t)
             return ref
-        if t >= self.times["t_L"] + self.cfg.settle_time:
+        if t >= self.times["t_L"] + cfg.settle_time:
             self.times["t_G"] = t
             self._enter(Phase.MOTORS_OFF, t, "landed: motors off (t_G)")
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
@@ -405,37 +416,37 @@ class MissionSupervisor:
             thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
         )  # fmt: skip
 
-    def _phase_motors_off(self, t: float, est: StateEstimate) -> Reference:
-        if t >= self.times["t_G"] + self.cfg.deploy_time and est.link is not None:
+    def _motors_off(self, t: float, est: StateEstimate) -> Reference:
+        cfg = self.cfg
+        if t >= self.times["t_G"] + cfg.deploy_time and est.link is not None:
             self.times["t_T"] = t
-            t0 = t + self.cfg.spinup_time
+            t0 = t + cfg.spinup_time
             track = TrajectoryTrack(
                 self.takeoff_traj, t0, self.rate_hz, int(Phase.TETHERED_TAKEOFF)
             )
             self._track = BlendedTrack(
-                track, self._output_now(est), t, self.cfg.spinup_time + self.cfg.blend_time
+                track, self._output_now(est), t, cfg.spinup_time + cfg.blend_time
             )
             self._enter(Phase.SPIN_UP, t, "deployment time over: motors on (t_T)")
             return self._track.reference(t, self.phase)
         return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
 
-    def _phase_spin_up(self, t: float, est: StateEstimate) -> Reference:
+    def _spin_up(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         if t >= self._track.track.t0:
             self._enter(Phase.TETHERED_TAKEOFF, t, "motors up to speed")
         return self._track.reference(t, self.phase)
 
-    def _phase_tethered_takeoff(self, t: float, est: StateEstimate) -> Reference:
+    def _tethered_takeoff(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
-        if t >= self._track.track.t_end + self.cfg.settle_time:
+        cfg = self.cfg
+        if t >= self._track.track.t_end + cfg.settle_time:
             self.times["t_released"] = t
             start = self._pull_point(est)
             d = est.body.p_W - self.geo.p_A
             d /= np.linalg.norm(d)
-            slack = self.geo.p_A + (self.length - self.cfg.release_slack) * d - self._att_offset
-            self._path = self._new_path(t, start, self.cfg.hook_speed).to(
-                slack, pause=self.cfg.settle_time
-            )
+            slack = self.geo.p_A + (self.length - cfg.release_slack) * d - self.wp.attachment_W
+            self._path = self._new_path(t, start, cfg.hook_speed).to(slack, pause=cfg.settle_time)
             self._track = None
             self._enter(
                 Phase.RELEASE, t, "takeoff trajectory completed: free flight, releasing tension"
@@ -443,56 +454,56 @@ class MissionSupervisor:
             return self._free(t)
         return self._track.reference(t, self.phase)
 
-    def _phase_release(self, t: float, est: StateEstimate) -> Reference:
+    def _release(self, t: float, est: StateEstimate) -> Reference:
+        wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
             self._path = (
-                self._new_path(t, self._path.end, self.cfg.hook_speed)
-                .to(self.p_hook).to(self.p_pre, pause=self.cfg.settle_time)
+                self._new_path(t, self._path.end, cfg.hook_speed)
+                .to(wp.hook_end).to(wp.hook_start, pause=cfg.settle_time)
             )  # fmt: skip
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t)
 
-    def _phase_unhook(self, t: float, est: StateEstimate) -> Reference:
+    def _unhook(self, t: float, est: StateEstimate) -> Reference:
+        wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
-            up = np.array([*self.p_pre[:2], self.z_safe])
-            home_high = np.array([*self.p_start[:2], self.z_safe])
-            home = self.p_start + self.cfg.takeoff_height * _Z
+            up = np.array([*wp.hook_start[:2], wp.z_safe])
+            home_high = np.array([*wp.start[:2], wp.z_safe])
+            home = wp.start + cfg.takeoff_height * Z_W
             self._path = (
-                self._new_path(t, self.p_pre)
+                self._new_path(t, wp.hook_start)
                 .to(up)
                 .to(home_high)
-                .to(home, pause=self.cfg.settle_time)
+                .to(home, pause=cfg.settle_time)
             )
             self._enter(Phase.RETURN, t, "hook released: returning")
         return self._free(t)
 
-    def _phase_return(self, t: float, est: StateEstimate) -> Reference:
+    def _return(self, t: float, est: StateEstimate) -> Reference:
+        cfg = self.cfg
         if t >= self._path.t_end:
-            self._path = self._new_path(t, self._path.end, self.cfg.hook_speed).to(
-                self.p_start - 0.02 * _Z, pause=self.cfg.settle_time
+            self._path = self._new_path(t, self._path.end, cfg.hook_speed).to(
+                self.wp.start - cfg.pad_press_depth * Z_W, pause=cfg.settle_time
             )
             self._enter(Phase.LAND, t, "above the start pad")
         return self._free(t)
 
-    def _phase_land(self, t: float, est: StateEstimate) -> Reference:
+    def _land(self, t: float, est: StateEstimate) -> Reference:
         if t >= self._path.t_end:
             self.times["t_done"] = t
             self._enter(Phase.DONE, t, "landed on the start pad: motors off")
-            self._terminate_at = t + 0.5
+            self._terminate_at = t + self.cfg.done_hold_time
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
         return self._free(t)
 
-    def _phase_done(self, t: float, est: StateEstimate) -> Reference:
-        return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
-
-    def _phase_safe_hover(self, t: float, est: StateEstimate) -> Reference:
+    def _safe_hover(self, t: float, est: StateEstimate) -> Reference:
         if t >= self._path.t_end:
             self._enter(Phase.ABORTED, t, "safe hover held: run ended")
             self._final_mode = ControlMode.FREE_FLIGHT
             self._terminate_at = t
         return self._free(t)
 
-    def _phase_aborted(self, t: float, est: StateEstimate) -> Reference:
+    def _motors_off_hold(self, t: float, est: StateEstimate) -> Reference:
         return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
 
     def finish(self, t: float) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import matplotlib
 
@@ -20,23 +20,36 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry, theta_A_from_z_B
 from tetherland.io import atomic_write_with
 from tetherland.mission.phases import Phase
 from tetherland.models.flatness import FlatnessMap
 from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
+from tetherland.sim.log import SimLog
+from tetherland.verdict.record import RunRecord
 
-if TYPE_CHECKING:
-    from tetherland.mission.run import MissionResult
+
+class MissionResult(Protocol):
+    """What the figures read of a run (:class:`tetherland.runs.RunResult` provides it)."""
+
+    log: SimLog
+    record: RunRecord
+    plan: Any
+    plant_scenario: Scenario
+    belief_scenario: Scenario
+
+    @property
+    def summary(self) -> dict[str, Any]: ...
 
 _TETHERED = (Phase.TETHERED_LANDING, Phase.TOUCHDOWN, Phase.MOTORS_OFF, Phase.SPIN_UP,
              Phase.TETHERED_TAKEOFF)  # fmt: skip
 _PHASE_COLORS = {
-    Phase.TETHERED_LANDING: "#dbe9f6",
-    Phase.TOUCHDOWN: "#e5f5e0",
-    Phase.MOTORS_OFF: "#f0f0f0",
-    Phase.SPIN_UP: "#fdebd2",
-    Phase.TETHERED_TAKEOFF: "#f3e0f7",
+    Phase.TETHERED_LANDING.name.lower(): "#dbe9f6",
+    Phase.TOUCHDOWN.name.lower(): "#e5f5e0",
+    Phase.MOTORS_OFF.name.lower(): "#f0f0f0",
+    Phase.SPIN_UP.name.lower(): "#fdebd2",
+    Phase.TETHERED_TAKEOFF.name.lower(): "#f3e0f7",
 }
 
 
@@ -65,17 +78,17 @@ def nominal_series(result: MissionResult, t: FloatArray) -> dict[str, FloatArray
 
     Rotor thrusts include the cancellation of the cable-offset torque (6.6.5), as flown.
     """
-    sup = result.supervisor
+    times, plan = result.record.times, result.plan
     n = len(t)
     out = {k: np.full(n, math.nan) for k in ("phi", "theta_A", "tension")}
     out["rotors"] = np.full((n, 4), math.nan)
     fmap = FlatnessMap.from_scenario(result.belief_scenario, with_cable_offset=True)
     spans = []
-    if "t_tethered" in sup.times:
-        spans.append((sup.landing_traj, sup.times["t_tethered"], sup.times.get("t_L", t[-1])))
-    if "t_T" in sup.times:
-        t0 = sup.times["t_T"] + sup.cfg.spinup_time
-        spans.append((sup.takeoff_traj, t0, sup.times.get("t_released", t[-1])))
+    if "t_tethered" in times:
+        spans.append((plan.landing_trajectory, times["t_tethered"], times.get("t_L", t[-1])))
+    if "t_T" in times:
+        t0 = times["t_T"] + result.belief_scenario.mission.spinup_time
+        spans.append((plan.takeoff_trajectory, t0, times.get("t_released", t[-1])))
     for traj, t0, t1 in spans:
         mask = (t >= t0) & (t <= t1)
         if not mask.any():
@@ -90,11 +103,12 @@ def nominal_series(result: MissionResult, t: FloatArray) -> dict[str, FloatArray
 
 
 def _mark(ax, result: MissionResult, t0: float, t1: float) -> None:
-    for r in result.supervisor.records:
-        if r.phase in _PHASE_COLORS and r.end > t0 and r.start < t1:
-            ax.axvspan(max(r.start, t0), min(r.end, t1), color=_PHASE_COLORS[r.phase], lw=0)
+    for r in result.record.phases:
+        color = _PHASE_COLORS.get(r.name)
+        if color is not None and r.end > t0 and r.start < t1:
+            ax.axvspan(max(r.start, t0), min(r.end, t1), color=color, lw=0)
     for name in ("t_L", "t_G", "t_T"):
-        tt = result.supervisor.times.get(name)
+        tt = result.record.times.get(name)
         if tt is not None and t0 <= tt <= t1:
             ax.axvline(tt, color="k", lw=0.7, ls=":")
             ax.text(tt, 1.0, f" {name}", transform=ax.get_xaxis_transform(), fontsize=7, va="top")
@@ -163,7 +177,8 @@ def figure_6_5(result: MissionResult) -> Figure:
     s = result.summary
     fig.suptitle(
         f"{result.plant_scenario.name}: tethered landing and takeoff "
-        f"({result.controller}, seed {result.seed}, {'success' if s.get('success') else 'failure'})"
+        f"({result.record.controller}, seed {result.record.seed}, "
+        f"{'success' if s.get('success') else 'failure'})"
     )
     fig.tight_layout()
     return fig

@@ -11,18 +11,46 @@
   reference.
 """
 
-from tetherland.sim.baselines import ConstantReference, ConstantSpeedController, TruthEstimator
-from tetherland.sim.hook import Hook, HookEvent, HookEventKind, HookState
-from tetherland.sim.log import Column, RunStatus, SimLog
-from tetherland.sim.mjcf import SceneLayout, build_mjcf
-from tetherland.sim.plant import Plant, link_state_of
-from tetherland.sim.runner import Runner, Schedule
-from tetherland.sim.sensors import Imu, Mocap
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+# Submodules load on first use (PEP 562), so that ``tetherland.sim.log`` (the run log,
+# needed to judge a saved run) does not pull in MuJoCo.
+_EXPORTS = {
+    "ConstantReference": "baselines", "ConstantSpeedController": "baselines",
+    "TruthEstimator": "baselines", "Hook": "hook", "HookEvent": "hook",
+    "HookEventKind": "hook", "HookState": "hook", "Column": "log", "RunStatus": "log",
+    "SimLog": "log", "SceneLayout": "mjcf", "build_mjcf": "mjcf", "Plant": "plant",
+    "link_state_of": "plant", "Runner": "runner", "Schedule": "runner", "Imu": "sensors",
+    "BoundObserver": "runner", "ControlTick": "runner",
+    "Mocap": "sensors",
+}  # fmt: skip
+
+if TYPE_CHECKING:
+    from tetherland.sim.baselines import ConstantReference, ConstantSpeedController, TruthEstimator
+    from tetherland.sim.hook import Hook, HookEvent, HookEventKind, HookState
+    from tetherland.sim.log import Column, RunStatus, SimLog
+    from tetherland.sim.mjcf import SceneLayout, build_mjcf
+    from tetherland.sim.plant import Plant, link_state_of
+    from tetherland.sim.runner import BoundObserver, ControlTick, Runner, Schedule
+    from tetherland.sim.sensors import Imu, Mocap
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'tetherland.sim' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"tetherland.sim.{module}"), name)
+
 
 __all__ = [
+    "BoundObserver",
     "Column",
     "ConstantReference",
     "ConstantSpeedController",
+    "ControlTick",
     "Hook",
     "HookEvent",
     "HookEventKind",

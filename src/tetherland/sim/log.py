@@ -262,6 +262,14 @@ class LogWriter:
     def __len__(self) -> int:
         return self._n
 
+    @property
+    def last_row(self) -> FloatArray:
+        """The row written last, in schema order (a read-only view; empty before any)."""
+        row = self._matrix[self._n - 1] if self._n else self._matrix[0, :0]
+        view = row.view()
+        view.setflags(write=False)
+        return view
+
     def write(self, parts: list[FloatArray]) -> None:
         """Append one row made of ``parts`` (1-D arrays concatenated in schema order)."""
         if self._n == self._matrix.shape[0]:

@@ -27,6 +27,12 @@ import numpy as np
 from tetherland import GRAVITY
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.models.airframe import (
+    HUB_HALF_SIZE,
+    PROP_HALF_THICKNESS,
+    PROP_HEIGHT,
+    PROP_RADIUS_FRACTION,
+)
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import rotmat_to_quat
 
@@ -34,14 +40,7 @@ SURFACE_HALF_THICKNESS = 0.05
 """Half thickness of the box that carries a planar surface [m]."""
 START_CLEARANCE = 1.0
 """Default horizontal distance of the start pad beyond the foot of the surface patch [m]."""
-PROP_RADIUS_FRACTION = 0.4
-"""Propeller (rotor guard) radius as a fraction of the arm length [-]."""
-HUB_HALF_SIZE = (0.06, 0.06, 0.025)
-"""Half sizes of the central hub box (collision and visual) [m]."""
-PROP_HEIGHT = 0.02
-"""Height of the rotor-guard disks above the rotor sites, along z_B [m]."""
-PROP_HALF_THICKNESS = 0.004
-"""Half thickness of the rotor-guard disks [m]."""
+
 
 SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("accelerometer", 3),

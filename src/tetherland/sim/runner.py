@@ -19,11 +19,11 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Generator, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from fractions import Fraction
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -56,6 +56,40 @@ _NAN4.setflags(write=False)
 
 Observer = Callable[[float, Plant], None]
 """Called at every control tick after the command, with (t_k, plant); e.g. a video recorder."""
+
+
+@runtime_checkable
+class BoundObserver(Protocol):
+    """Optional observer capability: bound to the runner and its log writer before a run.
+
+    :meth:`bind` is called once at the start of each run; the observer may then read the
+    row just written (``writer.last_row``) when it is called at each control tick.
+    """
+
+    def bind(self, runner: Runner, writer: LogWriter) -> None:
+        """The run is about to start: ``runner`` and the ``writer`` of its log."""
+        ...
+
+    def __call__(self, t: float, plant: Plant) -> None: ...
+
+
+@dataclass(frozen=True, slots=True)
+class ControlTick:
+    """What :meth:`Runner.steps` yields at each control tick (before the command).
+
+    Attributes
+    ----------
+    t : float
+        Time of the control tick t_k [s].
+    estimate : StateEstimate
+        The estimator's output at t_k.
+    reference : Reference
+        The reference source's output at t_k.
+    """
+
+    t: float
+    estimate: StateEstimate
+    reference: Reference
 
 
 def _ticks(rate_hz: float, steps_per_second: int, what: str) -> int:
@@ -222,6 +256,41 @@ class Runner:
         SimLog
             One row per control tick; ``log.status`` tells how the run ended.
         """
+        loop = self._loop(duration, initial_state, rotor_speeds, cable_engaged, rng, False)
+        try:
+            next(loop)
+        except StopIteration as done:
+            return done.value
+        raise AssertionError("the loop yielded a control tick with the controller in charge")
+
+    def steps(
+        self,
+        duration: float,
+        *,
+        initial_state: RigidBodyState | None = None,
+        rotor_speeds: FloatArray | None = None,
+        cable_engaged: bool = False,
+        rng: np.random.Generator | None = None,
+    ) -> Generator[ControlTick, Command, SimLog]:
+        """The loop of :meth:`run`, one control tick at a time, commanded from outside.
+
+        The generator yields a :class:`ControlTick` at each control tick; ``send(command)``
+        holds ``command`` (instead of calling the runner's controller) and advances to the
+        next control tick. It returns the :class:`SimLog` (``StopIteration.value``) when
+        the duration is over, the reference terminates or the run fails. Arguments as for
+        :meth:`run`.
+        """
+        return self._loop(duration, initial_state, rotor_speeds, cable_engaged, rng, True)
+
+    def _loop(
+        self,
+        duration: float,
+        initial_state: RigidBodyState | None,
+        rotor_speeds: FloatArray | None,
+        cable_engaged: bool,
+        rng: np.random.Generator | None,
+        external: bool,
+    ) -> Generator[ControlTick, Command, SimLog]:
         if not (duration > 0 and math.isfinite(duration)):
             raise ValueError(f"duration must be a positive number of seconds, got {duration}")
         sc, sched, plant = self.scenario, self.schedule, self.plant
@@ -277,6 +346,9 @@ class Runner:
             imu.bias_into,
         )
         observers = self.observers
+        for observer in observers:
+            if isinstance(observer, BoundObserver):
+                observer.bind(self, writer)
         hook = plant.hook
         # the row's parts, in schema order: fixed buffers refilled in place every tick and
         # slots for the estimate, reference and command (see _write_row)
@@ -317,7 +389,7 @@ class Runner:
                 t_k = k * dt
                 est = estimate()
                 ref = get_reference(t_k, est)
-                cmd = control(t_k, est, ref)
+                cmd = (yield ControlTick(t_k, est, ref)) if external else control(t_k, est, ref)
                 command(cmd.rotor_speeds)
                 if command_aware:
                     estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
@@ -427,4 +499,4 @@ class Runner:
         }
 
 
-__all__ = ["Observer", "Runner", "Schedule"]
+__all__ = ["BoundObserver", "ControlTick", "Observer", "Runner", "Schedule"]

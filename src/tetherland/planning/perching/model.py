@@ -51,7 +51,7 @@ STATE_NAMES = ("px", "pz", "theta", "vx", "vz", "omega", "f_R", "tau", "f_R_dot"
 INPUT_NAMES = ("f_R_ddot", "tau_ddot")
 GUARD_RADIUS_FRACTION = 0.4
 """Rotor-guard radius over arm length, as the simulated vehicle's
-(:data:`tetherland.sim.mjcf.PROP_RADIUS_FRACTION`; a test keeps them equal) [-]."""
+(:data:`tetherland.models.airframe.PROP_RADIUS_FRACTION`; a test keeps them equal) [-]."""
 PLANE_TOL = 1e-3
 """Largest distance of a start point from the fall-line plane [m]."""
 

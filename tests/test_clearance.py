@@ -9,14 +9,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tetherland.config import load_scenario
-from tetherland.geometry import LandingGeometry
-from tetherland.mission.clearance import (
+from tetherland.analysis.clearance import (
     hooking_clearance,
     level_vehicle_distance,
     surface_distance,
 )
-from tetherland.mission.supervisor import MissionError, MissionSupervisor
+from tetherland.config import load_scenario
+from tetherland.geometry import LandingGeometry
+from tetherland.mission import MissionError, plan_mission
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
@@ -93,7 +93,7 @@ def test_required_hook_drop_restores_the_margin_on_planes(slope, drop, yaw):
     )
     hook = surf.origin - 0.8 * surf.x_S  # a hook point on the surface
     up = np.array([0.0, 0.0, 1.0])
-    check = hooking_clearance(scenario, surf, [hook + (drop + 0.03) * up], yaw)
+    check = hooking_clearance(scenario, surf, [hook + (drop + 0.03) * up], yaw, 0.02)
     assert check.required_hook_drop_m >= drop
     fixed = load_scenario(
         "slope50",
@@ -101,22 +101,25 @@ def test_required_hook_drop_restores_the_margin_on_planes(slope, drop, yaw):
          f"tether.hook_drop={check.required_hook_drop_m}"],
     )  # fmt: skip
     raised = hook + (check.required_hook_drop_m + 0.03) * up
-    again = hooking_clearance(fixed, surf, [raised], yaw)
+    again = hooking_clearance(fixed, surf, [raised], yaw, 0.02)
     assert again.clearance_m >= check.margin_m - 1e-9
     assert again.ok
 
 
-def test_supervisor_refuses_a_hook_drop_too_short_for_the_slope():
+def test_mission_plan_refuses_a_hook_drop_too_short_for_the_slope():
     scenario = load_scenario("slope50", ["surface.slope_deg=70"])
     with pytest.raises(MissionError, match=r"tether\.hook_drop = 0\.5 m is too short") as info:
-        MissionSupervisor(scenario, Plant(scenario).start_state())
+        plan_mission(scenario, Plant(scenario).start_state())
     needed = float(str(info.value).split("hook_drop >= ")[1].split(" m")[0])
     ok = load_scenario(
         "slope50",
         ["surface.slope_deg=70", "tether.length=1.2", f"tether.hook_drop={needed + 0.01}"],
     )
-    supervisor = MissionSupervisor(ok, Plant(ok).start_state())
+    plan = plan_mission(ok, Plant(ok).start_state())
+    wp = plan.waypoints
     check = hooking_clearance(
-        ok, supervisor.geo.surface, (supervisor.p_pre, supervisor.p_hook), supervisor.yaw
-    )
-    assert check.ok
+        ok, plan.geometry.surface, (wp.hook_start, wp.hook_end), wp.yaw,
+        ok.mission.hooking_clearance,
+    )  # fmt: skip
+    assert check.ok and plan.clearance.ok
+    assert check.clearance_m == pytest.approx(plan.clearance.clearance_m)

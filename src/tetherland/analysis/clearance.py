@@ -6,7 +6,8 @@ of the frame comes close to the surface: with the hook at the anchor, the rotor 
 horizontal distance R from the centre meet a surface that rises R tan(beta). The mission
 checks this before it flies and reports the hook drop the slope needs instead of crashing.
 
-The vehicle's collision shape is the one the plant simulates (:mod:`tetherland.sim.mjcf`);
+The vehicle's collision shape is the one the plant simulates
+(:mod:`tetherland.models.airframe`);
 the frame is sampled on the rims of the rotor guards (5 degree steps, under 0.3 mm error)
 and the corners of the hub.
 """
@@ -21,14 +22,14 @@ from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, Surface
-from tetherland.models.quadrotor import RotorLayout
-from tetherland.rotations import rotation_from_z_and_yaw
-from tetherland.sim.mjcf import (
+from tetherland.models.airframe import (
     HUB_HALF_SIZE,
     PROP_HALF_THICKNESS,
     PROP_HEIGHT,
     PROP_RADIUS_FRACTION,
 )
+from tetherland.models.quadrotor import RotorLayout
+from tetherland.rotations import rotation_from_z_and_yaw
 
 _N_RIM = 72
 _RIM = np.column_stack(
@@ -59,10 +60,10 @@ def level_vehicle_distance(
 ) -> float:
     """Smallest signed distance [m] of the level vehicle's collision shape from the surface.
 
-    The shape is the one of :mod:`tetherland.sim.mjcf`: rotor guards (disks of radius
-    PROP_RADIUS_FRACTION arm_length, PROP_HEIGHT above the rotors), the hub box and the
-    four lander spheres, with the vehicle level at centre of mass ``p_W`` [m] and heading
-    ``yaw`` [rad].
+    The shape is the one the plant simulates (:mod:`tetherland.models.airframe`): rotor
+    guards (disks of radius PROP_RADIUS_FRACTION arm_length, PROP_HEIGHT above the rotors),
+    the hub box and the four lander spheres, with the vehicle level at centre of mass
+    ``p_W`` [m] and heading ``yaw`` [rad].
     """
     v = scenario.vehicle
     R = rotation_from_z_and_yaw((0.0, 0.0, 1.0), yaw)
@@ -95,9 +96,9 @@ class HookingClearance:
         Smallest signed distance [m] at the ends of the pass (it is linear in between for
         a plane).
     required_hook_drop_m : float
-        Hook drop [m] that gives ``margin_m`` of clearance: exact for a plane (raising the
-        vehicle by dz raises every point by dz cos(beta)); for a pipe an estimate by the
-        same rule.
+        Hook drop [m] that gives ``margin_m`` of clearance: exact for a plane (a longer
+        drop dh moves the vehicle back along the approach direction n, away from the plane
+        by dh (-n . z_S)); for a pipe an estimate by the same rule.
     margin_m : float
         Clearance asked for [m].
     """
@@ -112,7 +113,12 @@ class HookingClearance:
 
 
 def hooking_clearance(
-    scenario: Scenario, surface: Surface, pass_W: ArrayLike, yaw: float, margin: float = 0.02
+    scenario: Scenario,
+    surface: Surface,
+    pass_W: ArrayLike,
+    yaw: float,
+    margin: float,
+    approach_W: ArrayLike = (0.0, 0.0, -1.0),
 ) -> HookingClearance:
     """Clearance of the hooking pass whose centre-of-mass end points are ``pass_W``.
 
@@ -128,11 +134,15 @@ def hooking_clearance(
         Heading of the vehicle during the pass [rad].
     margin : float
         Clearance the pass must keep [m].
+    approach_W : (3,) array
+        Unit approach direction n: the hook leads the vehicle by ``hook_drop`` along n, so
+        a longer hook drop moves the vehicle back by the same length along -n.
     """
     clearance = min(
         level_vehicle_distance(scenario, surface, p, yaw)
         for p in np.atleast_2d(np.asarray(pass_W, dtype=float))
     )
-    cos_beta = max(float(surface.z_S[2]), 1e-3)
-    needed = scenario.tether.hook_drop + max(0.0, margin - clearance) / cos_beta
+    # a longer drop dh moves the vehicle by -dh n: away from a plane by dh (-n . z_S)
+    away = max(-float(np.dot(np.asarray(approach_W, dtype=float), surface.z_S)), 1e-3)
+    needed = scenario.tether.hook_drop + max(0.0, margin - clearance) / away
     return HookingClearance(clearance_m=clearance, required_hook_drop_m=needed, margin_m=margin)

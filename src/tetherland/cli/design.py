@@ -1,0 +1,139 @@
+"""`tetherland design`: cable, attachment, anchor height and hooking approach for a slope."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from tetherland import __version__
+from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
+from tetherland.design import DesignResult, feasibility_map, search_designs
+from tetherland.design.map import MAP_LENGTHS, MAP_SLOPES_DEG
+from tetherland.design.plot import save_map_figure
+from tetherland.io import atomic_write_json, atomic_write_text, dumps_json
+from tetherland.planning import Planner
+from tetherland.provenance import provenance
+
+SlopeOption = Annotated[
+    float | None,
+    typer.Option(
+        "--slope-deg",
+        help="Slope to design for, 0-180 deg (90: wall, > 90: overhang); default: the "
+        "scenario's surface.slope_deg.",
+    ),
+]
+OutOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--out",
+        help="Also write the feasibility map (PNG, CSV, JSON) and design.json here "
+        "(slower: it designs every slope and cable length).",
+        file_okay=False,
+    ),
+]
+
+
+def _table(result: DesignResult) -> Table:
+    table = Table(title=f"Designs for {result.slope_deg:g} deg, best first")
+    for name in ("#", "l [m]", "r_att z [m]", "h_A [m]", "approach elev. [deg]",
+                 "hook drop [m]", "rotor margin [N]", "clearance [cm]"):  # fmt: skip
+        table.add_column(name, justify="right")
+    for k, d in enumerate(result.designs, 1):
+        p = d.point
+        x, y, z = p.approach_A
+        # elevation below the horizontal toward the surface: 90 lowers the hook, 0 is level
+        elevation = round(math.degrees(math.atan2(-z, math.hypot(x, y))))  # int: no "-0"
+        table.add_row(
+            str(k), f"{p.length:g}", f"{p.attachment[2]:g}", f"{p.h_A:g}", f"{elevation:.0f}",
+            f"{p.hook_drop:g}", f"{d.min_rotor_margin:.3f}", f"{100 * d.min_clearance:.1f}",
+        )  # fmt: skip
+    return table
+
+
+def design(
+    scenario: ScenarioArg,
+    overrides: SetOption = None,
+    slope_deg: SlopeOption = None,
+    out: OutOption = None,
+    json: JsonOption = False,
+) -> int:
+    """Search the cable length, attachment offset along z_B, anchor height and hooking
+    approach with which the scenario's vehicle can land on and take off from the slope.
+
+    Candidates pass the landed-hover analysis, the hooking clearance and the planner
+    (landing and takeoff OCPs solved and verified); they are ranked by the rotor margin
+    over both plans, cable-offset torque included, then by clearance while hooking. The
+    overrides of a design reproduce it with any other command (--set). Exits with 1 and
+    a one-line reason when no design exists, with 2 on bad input.
+    """
+    sc = resolve_scenario(scenario, overrides)
+    planner = Planner()
+    result = search_designs(sc, slope_deg, planner=planner)
+    doc: dict[str, Any] = result.to_dict()
+    files: dict[str, str] = {}
+    if out is not None:
+        fmap = feasibility_map(sc, planner=planner, slopes_deg=MAP_SLOPES_DEG, lengths=MAP_LENGTHS)
+        record = provenance(sc, extra={"slope_deg": result.slope_deg})
+        title = (
+            f"{sc.name}: {sc.vehicle.mass:g} kg, rotors {sc.vehicle.f_min:g}-"
+            f"{sc.vehicle.f_max:g} N, control margin {sc.vehicle.control_margin:g} N\n"
+            f"hooking pass: overshoot {sc.mission.hook_overshoot:g} m, capture radius "
+            f"{sc.tether.capture_radius:g} m"
+        )
+        files["map"] = str(save_map_figure(out / "feasibility_map.png", fmap, result.chosen, title))
+        files["map_data"] = str(
+            atomic_write_json(
+                out / "feasibility_map.json",
+                {
+                    **fmap.to_dict(),
+                    "chosen": None if result.chosen is None else result.chosen.to_dict(),
+                    "provenance": record,
+                },
+            )
+        )
+        header = (
+            f"# tetherland {__version__} ({record['git_commit']}), scenario {sc.name}; "
+            "provenance in feasibility_map.json\n"
+        )
+        files["map_csv"] = str(
+            atomic_write_text(out / "feasibility_map.csv", header + fmap.to_csv())
+        )
+        doc["map_wall_time_s"] = fmap.wall_time_s
+        files["design"] = str(out / "design.json")
+    doc["files"] = files
+    doc["provenance"] = provenance(sc, extra={"slope_deg": result.slope_deg})
+    if out is not None:
+        atomic_write_json(out / "design.json", doc)
+    if json:
+        typer.echo(dumps_json(doc), nl=False)
+    else:
+        v = sc.vehicle
+        console.print(
+            f"[bold]{sc.name}[/bold]: {v.mass:g} kg, rotors {v.f_min:g}-{v.f_max:g} N "
+            f"(control margin {v.control_margin:g} N), {sc.surface.kind} at "
+            f"{result.slope_deg:g} deg"
+        )
+        if result.feasible:
+            console.print(_table(result))
+            chosen = result.chosen
+            assert chosen is not None
+            console.print(
+                "chosen: " + escape(" ".join(f"--set {o}" for o in chosen.overrides)),
+                soft_wrap=True,
+            )
+        console.print(
+            f"{result.candidates} candidates analysed, {result.planned} planned, "
+            f"{result.wall_time_s:.2f} s"
+            + (f"; map {doc['map_wall_time_s']:.1f} s" if "map_wall_time_s" in doc else "")
+        )
+        for name, path in files.items():
+            console.print(f"{name}: {escape(path)}")
+    if not result.feasible:
+        typer.echo(f"error: {result.reason}", err=True)
+        raise typer.Exit(1)
+    return 0

@@ -1,0 +1,40 @@
+"""How a run is judged: landing tolerances (conditions (1)-(5)) and touchdown detection.
+
+One section for every landing method: the tethered mission and the contact-free baseline
+are judged by the same function with the same numbers (docs/theory.md section 5).
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from tetherland.config.base import Section
+
+
+class VerdictConfig(Section):
+    """Landing tolerances and the contact rules of the judge, measured on the plant's truth."""
+
+    position_m: float = Field(0.03, gt=0, le=1)
+    """Condition (1): largest ||p_RL(t_L) - p*_L|| [m]."""
+    attitude_deg: float = Field(3.0, gt=0, le=45)
+    """Condition (2): largest angle between z_B(t_L) and z_S [deg]."""
+    speed_mps: float = Field(0.1, gt=0, le=10)
+    """Condition (3): largest ||p'_R(t_L-)|| [m/s]."""
+    angular_rate_rps: float = Field(0.3, gt=0, le=50)
+    """Condition (3): largest ||omega_B(t_L-)|| [rad/s]."""
+    accel_mps2: float = Field(1.0, gt=0, le=100)
+    """Condition (4): largest ||p''_R(t_L-)|| [m/s^2]."""
+    angular_accel_rps2: float = Field(10.0, gt=0, le=1000)
+    """Condition (4): largest ||omega'_B(t_L-)|| [rad/s^2]."""
+    slip_m: float = Field(0.01, gt=0, le=1)
+    """Condition (5): largest displacement of p_RL while the motors are off [m]."""
+    rest_speed_mps: float = Field(0.02, gt=0, le=10)
+    """Condition (5): largest speed while resting, from ``rest_settle`` after the motors
+    go off [m/s]."""
+    rest_settle: float = Field(0.3, ge=0, le=10)
+    """Condition (5): the rest speed is judged from this long after the motors go off
+    (rotor spin-down, contact transient); the slip is measured over the whole rest [s]."""
+    contact_force: float = Field(0.05, gt=0, le=100)
+    """Touchdown: a normal force above this on a lander (or on the frame) [N]."""
+    crash_force: float = Field(1e-6, gt=0, le=100)
+    """Crash: a normal force above this on the hub or a rotor guard, at any time [N]."""

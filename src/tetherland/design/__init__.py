@@ -1,0 +1,49 @@
+"""Design search: cable, attachment, anchor height and hooking approach for a slope.
+
+:func:`search_designs` finds the designs of a scenario's vehicle that can land on and take
+off from a given slope (analysis, hooking clearance, then the planner), ranked by the
+rotor margin over the planned maneuvers and the hooking clearance;
+:func:`feasibility_map` maps the best design over slopes and cable lengths. The figure
+lives in :mod:`tetherland.design.plot` (matplotlib).
+"""
+
+from tetherland.design.map import (
+    FeasibilityMap,
+    MapCell,
+    SteepestSlope,
+    feasibility_map,
+    steepest_slope,
+)
+from tetherland.design.margins import plan_rotor_margin, rotor_margin
+from tetherland.design.search import (
+    Design,
+    DesignLimit,
+    DesignResult,
+    design_base,
+    landed_slope_limit,
+    search_designs,
+)
+from tetherland.design.space import DesignPoint, DesignSpace
+from tetherland.mission.hooking import HookingPass, hooking_pass, hooking_pass_for, pass_clearance
+
+__all__ = [
+    "Design",
+    "DesignLimit",
+    "DesignPoint",
+    "DesignResult",
+    "DesignSpace",
+    "FeasibilityMap",
+    "HookingPass",
+    "MapCell",
+    "SteepestSlope",
+    "design_base",
+    "feasibility_map",
+    "hooking_pass",
+    "hooking_pass_for",
+    "landed_slope_limit",
+    "pass_clearance",
+    "plan_rotor_margin",
+    "rotor_margin",
+    "search_designs",
+    "steepest_slope",
+]

@@ -1,0 +1,479 @@
+"""Search cable length, attachment offset, anchor height and hooking approach for a slope.
+
+Three stages, cheapest first:
+
+1. **Analysis** on the whole grid of (l, r_att,z, h_A): the landed inclined hover of
+   :func:`tetherland.analysis.landed_hover` (rotor floor and ceiling with the control
+   margin, the cable-offset torque, the rest with the motors off).
+2. **Hooking clearance** for the feasible ones, best landed-hover rotor margin first:
+   every approach direction and hook drop of the space; the pass must keep the
+   mission's ``hooking_clearance``, and the approach with the most clearance (counted up to
+   ``target_clearance``, then the shorter hook drop) is kept.
+3. **Planning** for the first ``shortlist`` of them (stopping once ``max_designs`` are
+   verified): the landing and takeoff OCPs (6.21)
+   solved and verified by the planner (re-simulation: final state, rotor bounds, tension
+   bound), then the rotor margin over both maneuvers with the cable-offset torque
+   (:func:`~tetherland.design.margins.plan_rotor_margin`), which must keep the control
+   margin.
+
+Designs are ranked by that rotor margin, then by hooking clearance.
+"""
+
+from __future__ import annotations
+
+import enum
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from tetherland.analysis import (
+    Infeasibility,
+    LandedHover,
+    SlopeLimit,
+    VehicleLimits,
+    landed_hover,
+    tethered_slope_limit,
+)
+from tetherland.config import Scenario, with_overrides
+from tetherland.design.margins import plan_rotor_margin, rotor_margin
+from tetherland.design.space import DesignPoint, DesignSpace
+from tetherland.errors import ConfigError
+from tetherland.geometry import LandingGeometry, Surface, effective_h_R, landing_geometry
+from tetherland.mission.hooking import hooking_pass_for, pass_clearance
+from tetherland.planning import Maneuver, Planner, PlanResult
+
+_TOL = 1e-9
+
+
+class DesignLimit(enum.Enum):
+    """The stage at which every candidate of a design search failed."""
+
+    LANDED_HOVER = "landed_hover"
+    """The analysis: no candidate holds the landed hover (see ``analysis_binding``)."""
+    HOOKING_CLEARANCE = "hooking_clearance"
+    """Every hooking pass of the feasible candidates comes closer to the surface than
+    ``mission.hooking_clearance``."""
+    PLAN = "plan"
+    """The planner found no verified landing and takeoff for the shortlisted candidates."""
+    PLAN_ROTOR_MARGIN = "plan_rotor_margin"
+    """The plans exist, but with the cable-offset torque a rotor leaves the control margin."""
+    INVALID_CONFIG = "invalid_config"
+    """The shortlisted candidates are not valid scenarios (a validator of the
+    configuration refuses them, e.g. an attachment point below the landers)."""
+
+
+@dataclass(frozen=True)
+class Design:
+    """A design verified by the analysis, the hooking clearance and the planner.
+
+    Attributes
+    ----------
+    point : DesignPoint
+    landed_rotor_margin : float
+        Rotor margin of the landed inclined hover, cable-offset torque included [N].
+    min_rotor_margin : float
+        Rotor margin over the planned landing and takeoff, torque included [N].
+    min_clearance : float
+        Smallest distance of the vehicle from the surface on the hooking pass [m].
+    landing, takeoff : PlanResult
+        The verified plans.
+    """
+
+    point: DesignPoint
+    landed_rotor_margin: float
+    min_rotor_margin: float
+    min_clearance: float
+    landing: PlanResult
+    takeoff: PlanResult
+
+    @property
+    def overrides(self) -> tuple[str, ...]:
+        return self.point.overrides()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (the keys of ``tetherland design --json``)."""
+        return {
+            "overrides": list(self.overrides),
+            "min_rotor_margin_N": self.min_rotor_margin,
+            "min_clearance_m": self.min_clearance,
+            "landed_rotor_margin_N": self.landed_rotor_margin,
+        }
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """Outcome of :func:`search_designs`.
+
+    Attributes
+    ----------
+    scenario : str
+    slope_deg : float
+        The slope searched for [deg].
+    designs : tuple of Design
+        Verified designs, best first (empty: infeasible).
+    limit : DesignLimit or None
+        Where every candidate failed (None when a design was found).
+    analysis_binding : Infeasibility or None
+        With ``limit`` LANDED_HOVER: the requirement that binds for the best candidate.
+    reason : str
+        One line: ``"ok"``, or why no design exists.
+    landed_margin : float or None
+        Best landed-hover rotor margin of the analysis over the grid, cable-offset torque
+        included [N] (None: no grid point holds the landed hover).
+    candidates : int
+        Grid points (l, r_att,z, h_A) checked by the analysis.
+    planned : int
+        Candidates whose landing and takeoff were planned.
+    wall_time_s : float
+        Wall time of the search [s].
+    """
+
+    scenario: str
+    slope_deg: float
+    designs: tuple[Design, ...]
+    limit: DesignLimit | None
+    analysis_binding: Infeasibility | None
+    reason: str
+    landed_margin: float | None
+    candidates: int
+    planned: int
+    wall_time_s: float
+
+    @property
+    def feasible(self) -> bool:
+        return bool(self.designs)
+
+    @property
+    def chosen(self) -> Design | None:
+        """The best design (None when infeasible)."""
+        return self.designs[0] if self.designs else None
+
+    @property
+    def binding(self) -> str | None:
+        """The limit that binds, by name: an :class:`Infeasibility` value for the landed
+        hover, else a :class:`DesignLimit` value (None when feasible)."""
+        if self.limit is None:
+            return None
+        if self.limit is DesignLimit.LANDED_HOVER and self.analysis_binding is not None:
+            return self.analysis_binding.value
+        return self.limit.value
+
+    def to_dict(self) -> dict[str, Any]:
+        """The document ``tetherland design --json`` prints (without provenance)."""
+        return {
+            "scenario": self.scenario,
+            "slope_deg": self.slope_deg,
+            "feasible": self.feasible,
+            "reason": self.reason,
+            "binding": self.binding,
+            "designs": [d.to_dict() for d in self.designs],
+            "landed_margin_N": self.landed_margin,
+            "candidates": self.candidates,
+            "planned": self.planned,
+            "wall_time_s": self.wall_time_s,
+        }
+
+
+@dataclass(frozen=True)
+class _Candidate:
+    """A grid point (l, r_att, h_A) and its landed hover."""
+
+    length: float
+    attachment: tuple[float, float, float]
+    h_A: float
+    hover: LandedHover
+    landed_margin: float
+
+    def describe(self) -> str:
+        return (
+            f"l = {self.length:g} m, attachment z = {self.attachment[2]:g} m, h_A = {self.h_A:g} m"
+        )
+
+
+@dataclass(frozen=True)
+class _Hooking:
+    approach_A: tuple[float, float, float]
+    hook_drop: float
+    clearance: float
+
+
+def design_base(scenario: Scenario, slope_deg: float | None = None) -> Scenario:
+    """The scenario at ``slope_deg`` (validated), checked to be one the search can vary.
+
+    Raises
+    ------
+    ConfigError
+        For a slope outside [0, 180] deg or not finite, a surface given by its normal,
+        or an explicit anchor position (the search places the anchor by (6.13)).
+    """
+    if scenario.surface.normal is not None:
+        raise ConfigError(
+            "design varies surface.slope_deg: give the surface by slope_deg and azimuth_deg, "
+            "not by surface.normal"
+        )
+    if scenario.anchor.position is not None:
+        raise ConfigError(
+            "design places the anchor by (6.13) for anchor.landing_point: remove anchor.position"
+        )
+    if slope_deg is None:
+        return scenario
+    return with_overrides(scenario, [f"surface.slope_deg={float(slope_deg)!r}"])
+
+
+def search_designs(
+    scenario: Scenario,
+    slope_deg: float | None = None,
+    space: DesignSpace | None = None,
+    planner: Planner | None = None,
+) -> DesignResult:
+    """Designs of ``scenario``'s vehicle that can land on and take off from ``slope_deg``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Vehicle, surface kind and friction, mission settings (hooking pass), planner.
+    slope_deg : float, optional
+        Slope in [0, 180] [deg]; default the scenario's.
+    space : DesignSpace, optional
+        The grid searched (default :class:`DesignSpace`).
+    planner : Planner, optional
+        Reused for its compiled solvers.
+
+    Raises
+    ------
+    ConfigError
+        On bad input (see :func:`design_base`).
+    """
+    t0 = time.perf_counter()
+    space = space or DesignSpace()
+    planner = planner or Planner()
+    base = design_base(scenario, slope_deg)
+    B = float(base.surface.slope_deg)
+
+    candidates = _analysis_stage(base, space)
+    feasible = sorted((c for c in candidates if c.hover.feasible), key=lambda c: -c.landed_margin)
+
+    def result(
+        designs: Sequence[Design],
+        limit: DesignLimit | None,
+        binding: Infeasibility | None,
+        reason: str,
+        counted: int,
+        planned: int,
+    ) -> DesignResult:
+        return DesignResult(
+            scenario=base.name, slope_deg=B, designs=tuple(designs), limit=limit,
+            analysis_binding=binding, reason=reason,
+            landed_margin=feasible[0].landed_margin if feasible else None,
+            candidates=counted, planned=planned, wall_time_s=time.perf_counter() - t0,
+        )  # fmt: skip
+
+    if not feasible:
+        limit, binding, reason = _no_landed_hover(base, space, candidates)
+        return result((), limit, binding, reason, len(candidates), 0)
+
+    hooked: list[tuple[_Candidate, _Hooking]] = []
+    closest: tuple[_Candidate, _Hooking] | None = None
+    surface = LandingGeometry.from_scenario(base).surface
+    for cand in feasible:
+        best = _best_hooking(base, surface, space, cand)
+        if best is None:
+            continue
+        if best.clearance >= base.mission.hooking_clearance - _TOL:
+            hooked.append((cand, best))
+            if len(hooked) >= space.shortlist:
+                break
+        elif closest is None or best.clearance > closest[1].clearance:
+            closest = (cand, best)
+    if not hooked:
+        reason = f"no design lands on {B:g} deg: the hooking pass comes too close to the surface"
+        if closest is not None:
+            cand, hook = closest
+            reason += (
+                f" for every candidate whose landed hover is feasible; the best ({cand.describe()},"
+                f" approach {list(hook.approach_A)}, hook_drop {hook.hook_drop:g} m) passes "
+                f"{100 * hook.clearance:.1f} cm from it (needs mission.hooking_clearance = "
+                f"{100 * base.mission.hooking_clearance:g} cm)"
+            )
+        return result((), DesignLimit.HOOKING_CLEARANCE, None, reason, len(candidates), 0)
+
+    designs: list[Design] = []
+    failures: list[tuple[DesignLimit, str]] = []
+    planned = 0
+    for cand, hook in hooked:
+        point = DesignPoint(B, cand.length, cand.attachment, cand.h_A, hook.approach_A,
+                            hook.hook_drop)  # fmt: skip
+        try:
+            sc = point.apply(base)
+        except ConfigError as err:
+            failures.append((DesignLimit.INVALID_CONFIG, f"{cand.describe()}: {err}"))
+            continue
+        planned += 1
+        outcome = _plan_stage(sc, planner, cand, hook, point)
+        if isinstance(outcome, Design):
+            designs.append(outcome)
+            if len(designs) >= space.max_designs:
+                break
+        else:
+            failures.append(outcome)
+    if not designs:
+        # the best-ranked candidate that got furthest: its failure is what binds
+        order = (DesignLimit.PLAN_ROTOR_MARGIN, DesignLimit.PLAN, DesignLimit.INVALID_CONFIG)
+        limit, why = min(failures, key=lambda f: order.index(f[0]))
+        reason = f"no design lands on {B:g} deg: {why}"
+        return result((), limit, None, reason, len(candidates), planned)
+    designs.sort(key=lambda d: (-d.min_rotor_margin, -min(d.min_clearance, space.target_clearance)))
+    return result(designs[: space.max_designs], None, None, "ok", len(candidates), planned)
+
+
+def _analysis_stage(base: Scenario, space: DesignSpace) -> list[_Candidate]:
+    geo = LandingGeometry.from_scenario(base)
+    limits0 = VehicleLimits.from_scenario(base)
+    v = base.vehicle
+    h_R = effective_h_R(base)
+    rx, ry, _ = v.cable_attachment
+    out = []
+    for length in space.lengths:
+        for z in space.attachment_z:
+            for h_A in space.anchor_heights:
+                c = (h_R + z - h_A) / length
+                if not abs(c) < 1.0:
+                    continue
+                attachment = (float(rx), float(ry), float(z))
+                limits = replace(limits0, r_att_B=np.array(attachment))
+                hover = landed_hover(geo.surface, c, limits)
+                margin = rotor_margin(hover.rotor_thrusts, v.f_min, v.f_max)
+                out.append(_Candidate(float(length), attachment, float(h_A), hover, margin))
+    return out
+
+
+def _no_landed_hover(
+    base: Scenario, space: DesignSpace, candidates: list[_Candidate]
+) -> tuple[DesignLimit, Infeasibility | None, str]:
+    B = base.surface.slope_deg
+    if not candidates:
+        return (
+            DesignLimit.LANDED_HOVER,
+            None,
+            f"no design lands on {B:g} deg: |h_att - h_A| >= l for every cable length searched "
+            f"({min(space.lengths):g}-{max(space.lengths):g} m)",
+        )
+    best = max(candidates, key=lambda c: c.hover.margin)
+    finding = best.hover.findings[0]
+    return (
+        DesignLimit.LANDED_HOVER,
+        finding.reason,
+        f"no design lands on {B:g} deg: {finding.reason.value} binds for every cable length "
+        f"({min(space.lengths):g}-{max(space.lengths):g} m), attachment offset and anchor "
+        f"height searched; the closest ({best.describe()}): {finding.message}",
+    )
+
+
+def _best_hooking(
+    base: Scenario, surface: Surface, space: DesignSpace, cand: _Candidate
+) -> _Hooking | None:
+    """The hooking approach with the most clearance for this candidate (None: no valid
+    hook drop, every one leaves the cable taut at capture)."""
+    h_R = effective_h_R(base)
+    geo = landing_geometry(
+        surface,
+        length=cand.length,
+        h_R=h_R,
+        h_att=h_R + cand.attachment[2],
+        h_A=cand.h_A,
+        landing_point=base.anchor.landing_point,
+    )
+    capture, cfg = base.tether.capture_radius, base.mission
+    drops = [d for d in space.hook_drops if d + capture < cand.length]
+    if not drops:
+        return None
+
+    def exact(approach: tuple[float, float, float], drop: float) -> _Hooking:
+        hooking = hooking_pass_for(
+            geo, approach_A=approach, hook_drop=drop, r_att_B=cand.attachment,
+            approach_distance=cfg.approach_distance, hook_overshoot=cfg.hook_overshoot,
+        )  # fmt: skip
+        return _Hooking(approach, float(drop), pass_clearance(base, geo, hooking))
+
+    best: _Hooking | None = None
+    for approach in space.approach_directions(geo.surface.slope):
+        if geo.surface.kind == "plane":
+            # The hook drop moves the whole level vehicle by -drop n, so every distance from
+            # a plane changes by -drop (n . z_S): the clearance is affine in the drop.
+            at_zero = exact(approach, 0.0).clearance
+            n_W = geo.R_WA @ np.asarray(approach) / np.linalg.norm(approach)
+            rate = -float(n_W @ geo.surface.z_S)
+            drop = max(drops, key=lambda d: (min(at_zero + rate * d, space.target_clearance), -d))
+            option = exact(approach, drop)
+        else:
+            option = None
+            for drop in drops:
+                trial = exact(approach, drop)
+                if option is None or _hook_score(trial, space) > _hook_score(option, space):
+                    option = trial
+                if trial.clearance >= space.target_clearance:
+                    break  # a longer hook of this approach scores lower
+        if best is None or _hook_score(option, space) > _hook_score(best, space):
+            best = option
+    return best
+
+
+def _hook_score(h: _Hooking, space: DesignSpace) -> tuple[float, float]:
+    return (min(h.clearance, space.target_clearance), -h.hook_drop)
+
+
+def _plan_stage(
+    sc: Scenario, planner: Planner, cand: _Candidate, hook: _Hooking, point: DesignPoint
+) -> Design | tuple[DesignLimit, str]:
+    plans = []
+    for maneuver in (Maneuver.LANDING, Maneuver.TAKEOFF):
+        plan = planner.plan(sc, maneuver)
+        if not plan.success:
+            return (
+                DesignLimit.PLAN,
+                f"{cand.describe()}: {maneuver.value} plan {plan.status.value}: {plan.message}",
+            )
+        plans.append(plan)
+    margin = plan_rotor_margin(sc, plans)
+    floor = sc.vehicle.control_margin
+    if margin < floor - _TOL:
+        return (
+            DesignLimit.PLAN_ROTOR_MARGIN,
+            f"{cand.describe()}: with the cable-offset torque the planned maneuvers keep a rotor "
+            f"margin of {margin:.3f} N < control_margin = {floor:g} N",
+        )
+    return Design(
+        point=point,
+        landed_rotor_margin=cand.landed_margin,
+        min_rotor_margin=margin,
+        min_clearance=hook.clearance,
+        landing=plans[0],
+        takeoff=plans[1],
+    )
+
+
+def landed_slope_limit(scenario: Scenario, length: float, space: DesignSpace) -> SlopeLimit:
+    """Steepest slope whose landed hover is feasible for cable ``length`` [m], over the
+    attachment offsets and anchor heights of ``space`` (the analysis' bound, without
+    hooking or planning), and what binds beyond it."""
+    base = design_base(scenario)
+    surface = LandingGeometry.from_scenario(base).surface
+    limits0 = VehicleLimits.from_scenario(base)
+    h_R = effective_h_R(base)
+    rx, ry, _ = base.vehicle.cable_attachment
+    best = SlopeLimit(None, None)
+    for z in space.attachment_z:
+        for h_A in space.anchor_heights:
+            c = (h_R + z - h_A) / length
+            if not abs(c) < 1.0:
+                continue
+            limits = replace(limits0, r_att_B=np.array([rx, ry, z], dtype=float))
+            limit = tethered_slope_limit(surface, c, limits)
+            if limit.max_slope_rad is not None and (
+                best.max_slope_rad is None or limit.max_slope_rad > best.max_slope_rad
+            ):
+                best = limit
+    return best

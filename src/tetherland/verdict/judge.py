@@ -1,0 +1,369 @@
+"""The one judge of every run: touchdown, crash, slip and landing conditions (1)-(5).
+
+:func:`judge` reads only the run's log (the plant's truth at every control tick) and its
+:class:`~tetherland.verdict.RunRecord`, and measures against the *true* desired landing
+point of the plant's scenario; the robot may have believed otherwise. The same rules
+serve every landing method (docs/theory.md section 5):
+
+* touchdown t_L: the first logged tick of the method's landing phases at which a lander
+  or the frame carries a normal force above ``verdict.contact_force`` (the plant's contact
+  solver: a real touch, not a distance); t_L- is the tick before;
+* (1) ||p_RL(t_L) - p*_L||, p_RL = p - h_R z_B; (2) angle(z_B(t_L), z_S);
+  (3) ||p'(t_L-)||, ||omega(t_L-)||; (4) ||p''(t_L-)|| from the true specific force and
+  ||omega'(t_L-)|| from the two ticks before;
+* (5) observed over the first motors-off interval after touchdown: the slip of p_RL over
+  the whole interval and the speed from ``verdict.rest_settle`` after its start;
+* crash: a normal force above ``verdict.crash_force`` on the hub or a rotor guard, at any
+  time of the run.
+
+What a method must achieve beyond that (which conditions, a taut cable, a takeoff and a
+return) is its :class:`~tetherland.verdict.Expectations`, stored in the record.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tetherland import GRAVITY, __version__
+from tetherland.analysis.conditions import LandingTolerances, evaluate_landing
+from tetherland.config import Scenario
+from tetherland.geometry import LandingGeometry
+from tetherland.interfaces import ControlMode
+from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
+from tetherland.sim.log import RunStatus, SimLog
+from tetherland.verdict.record import RunRecord
+
+
+class Outcome(enum.Enum):
+    """What decided a run, in the order the judge checks (the first that applies)."""
+
+    SUCCESS = "success"
+    """Every expectation of the method was met."""
+    NO_RUN = "no_run"
+    """The run could not start (no plan, or an input error): nothing was flown."""
+    SIM_FAILED = "sim_failed"
+    """The physics diverged or a component raised an error during the run."""
+    CRASHED = "crashed"
+    """The frame (hub or rotor guards) touched something."""
+    ABORTED = "aborted"
+    """The supervisor moved to a safe state (operator abort or a detected fault)."""
+    NO_TOUCHDOWN = "no_touchdown"
+    """No touchdown in the method's landing phases."""
+    LANDING_CONDITIONS = "landing_conditions"
+    """Touchdown happened, but a required landing condition (1)-(5) does not hold."""
+    SLACK_CABLE = "slack_cable"
+    """The cable went slack where the plan needs tension."""
+    NO_TAKEOFF = "no_takeoff"
+    """The takeoff after the landing was not completed."""
+    NO_RETURN = "no_return"
+    """The return to the start pad was not completed."""
+    UNFINISHED = "unfinished"
+    """The run ended before the method's end state."""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The judged run: an outcome, every reason, and the ``summary.json`` document.
+
+    Attributes
+    ----------
+    success : bool
+    outcome : Outcome
+        The first failing check (or SUCCESS).
+    reasons : tuple of str
+        Every failing check, in judging order (empty on success).
+    summary : mapping
+        The full JSON-ready verdict (``summary.json``): landing measures, takeoff and
+        return, phases, times, switches, tolerances, timing, provenance.
+    """
+
+    success: bool
+    outcome: Outcome
+    reasons: tuple[str, ...]
+    summary: Mapping[str, Any]
+
+    @property
+    def reason(self) -> str:
+        """One line: ``"ok"`` or the reasons joined."""
+        return "ok" if self.success else "; ".join(self.reasons)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``summary.json`` document (a fresh dict)."""
+        return dict(self.summary)
+
+
+def tolerances_of(scenario: Scenario) -> LandingTolerances:
+    """The landing tolerances of a scenario's ``[verdict]`` section (SI units)."""
+    v = scenario.verdict
+    return LandingTolerances(
+        position=v.position_m,
+        attitude=math.radians(v.attitude_deg),
+        speed=v.speed_mps,
+        angular_rate=v.angular_rate_rps,
+        accel=v.accel_mps2,
+        angular_accel=v.angular_accel_rps2,
+        slip=v.slip_m,
+        rest_speed=v.rest_speed_mps,
+    )
+
+
+def _z_axes(q: np.ndarray) -> np.ndarray:
+    return quat_to_rotmat_many(q)[:, :, 2]
+
+
+def _in(log: SimLog, record: RunRecord, names: tuple[str, ...]) -> np.ndarray:
+    codes = [record.phase_codes[n] for n in names if n in record.phase_codes]
+    return np.isin(log["phase"].astype(int), codes)
+
+
+def _first_run(mask: np.ndarray, start: int) -> np.ndarray:
+    """Indices of the first contiguous run of True in ``mask`` at or after ``start``."""
+    idx = np.flatnonzero(mask[start:]) + start
+    if idx.size == 0:
+        return idx
+    gaps = np.flatnonzero(np.diff(idx) > 1)
+    return idx[: gaps[0] + 1] if gaps.size else idx
+
+
+def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
+    cfg = truth.verdict
+    tol = tolerances_of(truth)
+    geo = LandingGeometry.from_scenario(truth)
+    in_landing = _in(log, record, record.landing_phases)
+    if not in_landing.any():
+        return {"reached": False}
+    z_B = _z_axes(log["q_WB"])
+    p_RL = log["p_W"] - geo.h_R * z_B
+    clearance = (p_RL - geo.surface.origin) @ geo.surface.z_S
+    force = np.maximum(np.nan_to_num(log["lander_forces"]).max(axis=1),
+                       np.nan_to_num(log["frame_force"]))  # fmt: skip
+    touching = force > cfg.contact_force
+    idx = np.flatnonzero(in_landing & touching)
+    if idx.size == 0:
+        return {"reached": False, "min_clearance_m": float(clearance[in_landing].min())}
+    k = int(idx[0])
+    k_prev = max(k - 1, 0)
+    t = log["t"]
+    dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
+    R_prev = quat_to_rotmat(log["q_WB"][k_prev])
+    a_W = R_prev @ log["specific_force_B"][k_prev] + np.array([0.0, 0.0, -GRAVITY])
+    w = log["omega_B"]
+    w_dot = (w[k_prev] - w[max(k_prev - 1, 0)]) / dt
+    rest_idx = _first_run(log["mode"].astype(int) == int(ControlMode.MOTORS_OFF), k)
+    rested = bool(rest_idx.size)
+    rest_p = p_RL[rest_idx] if rested else p_RL[k : k + 1]
+    settled = rest_idx[t[rest_idx] >= t[rest_idx[0]] + cfg.rest_settle] if rested else rest_idx
+    rest_v = log["v_W"][settled] if settled.size else np.zeros((1, 3))
+    verdict = evaluate_landing(
+        p_RL=p_RL[k], z_B=z_B[k], v_W=log["v_W"][k_prev], omega_B=w[k_prev], a_W=a_W,
+        omega_dot_B=w_dot, p_L_star=geo.p_L, z_S=geo.surface.z_S, rest_p_RL=rest_p,
+        rest_v_W=rest_v, tol=tol,
+    )  # fmt: skip
+    measures = {m.name: m.value for c in verdict.conditions for m in c.measures}
+    conditions = {
+        str(c.number): c.holds and (c.number != 5 or rested) for c in verdict.conditions
+    }
+    required = record.expects.required_conditions
+    tension: dict[str, float | None] = {"min_tension_N": None, "min_tension_all_N": None}
+    if record.tension_phases:
+        # the cable must be taut during the tethered maneuvers wherever the vehicle flies on
+        # a plan that needs tension: not while the landers carry it (on a gentle slope
+        # friction alone may hold it and the cable slackens), nor where the plan itself is
+        # slack (flat ground)
+        min_tension = record.belief_scenario().planner.min_tension
+        airborne = np.nan_to_num(log["lander_forces"]).max(axis=1) <= cfg.contact_force
+        planned = _in(log, record, record.tension_phases) & airborne
+        if "diag.ff_tension" in log:
+            planned &= np.nan_to_num(log["diag.ff_tension"]) >= min_tension
+        tethered = _in(log, record, record.tethered_phases)
+        tension = {
+            "min_tension_N": float(log["tension"][planned].min()) if planned.any() else None,
+            "min_tension_all_N": float(log["tension"][tethered].min()) if tethered.any() else None,
+        }
+    return {
+        "reached": True,
+        "t_L": float(t[k]),
+        "position_error_m": measures["position_error"],
+        "attitude_error_rad": measures["attitude_error"],
+        "touchdown_speed_mps": measures["speed"],
+        "touchdown_angular_rate_rps": measures["angular_rate"],
+        "touchdown_accel_mps2": measures["accel"],
+        "touchdown_angular_accel_rps2": measures["angular_accel"],
+        "slip_m": measures["slip"] if rested else None,
+        "rest_speed_mps": measures["rest_speed"] if rested else None,
+        "motors_off_t": float(t[rest_idx[0]]) if rested else None,
+        **tension,
+        "conditions": conditions,
+        "required_conditions": [str(n) for n in required],
+        "all_conditions": all(conditions[str(n)] for n in required),
+    }
+
+
+def _takeoff(log: SimLog, record: RunRecord, geo: LandingGeometry) -> dict[str, Any]:
+    if not record.expects.takeoff:
+        return {"required": False}
+    t_released = record.times.get("t_released")
+    if t_released is None or record.takeoff_target is None:
+        return {"required": True, "completed": False}
+    target = record.takeoff_target
+    k = min(int(np.searchsorted(log["t"], t_released)), len(log) - 1)
+    phi = float(log["link_phi"][k]) if "link_phi" in log else math.nan
+    z_A = geo.R_WA.T @ _z_axes(log["q_WB"][k : k + 1])[0]
+    theta = math.atan2(z_A[0], z_A[2])
+    during = _in(log, record, ("tethered_takeoff",))
+    return {
+        "required": True,
+        "completed": True,
+        "phi_error_rad": abs(phi - target[0]),
+        "theta_A_error_rad": abs(theta - target[2]),
+        "min_tension_N": float(log["tension"][during].min()) if during.any() else None,
+    }
+
+
+def _return(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
+    if not record.expects.return_home:
+        return {"required": False}
+    if "t_done" not in record.times or record.home_pad_W is None:
+        return {"required": True, "completed": False}
+    h_R = truth.vehicle.h_R
+    z_B = _z_axes(log["q_WB"][-1:])[0]
+    p_RL = log["p_W"][-1] - h_R * z_B
+    pad = np.asarray(record.home_pad_W) - h_R * np.array([0.0, 0.0, 1.0])
+    return {
+        "required": True,
+        "completed": True,
+        "position_error_m": float(np.linalg.norm(p_RL - pad)),
+        "speed_mps": float(np.linalg.norm(log["v_W"][-1])),
+    }
+
+
+def judge(log: SimLog, record: RunRecord) -> Verdict:
+    """Judge one run from its log and record (see the module docstring).
+
+    Parameters
+    ----------
+    log : SimLog
+        The run's log (plant truth, every control tick).
+    record : RunRecord
+        What the method reported and expects.
+
+    Returns
+    -------
+    Verdict
+        Its ``summary`` is the run's ``summary.json``.
+    """
+    truth = record.truth_scenario()
+    geo = LandingGeometry.from_scenario(truth)
+    tol = tolerances_of(truth)
+    status = RunStatus(log.metadata.get("status", RunStatus.COMPLETED.value))
+    landing = _landing(log, record, truth) if len(log) else {"reached": False}
+    takeoff = _takeoff(log, record, geo)
+    ret = _return(log, record, truth)
+    crashed = bool(np.any(np.nan_to_num(log["frame_force"]) > truth.verdict.crash_force))
+    sim_time = float(log["t"][-1]) if len(log) else 0.0
+    checks: list[tuple[Outcome, str]] = []
+    if status in (RunStatus.DIVERGED, RunStatus.FAILED):
+        message = log.metadata.get("message", "")
+        checks.append((Outcome.SIM_FAILED, f"run {status.value}: {message}"))
+    if crashed:
+        checks.append((Outcome.CRASHED, "the frame touched something (crash)"))
+    if not landing.get("reached", False):
+        checks.append((Outcome.NO_TOUCHDOWN, "no touchdown in the landing phases"))
+    elif not landing["all_conditions"]:
+        failed = [n for n in landing["required_conditions"] if not landing["conditions"][n]]
+        checks.append(
+            (Outcome.LANDING_CONDITIONS, f"landing condition(s) {', '.join(failed)} not met")
+        )
+    if record.expects.tension and not (
+        landing.get("min_tension_N") is None or landing["min_tension_N"] > 0.0
+    ):
+        checks.append((Outcome.SLACK_CABLE, "cable went slack where the plan needs tension"))
+    if record.abort_reason is not None:
+        checks.append((Outcome.ABORTED, f"aborted: {record.abort_reason}"))
+    if landing.get("reached") and takeoff.get("required") and not takeoff.get("completed"):
+        checks.append((Outcome.NO_TAKEOFF, "takeoff not completed"))
+    if takeoff.get("completed") and ret.get("required") and not ret.get("completed"):
+        checks.append((Outcome.NO_RETURN, "return not completed"))
+    if not record.finished and not checks:
+        checks.append((Outcome.UNFINISHED, f"the run did not finish ({status.value})"))
+    order = list(Outcome)
+    checks.sort(key=lambda c: order.index(c[0]))
+    success = not checks
+    outcome = Outcome.SUCCESS if success else checks[0][0]
+    reasons = tuple(r for _, r in checks)
+    summary = {
+        "success": success,
+        "outcome": outcome.value,
+        "reason": "ok" if success else "; ".join(reasons),
+        "method": record.method,
+        "scenario": truth.name,
+        "controller": record.controller,
+        "seed": record.seed,
+        "status": status.value,
+        "aborted": record.abort_reason is not None,
+        "abort_reason": record.abort_reason,
+        "crashed": crashed,
+        "phases": [p.to_dict() for p in record.phases],
+        "times": dict(record.times),
+        "hook": _hook(log, record),
+        "landing": landing,
+        "takeoff": takeoff,
+        "return": ret,
+        "switches": [s.to_dict() for s in record.switches],
+        "tolerances": {
+            "position_m": tol.position,
+            "attitude_rad": tol.attitude,
+            "speed_mps": tol.speed,
+            "angular_rate_rps": tol.angular_rate,
+            "accel_mps2": tol.accel,
+            "slip_m": tol.slip,
+        },
+        "sim_time_s": sim_time,
+        "wall_time_s": record.wall_time_s,
+        "real_time_factor": sim_time / record.wall_time_s if record.wall_time_s > 0 else None,
+        "version": __version__,
+        "provenance": dict(record.provenance),
+    }
+    return Verdict(success=success, outcome=outcome, reasons=reasons, summary=summary)
+
+
+def _hook(log: SimLog, record: RunRecord) -> dict[str, Any] | None:
+    if record.hook_attempts is None:
+        return None
+    events = [e for e in log.metadata.get("events", []) if e.get("source") == "hook"]
+    return {
+        "attempts": record.hook_attempts,
+        "events": [{"t": e["t"], "kind": e["kind"]} for e in events],
+    }
+
+
+def not_flown(record: RunRecord, reason: str) -> Verdict:
+    """The verdict of a run that could not start (no plan): nothing to measure."""
+    summary = {
+        "success": False,
+        "outcome": Outcome.NO_RUN.value,
+        "reason": reason,
+        "method": record.method,
+        "scenario": str(record.truth.get("name", "custom")),
+        "controller": record.controller,
+        "seed": record.seed,
+        "status": None,
+        "aborted": False,
+        "abort_reason": None,
+        "crashed": False,
+        "landing": {"reached": False},
+        "takeoff": {"required": record.expects.takeoff},
+        "return": {"required": record.expects.return_home},
+        "sim_time_s": 0.0,
+        "wall_time_s": record.wall_time_s,
+        "real_time_factor": None,
+        "version": __version__,
+        "provenance": dict(record.provenance),
+    }
+    return Verdict(success=False, outcome=Outcome.NO_RUN, reasons=(reason,), summary=summary)

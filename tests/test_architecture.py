@@ -1,0 +1,141 @@
+"""The import graph is one-way, and the mission logic runs without the simulator.
+
+The graph is read from the source (every ``import`` statement, including those inside
+functions; typing-only imports under ``if TYPE_CHECKING:`` are not part of the runtime
+graph). Importing ``a.b.c`` counts as importing its packages ``a.b`` too, since Python
+runs their ``__init__`` first.
+"""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for path in (SRC / "tetherland").rglob("*.py"):
+        parts = list(path.relative_to(SRC).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(tree: ast.AST) -> set[str]:
+    found: set[str] = set()
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and _is_type_checking(node):
+            for child in node.orelse:
+                visit(child)
+            return
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.add(node.module)
+            found.update(f"{node.module}.{a.name}" for a in node.names)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(tree)
+    return found
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the tetherland modules it imports (with their parent packages)."""
+    modules = _modules()
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        targets: set[str] = set()
+        for imported in _imports(ast.parse(path.read_text())):
+            parts = imported.split(".")
+            for i in range(2, len(parts) + 1):
+                target = ".".join(parts[:i])
+                inside = name == target or name.startswith(target + ".")
+                if target in modules and not inside:
+                    targets.add(target)
+        graph[name] = targets
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one node (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def strong(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 10_000))
+    for v in sorted(graph):
+        if v not in index:
+            strong(v)
+    return found
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_the_module_import_graph_has_no_cycles():
+    graph = import_graph()
+    assert len(graph) > 50  # the whole package was read
+    assert cycles(graph) == []
+
+
+def test_the_package_import_graph_has_no_cycles():
+    packages: dict[str, set[str]] = {}
+    for module, targets in import_graph().items():
+        top = ".".join(module.split(".")[:2])
+        packages.setdefault(top, set()).update(
+            t2 for t in targets if (t2 := ".".join(t.split(".")[:2])) != top
+        )
+    assert "tetherland.mission" in packages["tetherland.methods"]
+    assert cycles(packages) == []
+
+
+@pytest.mark.parametrize(
+    "package",
+    ["tetherland.mission", "tetherland.methods", "tetherland.verdict", "tetherland.control",
+     "tetherland.estimation", "tetherland.planning", "tetherland.analysis"],
+)  # fmt: skip
+def test_robot_side_packages_do_not_import_mujoco(package):
+    code = f"import sys, {package}; print('mujoco' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

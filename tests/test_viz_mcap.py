@@ -1,0 +1,210 @@
+"""MCAP logs (issue 16, item 1): a mission written with --mcap and a saved run exported,
+read back with the `mcap` reader."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
+
+from tetherland.cli import main
+from tetherland.geometry import LandingGeometry
+from tetherland.sim.log import SimLog
+from tetherland.viz.channels import PER_TICK, TOPICS
+from tetherland.viz.layout import build_layout, layout_path, layout_topics
+from tetherland.viz.scene import SLACK_TENSION, static_scene, tension_rgba
+
+
+def read(path: Path, topics=None):
+    """(summary, {topic: [(log_time, decoded)]}) of an MCAP file."""
+    out: dict[str, list] = {}
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        for schema, channel, message in reader.iter_messages(topics=topics):
+            if schema.encoding == "jsonschema":
+                value = json.loads(message.data)
+            else:
+                value = message.data  # protobuf: decoded where a test needs it
+            out.setdefault(channel.topic, []).append((message.log_time, value))
+    return summary, out
+
+
+def decode(message):
+    """A Foxglove SDK message decoded with its own protobuf schema (the SDK's objects have
+    no getters)."""
+    from mcap.records import Schema
+
+    s = type(message).get_schema()
+    schema = Schema(id=1, name=s.name, encoding=s.encoding, data=s.data)
+    return DecoderFactory().decoder_for("protobuf", schema)(message.encode())
+
+
+def decoded(path: Path, topic: str):
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        return [(m.log_time, d) for _, _, m, d in reader.iter_decoded_messages(topics=[topic])]
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory) -> Path:
+    """A full slope50 mission written with --mcap (the CLI, in process)."""
+    out = tmp_path_factory.mktemp("mission")
+    code = main(["mission", "slope50", "--seed", "1", "--out", str(out), "--mcap", "--json"])
+    assert code == 0
+    return out
+
+
+pytestmark = pytest.mark.slow
+
+
+def test_channels_schemas_and_one_message_per_tick(run_dir):
+    log = SimLog.load(run_dir / "log.npz")
+    summary, messages = read(run_dir / "run.mcap")
+    schemas = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
+    assert {t: s.name for t, s in schemas.items()} == TOPICS
+    for topic in TOPICS:
+        expected = "jsonschema" if TOPICS[topic].startswith("tetherland.") else "protobuf"
+        assert schemas[topic].encoding == expected
+    t_ns = np.round(log["t"] * 1e9).astype(np.int64)
+    for topic in PER_TICK:
+        stamps = np.array([m[0] for m in messages[topic]])
+        np.testing.assert_array_equal(np.sort(stamps), t_ns, err_msg=topic)
+    record = json.loads((run_dir / "run.json").read_text())
+    names = {m[1]["phase_name"] for m in messages["/mission/state"]}
+    assert "tethered_landing" in names and names <= set(record["phase_codes"])
+    for _, state in messages["/mission/state"][::500]:
+        assert record["phase_codes"][state["phase_name"]] == state["phase"]
+    assert len(messages["/verdict"]) == 1
+    verdict = messages["/verdict"][0][1]
+    doc = json.loads((run_dir / "summary.json").read_text())
+    assert doc["files"]["mcap"] == str(run_dir / "run.mcap")
+    assert verdict["success"] is doc["success"] is True
+    assert verdict["conditions"] == doc["landing"]["conditions"]
+    # every phase change and hook event of the run is a Log message
+    texts = [m for m in decoded(run_dir / "run.mcap", "/mission/events")]
+    assert len(texts) == len(log.events) + 1  # + the verdict line
+    assert sum("ENGAGED" in d.message for _, d in texts) == sum(
+        e["kind"] == "ENGAGED" for e in log.events
+    )
+
+
+def test_replayed_pose_and_series_match_the_log(run_dir):
+    log = SimLog.load(run_dir / "log.npz")
+    tf = decoded(run_dir / "run.mcap", "/tf")
+    assert len(tf) == len(log)
+    k = np.linspace(0, len(log) - 1, 400).astype(int)
+    by_time = dict(tf)
+    for i in k:
+        frames = {x.child_frame_id: x for x in by_time[round(log["t"][i] * 1e9)].transforms}
+        body, est = frames["body"], frames["body_estimated"]
+        p = [body.translation.x, body.translation.y, body.translation.z]
+        q = [body.rotation.w, body.rotation.x, body.rotation.y, body.rotation.z]
+        np.testing.assert_allclose(p, log["p_W"][i], atol=1e-12)
+        np.testing.assert_allclose(q, log["q_WB"][i], atol=1e-12)
+        np.testing.assert_allclose([est.translation.x, est.translation.y, est.translation.z],
+                                   log["est_p_W"][i], atol=1e-12)  # fmt: skip
+        anchor = frames["anchor"].translation
+        geo_p_A = log.metadata["anchor_W"]
+        np.testing.assert_allclose([anchor.x, anchor.y, anchor.z], geo_p_A, atol=1e-12)
+    _, series = read(run_dir / "run.mcap", ["/tension", "/angles/phi", "/rotor_thrusts"])
+    tension = dict(series["/tension"])
+    phi = dict(series["/angles/phi"])
+    thrusts = dict(series["/rotor_thrusts"])
+    for i in k:
+        ns = round(log["t"][i] * 1e9)
+        assert tension[ns]["actual"] == pytest.approx(log["tension"][i], abs=1e-12)
+        assert phi[ns]["actual"] == pytest.approx(math.degrees(log["link_phi"][i]), abs=1e-9)
+        if np.isfinite(log["ref_output"][i, 0]):
+            assert phi[ns]["desired"] == pytest.approx(math.degrees(log["ref_output"][i, 0]))
+        else:
+            assert "desired" not in phi[ns]
+        np.testing.assert_allclose([thrusts[ns]["actual"][f"f{j}"] for j in range(1, 5)],
+                                   log["rotor_thrusts"][i], atol=1e-12)  # fmt: skip
+    # the nominal tension exists exactly while a plan is flown and is positive on slope50
+    doc = json.loads((run_dir / "summary.json").read_text())
+    t_tethered, t_L = doc["times"]["t_tethered"], doc["times"]["t_L"]
+    inside = [v["nominal"] for ns, v in tension.items() if t_tethered <= ns * 1e-9 <= t_L]
+    outside = [v for ns, v in tension.items() if ns * 1e-9 < t_tethered]
+    assert inside and min(inside) > 0.0
+    assert all("nominal" not in v for v in outside)
+
+
+def test_export_of_the_saved_run_matches_the_mission_file(run_dir, tmp_path):
+    """`tetherland export RUN_DIR --mcap` (from disk) gives the messages the mission wrote
+    from memory (the plans round-trip through their CSV files)."""
+    target = tmp_path / "exported.mcap"
+    assert main(["export", str(run_dir), "--mcap", "--out", str(target), "--json"]) == 0
+    _, a = read(run_dir / "run.mcap")
+    _, b = read(target)
+    assert a.keys() == b.keys()
+    for topic in a:
+        assert len(a[topic]) == len(b[topic]), topic
+        if topic.startswith("/angles") or topic in ("/tension", "/rotor_thrusts"):
+            for (ta, va), (tb, vb) in zip(a[topic], b[topic], strict=True):
+                assert ta == tb and va.keys() == vb.keys()
+                for key in va:
+                    x, y = va[key], vb[key]
+                    if isinstance(x, dict):
+                        np.testing.assert_allclose(list(x.values()), list(y.values()), atol=1e-9)
+                    else:
+                        assert x == pytest.approx(y, abs=1e-9)
+        elif topic != "/scene":
+            assert a[topic] == b[topic], topic
+
+
+def test_export_rejects_bad_input(tmp_path, capsys):
+    assert main(["export", str(tmp_path / "missing"), "--mcap"]) == 2
+    assert main(["export", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "not a run directory" in err and "--mcap" in err
+    assert not list(tmp_path.iterdir())  # nothing half-written
+
+
+def test_shipped_layout_is_current_and_reads_published_topics():
+    shipped = json.loads(layout_path().read_text())
+    assert shipped == build_layout()
+    assert layout_topics(shipped) <= set(TOPICS)
+    plots = [k for k in shipped["configById"] if k.startswith("Plot!")]
+    assert {p.split("!")[1] for p in plots} == {"phi", "delta", "theta_A", "psi",
+                                                "rotor_thrusts", "tension"}  # fmt: skip
+    phi = shipped["configById"]["Plot!phi"]["paths"]
+    assert {p["label"] for p in phi} >= {"desired", "nominal", "actual"}
+
+
+def test_scene_is_the_plants_mujoco_scene(pipe60):
+    """The pipe is a cylinder of the pipe's radius along the fall line x_S."""
+    from tetherland.rotations import quat_to_rotmat
+    from tetherland.viz.mcap import scene_model
+
+    geo = LandingGeometry.from_scenario(pipe60)
+    update = decode(static_scene(scene_model(pipe60), geo, [], np.zeros(3)))
+    scene = next(e for e in update.entities if e.id == "scene")
+    pipes = [c for c in scene.cylinders if c.size.x > 0.3]
+    assert len(pipes) == 1
+    pipe = pipes[0]
+    assert pipe.size.x == pytest.approx(2 * pipe60.surface.pipe_radius)
+    o = pipe.pose.orientation
+    axis = quat_to_rotmat([o.w, o.x, o.y, o.z])[:, 2]
+    assert abs(axis @ geo.surface.x_S) == pytest.approx(1.0, abs=1e-9)
+    centre = [pipe.pose.position.x, pipe.pose.position.y, pipe.pose.position.z]
+    # the top line of the pipe passes through the surface origin
+    top = np.asarray(centre) + pipe60.surface.pipe_radius * geo.surface.z_S
+    np.testing.assert_allclose(np.cross(top - geo.surface.origin, geo.surface.x_S), 0, atol=1e-9)
+    vehicle = next(e for e in update.entities if e.id == "vehicle")
+    assert vehicle.frame_id == "body" and vehicle.frame_locked
+    assert len(vehicle.spheres) == 4  # the landers
+
+
+def test_cable_colour_follows_the_tension():
+    assert tension_rgba(0.5 * SLACK_TENSION, 10.0) == tension_rgba(math.nan, 10.0)  # grey
+    # plasma: blue falls and red rises with the tension
+    colours = [tension_rgba(f, 10.0) for f in (0.5, 3.0, 6.0, 9.5)]
+    reds = [c[0] for c in colours]
+    assert reds == sorted(reds) and reds[0] < reds[-1]
+    assert tension_rgba(50.0, 10.0) == tension_rgba(10.0, 10.0)  # saturates at the scale
