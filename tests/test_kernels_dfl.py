@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from tetherland.config import load_scenario
 from tetherland.control import DflController, dfl_kernels
-from tetherland.control.dfl import dfl_function
+from tetherland.control.dfl_model import dfl_function
 from tetherland.control.dfl_terms import dfl_terms_into
 from tetherland.rotations import exp_so3, rotmat_to_quat
 

@@ -2,7 +2,7 @@
 
 The DFL controller needs y and its derivatives, the decoupling matrix A and the drift
 term b (docs/theory.md section 7) at every control tick. They are Lie derivatives derived
-symbolically by CasADi (:func:`tetherland.control.dfl.dfl_expression`); calling the CasADi
+symbolically by CasADi (:func:`tetherland.control.dfl_model.dfl_expression`); calling the CasADi
 function from Python costs tens of microseconds, most of it call overhead. This script
 walks the expression's instruction list (after common-subexpression elimination) and
 writes every operation as one line of a numba function: the same arithmetic, in the same
@@ -106,7 +106,7 @@ def generate_source(fn: ca.Function) -> str:
 
 
 def main() -> None:
-    from tetherland.control.dfl import dfl_function
+    from tetherland.control.dfl_model import dfl_function
 
     TARGET.write_text(generate_source(dfl_function()))
     print(f"wrote {TARGET}")

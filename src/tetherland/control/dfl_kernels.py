@@ -15,6 +15,8 @@ import math
 import numpy as np
 from numba import njit
 
+from tetherland.control.common import cable_torque
+from tetherland.control.dfl_model import DFL_RELATIVE_DEGREES, dfl_function
 from tetherland.control.dfl_terms import dfl_terms_into
 from tetherland.control.kernels import (
     mix_into,
@@ -27,7 +29,6 @@ from tetherland.geometry import FloatArray, link_frame
 from tetherland.models.quadrotor import RotorLayout, RotorModel
 from tetherland.rotations import quat_to_rotmat
 
-DFL_RELATIVE_DEGREES = (4, 4, 2, 2)
 DFL_OFFSETS = (0, 4, 8, 10)  # start of each output's derivatives in y (12)
 DFL_WIDTH = 43
 """mass, integral (0/1), integral max, compensate, control period h, r_att (3), R_WA (9),
@@ -79,9 +80,6 @@ def dfl_reference(
     :mod:`tetherland.control.dfl` for the equations. ``Y`` rows y_d .. y_d'''' (5, 4),
     ``state`` updated in place (its thrust extension must be set). Returns ``out``
     (:data:`DFL_OUT_WIDTH`)."""
-    from tetherland.control.common import cable_torque
-    from tetherland.control.dfl import dfl_function
-
     integral, lim, compensate, h = par[1], par[2], par[3], par[4]
     r_att, R_WA = par[5:8], par[8:17].reshape(3, 3)
     K, k_int, share, p = par[17:29], par[29:33], par[33:37], par[37:43]

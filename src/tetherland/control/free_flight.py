@@ -12,7 +12,7 @@ import numpy as np
 
 from tetherland.config import Scenario
 from tetherland.control import kernels
-from tetherland.control.common import Mixer, command_from
+from tetherland.control.mixer import Mixer, command_from
 from tetherland.control.position import PositionController
 from tetherland.errors import SingularityError
 from tetherland.interfaces import Command, Reference, StateEstimate

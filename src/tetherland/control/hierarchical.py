@@ -33,7 +33,7 @@ from tetherland import GRAVITY
 from tetherland.config import Scenario
 from tetherland.control import kernels
 from tetherland.control.attitude import AttitudeController, AttitudeGains
-from tetherland.control.common import Mixer, command_from
+from tetherland.control.mixer import Mixer, command_from
 from tetherland.errors import SingularityError
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, Reference, StateEstimate

@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit
 
 from tetherland.control.attitude import attitude_error
+from tetherland.control.common import attitude_from_thrust_axis, cable_torque, heading_of
 from tetherland.errors import SingularityError
 from tetherland.geometry import FloatArray, link_frame, theta_A_from_z_B
 from tetherland.models.quadrotor import RotorLayout, RotorModel, Saturation
@@ -406,8 +407,6 @@ def hierarchical_reference(
     :mod:`tetherland.control.hierarchical` for the equations. ``link`` = [phi, delta,
     phi', delta'], ``Y`` rows y_d, y_d', y_d'' (the first k given), ``state`` updated in
     place. Returns ``out`` (:data:`HC_OUT_WIDTH`)."""
-    from tetherland.control.common import attitude_from_thrust_axis, cable_torque, heading_of
-
     m, l, g, k_p, k_d, k_i, integral_max, compensate = par[0:8]
     r_att, R_WA = par[8:11], par[11:20].reshape(3, 3)
     J, JkR, Jkw = par[20:23], par[23:26], par[26:29]
