@@ -100,6 +100,15 @@ class DflController:
         )  # fmt: skip
         # [f_R, f_R', t_last, last u (4), error integrals (4)]
         self._state = dfl_kernels.dfl_state()
+        # load the compiled law now (numba's cache, once per process), not at the first
+        # tethered tick of a mission: a call on scratch arrays
+        scratch = dfl_kernels.dfl_state()
+        scratch[0] = self.mass * GRAVITY
+        dfl_kernels.dfl_into(
+            0.0, np.array([0.5, 0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3),
+            np.zeros((5, 4)), 0.0, scratch, self._par, self.mixer.packed,
+            np.empty(dfl_kernels.DFL_OUT_WIDTH),
+        )  # fmt: skip
 
     def reset(self, thrust: float | None = None, thrust_rate: float = 0.0) -> None:
         """Restart the thrust extension at ``thrust`` [N] and ``thrust_rate`` [N/s]

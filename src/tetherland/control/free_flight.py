@@ -42,6 +42,12 @@ class FreeFlightController:
         self.mixer = Mixer(v)
         self._par = kernels.pack_free_flight(self.position)
         self._t_last: float | None = None
+        # load the compiled law now (numba's cache, once per process): scratch arrays
+        z3 = np.zeros(3)
+        kernels.free_flight_into(
+            z3, z3, np.array([1.0, 0.0, 0.0, 0.0]), z3, np.zeros((3, 3)), 0.0, math.nan,
+            np.zeros(3), self._par, self.mixer.packed, np.empty(kernels.FF_OUT_WIDTH),
+        )  # fmt: skip
 
     def reset(self) -> None:
         """Clear the position integral (the controller is taking over)."""

@@ -75,6 +75,13 @@ class HierarchicalController:
         # integral of the (phi, delta) errors [rad s], last update time, last regular
         # thrust and attitude (held through singularities)
         self._state = kernels.hierarchical_state(self.mass, self.g)
+        # load the compiled law now (numba's cache, once per process), not at the first
+        # tethered tick of a mission: a call on scratch arrays
+        kernels.hierarchical_into(
+            0.0, np.array([0.5, 0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3),
+            np.zeros((5, 4)), np.zeros(3), np.zeros(3), True, 0.0, self._state.copy(),
+            self._par, self.mixer.packed, np.empty(kernels.HC_OUT_WIDTH),
+        )  # fmt: skip
 
     def reset(self) -> None:
         """Forget the last regular attitude and the link integral (on activation)."""

@@ -92,6 +92,10 @@ class UkfEstimator:
         self.last_nis = math.nan
         """Normalised innovation squared of the last fused pose (chi-square, 6 dof)."""
         self._cached: StateEstimate | None = None
+        # load the compiled outputs now (numba's cache, once per process)
+        kernels.estimate_into(
+            self.ukf.x_view, self.ukf.imu_view, 0.0, self.mass, self._geo, np.empty(kernels.WIDTH)
+        )
         self.last_tension: TensionEstimate | None = None
         """Raw and filtered tension and the taut rule, as of the last estimate."""
 

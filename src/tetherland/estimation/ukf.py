@@ -170,6 +170,20 @@ class Ukf:
         self._ring[1] = 1
         self.rejected_late = 0
         """Motion-capture samples older than the history (not fused)."""
+        self._load_kernels()
+
+    def _load_kernels(self) -> None:
+        """Load the compiled prediction and update now (numba's cache, once per process)
+        rather than inside the first control ticks: calls on scratch copies."""
+        x, P, clock = self._x.copy(), self._P.copy(), self._imu.copy()
+        hist, ring = self._hist.copy(), self._ring.copy()
+        row = np.zeros((1, 7))
+        row[0, 0], row[0, 3] = clock[0] + 1e-3, 9.81
+        kernels.predict_into(x, P, clock, row, 1, self._wm, self._wc, self._par, hist, ring)
+        kernels.update_pose_into(
+            x, P, float(clock[0]), x[0:3].copy(), x[6:10].copy(), self._wm, self._wc, self._par,
+            hist, ring,
+        )  # fmt: skip
 
     # ---------------------------------------------------------------- accessors
     @property
