@@ -50,11 +50,11 @@ class CountingController:
 
 @pytest.mark.slow
 def test_a_users_tethered_controller_flies_the_tethered_phases():
-    sc = with_overrides(load_scenario("slope50"), ["mission.abort_time=29"])
+    sc = with_overrides(load_scenario("slope50"), ["mission.abort_time=32"])
     mine = CountingController(sc)
     result = run_mission(sc, controller=mine, seed=0, planners=Planners())
     t_tethered = result.record.times["t_tethered"]
-    ticks = (29.0 - t_tethered) * sc.controller.rate_hz
+    ticks = (32.0 - t_tethered) * sc.controller.rate_hz
     assert mine.calls == pytest.approx(ticks, abs=2)
     assert result.record.controller == "CountingController"
     assert result.summary["outcome"] == "aborted" and not result.summary["crashed"]

@@ -133,3 +133,19 @@ def test_problem_validation():
             duration=1.0, x0=[0, 0], p_value=[], path_lb=[], path_ub=[],
             x_lb=[-1, -1], x_ub=[1, 1], u_lb=[-1], u_ub=[1],
         )  # fmt: skip
+
+
+def test_jit_compiled_solver_finds_the_same_optimum(tmp_path, monkeypatch):
+    """SolverSettings.jit compiles the NLP's functions to C: same iterates, same optimum,
+    and no compiler files left in the working directory."""
+    monkeypatch.chdir(tmp_path)
+    tr = MultipleShooting(20, "rk4", 1)
+    plain = OcpSolver(tr, SolverSettings("fatrop", tol=1e-9)).solve(double_integrator(v_max=1.3))
+    jit = OcpSolver(tr, SolverSettings("fatrop", tol=1e-9, jit=True)).solve(
+        double_integrator(v_max=1.3)
+    )
+    assert plain.success and jit.success
+    assert jit.iterations == plain.iterations
+    np.testing.assert_allclose(jit.U, plain.U, atol=1e-10)
+    assert jit.X[1:-1, 1].max() <= 1.3 + 1e-6
+    assert list(tmp_path.iterdir()) == []

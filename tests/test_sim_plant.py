@@ -40,15 +40,27 @@ def hover_speed(scenario) -> float:
 def test_mjcf_compiles_for_every_builtin_scenario():
     import mujoco
 
+    cables = (['tether.material="ideal"'], [], ["tether.segments=4"])
     for name in ("flat", "slope50", "pipe60", "steep70"):
-        sc = load_scenario(name)
-        model = mujoco.MjModel.from_xml_string(build_mjcf(sc))
-        body = model.body("vehicle")
-        assert body.mass[0] == pytest.approx(sc.vehicle.mass)
-        np.testing.assert_allclose(body.inertia, sc.vehicle.inertia)
-        np.testing.assert_allclose(body.ipos, 0.0, atol=1e-12)  # body frame at the CoM
-        assert model.nu == 4 and model.ntendon == 1
-        assert model.tendon_range[0, 1] == pytest.approx(sc.tether.length)
+        for cable in cables:
+            sc = load_scenario(name, cable)
+            model = mujoco.MjModel.from_xml_string(build_mjcf(sc))
+            body = model.body("vehicle")
+            assert body.mass[0] == pytest.approx(sc.vehicle.mass)
+            np.testing.assert_allclose(body.inertia, sc.vehicle.inertia)
+            np.testing.assert_allclose(body.ipos, 0.0, atol=1e-12)  # body frame at the CoM
+            assert model.jnt_qposadr[0] == 0 and model.jnt_dofadr[0] == 0  # vehicle first
+            kind = sc.tether.cable_model.value
+            assert model.ntendon == 1
+            assert model.nu == (5 if kind == "elastic" else 4)
+            assert bool(model.tendon_limited[0]) == (kind == "ideal")
+            if kind == "ideal":
+                assert model.tendon_range[0, 1] == pytest.approx(sc.tether.length)
+            if kind == "chain":
+                links = [model.body(f"cable_link{i}") for i in range(sc.tether.segments)]
+                total = sum(b.mass[0] for b in links)
+                assert total == pytest.approx(sc.tether.mass_per_length * sc.tether.length)
+                assert model.neq == 1 and model.nq == 7 + 4 * sc.tether.segments
 
 
 def test_lander_tips_form_the_landers_plane(plant, scenario):

@@ -21,6 +21,8 @@ from tetherland.rotations import quat_to_rotmat, rotvec_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
+IDEAL = 'tether.material="ideal"'
+"""The chapter's inextensible cable, which these tests compare with its models."""
 SWING_ANGLE_TOL = 2e-3
 """|phi - phi_model|, |delta - delta_model| over 2 s [rad]; measured 7e-4 / 1.3e-4 at
 dt = 1 ms, halving at dt = 0.5 ms (first-order integrator error)."""
@@ -34,7 +36,7 @@ cable compliance (``sim.cable_timeconst`` = 4 ms)."""
 def test_tethered_swing_matches_the_3d_link_model():
     """Cable engaged at the CoM (r_att = 0), constant tilted thrust: (phi, delta) follow
     models/tethered.py integrated by scipy with the same thrust vector."""
-    sc = load_scenario("flat", ["vehicle.cable_attachment=[0,0,0]"])
+    sc = load_scenario("flat", ["vehicle.cable_attachment=[0,0,0]", IDEAL])
     plant = Plant(sc)
     geo = plant.layout.geometry
     m, l = sc.vehicle.mass, sc.tether.length
@@ -85,8 +87,9 @@ def test_tethered_swing_matches_the_3d_link_model():
 def test_rest_tension_on_a_50_degree_slope_equals_the_force_balance():
     """Landed at p*_L, motors off, cable holding: f_L = -m g (x_S.z_W)/(x_S.d~) (6.14),
     = m g sin(beta)/cos(gamma) since x_S.d~ = cos(gamma). Soft static friction creeps to
-    zero, so the cable ends up carrying the whole downhill load."""
-    sc = load_scenario("slope50")
+    zero, so the cable ends up carrying the whole downhill load (the inextensible cable:
+    an elastic one stops where friction holds it, tests/test_tether.py)."""
+    sc = load_scenario("slope50", [IDEAL])
     plant = Plant(sc)
     geo = plant.layout.geometry
     expected = tethered_rest_tension(geo.surface, geo.d_tilde, sc.vehicle.mass)
@@ -135,7 +138,7 @@ def test_without_cable_slides_iff_tan_beta_exceeds_mu(slope_deg, mu, slides):
 def test_vehicle_rests_on_the_pipe_on_its_four_landers():
     """pipe60: landed astride the top line, motors off, cable holding: all four landers
     carry load, no slip after settling, tension as (6.14) (pipe normals have no x_S part)."""
-    sc = load_scenario("pipe60")
+    sc = load_scenario("pipe60", [IDEAL])
     plant = Plant(sc)
     geo = plant.layout.geometry
     land = plant.landed_state()

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from tetherland import GRAVITY
 from tetherland.errors import SingularityError
 
 if TYPE_CHECKING:
@@ -448,3 +449,95 @@ def attachment_height(scenario: Scenario) -> float:
     geometry; an offset across z_B acts through the cable torque of section 6.6.5.
     """
     return effective_h_R(scenario) + scenario.vehicle.cable_attachment[2]
+
+
+# -- elastic cable: the stretch at the landed hover (docs/tether.md) ----------------------
+
+STRETCH_ITERATIONS = 50
+"""Fixed-point iterations of :func:`stretched_landing` (converges in a few)."""
+
+
+def cable_stretch(tension: float, length: float, axial_stiffness: float | None) -> float:
+    """Static elongation s = f_L l / EA of a cable of unstretched length ``length`` [m]
+    under ``tension`` [N] (0 for an inextensible cable, EA None, or a slack one) [m]."""
+    if axial_stiffness is None or tension <= 0.0:
+        return 0.0
+    return tension * length / axial_stiffness
+
+
+def landed_hover_tension(slope: float, c: float, mass: float, g: float) -> float:
+    """f_L = m g sin(beta)/cos(gamma), gamma = asin(c): the tension of inclined hovering at
+    the landing point with the cable in the fall-line plane (docs/theory.md section 13) [N]."""
+    return mass * g * math.sin(slope) / math.sqrt(1.0 - c * c)
+
+
+@dataclass(frozen=True)
+class StretchedLanding:
+    """Where an elastic cable puts the touchdown (docs/tether.md).
+
+    At the landed hover the cable holds f_L and is l + s long, s = f_L l/EA, so the link
+    elevation is phi*' = asin(c') - beta with c' = (h_att - h_A)/(l + s): the touchdown
+    point moves by about s along the cable, downhill. Feed-forward: plan for ``phi_star``
+    (the rigid model of length l ends s short along d~, 0.4 mm above the surface for
+    gamma = 4 deg and s = 6 mm), and place the anchor at ``anchor_for_p_L`` for the
+    stretched cable to land on p*_L.
+
+    Attributes
+    ----------
+    tension : float
+        f_L at the stretched landing point [N].
+    stretch : float
+        s [m].
+    geometry : LandingGeometry
+        The landing geometry with the same anchor and length l + s: its ``p_L``,
+        ``d_tilde`` and ``phi_star`` are the real touchdown's.
+    shift_W : (3,) array
+        Touchdown point moved from the rigid cable's p~_L, in F_W [m].
+    anchor_for_p_L : (3,) array
+        Anchor (6.13) with the stretched length, which puts the touchdown at the rigid
+        geometry's p_L [m].
+    """
+
+    tension: float
+    stretch: float
+    geometry: LandingGeometry
+    shift_W: FloatArray
+    anchor_for_p_L: FloatArray
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> StretchedLanding:
+        """The stretched touchdown of a scenario's tether (stiffness, vehicle mass) at its
+        rigid landing geometry (:meth:`LandingGeometry.from_scenario`)."""
+        return stretched_landing(
+            LandingGeometry.from_scenario(scenario),
+            scenario.vehicle.mass,
+            scenario.tether.effective_axial_stiffness,
+        )
+
+
+def stretched_landing(
+    geo: LandingGeometry, mass: float, axial_stiffness: float | None, g: float = GRAVITY
+) -> StretchedLanding:
+    """The touchdown of a cable with stiffness EA = ``axial_stiffness`` [N] holding a vehicle
+    of ``mass`` [kg] in inclined hovering at the landing point of ``geo``.
+
+    Solves s = f_L(c') l/EA with c' = (h_att - h_A)/(l + s) by fixed-point iteration
+    (a contraction: ds'/ds = O(c^2 f_L/EA)). Inextensible (None): s = 0 and ``geo``.
+    """
+    h = geo.h_att - geo.h_A
+    l = geo.length
+    beta = geo.surface.slope
+    s = 0.0
+    for _ in range(STRETCH_ITERATIONS):
+        f_L = landed_hover_tension(beta, h / (l + s), mass, g)
+        s_new = cable_stretch(f_L, l, axial_stiffness)
+        done = abs(s_new - s) <= 1e-15 * l
+        s = s_new
+        if done:
+            break
+    f_L = landed_hover_tension(beta, h / (l + s), mass, g)
+    stretched = landing_geometry(
+        geo.surface, length=l + s, h_R=geo.h_R, h_A=geo.h_A, h_att=geo.h_att, anchor=geo.p_A
+    )
+    anchor = anchor_for_landing_point(geo.p_L, geo.surface.R_WS, stretched.c, l + s, geo.h_att)
+    return StretchedLanding(f_L, s, stretched, stretched.p_L - geo.p_L, anchor)

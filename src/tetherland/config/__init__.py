@@ -22,7 +22,15 @@ from tetherland.config.loader import (
 from tetherland.config.mission import MissionConfig
 from tetherland.config.perching import PerchingConfig, PerchingWeights
 from tetherland.config.perturbation import PerturbationConfig
-from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig, VehicleConfig
+from tetherland.config.physical import (
+    TETHER_MATERIALS,
+    AnchorConfig,
+    CableModel,
+    SurfaceConfig,
+    TetherConfig,
+    TetherMaterial,
+    VehicleConfig,
+)
 from tetherland.config.planning import PlannerConfig, PlannerWeights
 from tetherland.config.scenario import Scenario
 from tetherland.config.sensors import ImuConfig, MocapConfig, SensorsConfig
@@ -30,7 +38,9 @@ from tetherland.config.simulation import SimConfig
 from tetherland.config.verdict import VerdictConfig
 
 __all__ = [
+    "TETHER_MATERIALS",
     "AnchorConfig",
+    "CableModel",
     "ControllerConfig",
     "FreeFlightGains",
     "ImuConfig",
@@ -48,6 +58,7 @@ __all__ = [
     "SimConfig",
     "SurfaceConfig",
     "TetherConfig",
+    "TetherMaterial",
     "TetheredGains",
     "Vec3",
     "VehicleConfig",

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Literal
+import math
+from collections.abc import Mapping
+from enum import StrEnum
+from types import MappingProxyType
+from typing import Literal, NamedTuple
 
 from pydantic import Field, field_validator, model_validator
 
@@ -81,8 +85,85 @@ class VehicleConfig(Section):
         return self
 
 
+class TetherMaterial(NamedTuple):
+    """Axial stiffness and mass of a 1 mm line of one material (docs/tether.md).
+
+    Attributes
+    ----------
+    name : str
+    axial_stiffness : float or None
+        Effective EA of the line, None for an inextensible cable [N].
+    linear_density : float
+        Mass per length [kg/m].
+    source : str
+        Where the numbers come from.
+    """
+
+    name: str
+    axial_stiffness: float | None
+    linear_density: float
+    source: str
+
+
+TETHER_MATERIALS: Mapping[str, TetherMaterial] = MappingProxyType(
+    {
+        "ideal": TetherMaterial(
+            "ideal", None, 0.0, "inextensible and massless (the chapter's cable)"
+        ),
+        "dyneema": TetherMaterial(
+            "dyneema",
+            1.5e4,
+            6.0e-4,
+            "12-strand HMPE braid of Dyneema SK78: fibre modulus 109-132 GPa, elongation at "
+            "break 3-4 % (DSM Dyneema fact sheet CIS YA100, 2010); 0.6 g/m of fibre is "
+            "0.62 mm2 at 975 kg/m3, fibre EA 7.4e4 N, of which a braid keeps about 20 % at "
+            "low load (construction stretch)",
+        ),
+        "nylon": TetherMaterial(
+            "nylon",
+            1.2e3,
+            9.0e-4,
+            "polyamide 6.6 monofilament: tensile modulus about 1.5 GPa conditioned "
+            "(2.8 GPa dry, DuPont Zytel 101 data sheet), 1140 kg/m3, on 0.785 mm2",
+        ),
+        "steel": TetherMaterial(
+            "steel",
+            4.4e4,
+            3.5e-3,
+            "7x7 stainless wire rope: metallic area 0.44 mm2 (fill factor 0.56 from the "
+            "API 9A / ISO 2408 mass table, 6x7 class), rope modulus about 100 GPa on the "
+            "metallic area, 7900 kg/m3",
+        ),
+    }
+)
+"""Presets of ``tether.material`` for a 1 mm line; the derivations are in docs/tether.md."""
+
+TetherMaterialName = Literal["ideal", "dyneema", "nylon", "steel"]
+
+
+class CableModel(StrEnum):
+    """How the plant simulates the cable (docs/tether.md)."""
+
+    IDEAL = "ideal"
+    """Inextensible, massless: a limited tendon (a unilateral constraint at l)."""
+    ELASTIC = "elastic"
+    """Massless and elastic: a unilateral spring-damper on the anchor-attachment distance."""
+    CHAIN = "chain"
+    """Massive: ``segments`` rigid links with ball joints, the stretch added quasi-statically."""
+
+
 class TetherConfig(Section):
-    """A passive cable of constant length between the anchor and the vehicle, and its hook.
+    """The cable between the anchor and the vehicle, its material, and its hook.
+
+    Cable (docs/tether.md): ``material`` presets the effective axial stiffness EA and the
+    linear density of a 1 mm line (:data:`TETHER_MATERIALS`); ``axial_stiffness`` and
+    ``linear_density`` override the preset. Taut, the cable pulls with
+    f_L = k x + c x' (x = distance - l > 0, k = EA/l, c = 2 zeta sqrt(k m), m the
+    vehicle mass) and never pushes; slack, it exerts no force. ``segments = 0`` models it
+    massless (the preset's density is then not used: a 1 m line of 1 mm weighs under
+    4 g); ``segments >= 1`` simulates that many massive links that drape when slack.
+    Giving a ``linear_density > 0`` with ``segments = 0``, or ``segments >= 1`` with a
+    zero density, is an error.
 
     Hook model (simulation, chapter 6.6.1): the hook point is the attachment point lowered
     by ``hook_drop`` along -z_W (the hook hanging under the vehicle). The cable engages when
@@ -92,7 +173,19 @@ class TetherConfig(Section):
     """
 
     length: float = Field(1.0, gt=0, le=100)
-    """Cable length l from the anchor to the attachment point [m]."""
+    """Unstretched cable length l from the anchor to the attachment point [m]."""
+    material: TetherMaterialName = "dyneema"
+    """Preset of EA and linear density for a 1 mm line: ``ideal`` (inextensible,
+    massless), ``dyneema`` (EA 1.5e4 N, 0.6 g/m), ``nylon`` (1.2e3 N, 0.9 g/m), ``steel``
+    (7x7 wire rope, 4.4e4 N, 3.5 g/m) [-]."""
+    axial_stiffness: float | None = Field(None, gt=0, le=1e7)
+    """Effective axial stiffness EA, overriding the material's; k = EA/l [N]."""
+    damping_ratio: float = Field(0.05, ge=0, le=2)
+    """Damping ratio zeta of the taut cable with the vehicle mass, c = 2 zeta sqrt(k m) [-]."""
+    linear_density: float | None = Field(None, ge=0, le=10)
+    """Mass per length, overriding the material's (needs ``segments >= 1``) [kg/m]."""
+    segments: int = Field(0, ge=0, le=50)
+    """Number of massive links simulated; 0 models the cable massless [-]."""
     capture_radius: float = Field(0.1, gt=0, le=10)
     """Radius of the capture disk around the anchor within which the hook catches [m]."""
     approach_direction: Vec3 = (0.0, 0.0, -1.0)
@@ -117,6 +210,65 @@ class TetherConfig(Section):
                 f"be < length = {self.length} m (the cable must be slack when the hook catches)"
             )
         return self
+
+    @model_validator(mode="after")
+    def _mass_needs_segments(self) -> TetherConfig:
+        rho = self.linear_density
+        if rho is not None and rho > 0 and self.segments == 0:
+            raise ValueError(
+                f"linear_density = {rho:g} kg/m needs segments >= 1 (segments = 0 is the "
+                "massless cable; remove linear_density or simulate segments in [1, 50])"
+            )
+        if self.segments > 0 and self.mass_per_length <= 0.0:
+            raise ValueError(
+                f"segments = {self.segments} needs a linear_density > 0 kg/m (material "
+                f"'{self.material}' gives {TETHER_MATERIALS[self.material].linear_density:g}); "
+                "set linear_density in (0, 10] or segments = 0"
+            )
+        return self
+
+    # -- resolved cable parameters -----------------------------------------------------
+
+    @property
+    def effective_axial_stiffness(self) -> float | None:
+        """Effective axial stiffness: ``axial_stiffness`` or the material's; None if
+        inextensible [N]."""
+        if self.axial_stiffness is not None:
+            return self.axial_stiffness
+        return TETHER_MATERIALS[self.material].axial_stiffness
+
+    @property
+    def stiffness(self) -> float | None:
+        """Spring constant k = EA/l of the taut cable; None if inextensible [N/m]."""
+        EA = self.effective_axial_stiffness
+        return None if EA is None else EA / self.length
+
+    @property
+    def mass_per_length(self) -> float:
+        """Simulated linear density: ``linear_density``, else the material's when
+        ``segments >= 1``, else 0 (massless) [kg/m]."""
+        if self.linear_density is not None:
+            return self.linear_density
+        return TETHER_MATERIALS[self.material].linear_density if self.segments > 0 else 0.0
+
+    @property
+    def cable_model(self) -> CableModel:
+        """How the plant simulates this cable."""
+        if self.segments > 0:
+            return CableModel.CHAIN
+        return CableModel.IDEAL if self.stiffness is None else CableModel.ELASTIC
+
+    def damping(self, mass: float) -> float:
+        """Damping coefficient c = 2 zeta sqrt(k m) of the taut cable holding ``mass`` [N s/m]
+        (0 if inextensible)."""
+        k = self.stiffness
+        return 0.0 if k is None else 2.0 * self.damping_ratio * math.sqrt(k * mass)
+
+    def stretch(self, tension: float) -> float:
+        """Static elongation f_L l / EA of the cable under ``tension`` [N] (0 if
+        inextensible or slack) [m]."""
+        k = self.stiffness
+        return 0.0 if k is None or tension <= 0.0 else tension / k
 
 
 class SurfaceConfig(Section):

@@ -79,3 +79,25 @@ class Scenario(Section):
                     f"it is {off:+.3g} m off"
                 )
         return self
+
+    @model_validator(mode="after")
+    def _stable_tether(self) -> Scenario:
+        # The elastic cable force is explicit in the plant's semi-implicit Euler step: with
+        # w = sqrt(k/m_eff), stable while w dt < 2 (sqrt(zeta^2 + 1) - zeta); we keep half.
+        k = self.tether.stiffness
+        if k is None:
+            return self
+        v, t, dt = self.vehicle, self.tether, self.sim.timestep
+        r2 = sum(x * x for x in v.cable_attachment)
+        m_eff = 1.0 / (1.0 / v.mass + r2 / min(v.inertia))
+        w_dt = (k / m_eff) ** 0.5 * dt
+        zeta = t.damping_ratio
+        limit = (zeta * zeta + 1.0) ** 0.5 - zeta
+        if w_dt > limit:
+            raise ValueError(
+                f"tether.axial_stiffness: EA = {t.effective_axial_stiffness:g} N (k = EA/l = "
+                f"{k:g} N/m) is too stiff for sim.timestep = {dt:g} s: sqrt(k/m) dt = "
+                f"{w_dt:.3g} must be <= {limit:.3g} at damping_ratio {zeta:g}; use a smaller "
+                'sim.timestep, a softer cable or tether.material = "ideal"'
+            )
+        return self

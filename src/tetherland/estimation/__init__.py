@@ -2,15 +2,18 @@
 
 from tetherland.estimation.estimator import UkfEstimator
 from tetherland.estimation.tension import (
+    CableEstimate,
     MotorLagThrust,
     TensionEstimate,
     TensionEstimator,
     ThresholdDwell,
+    elastic_tension,
     tension_from_forces,
 )
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
 
 __all__ = [
+    "CableEstimate",
     "MotorLagThrust",
     "NavState",
     "TensionEstimate",
@@ -19,6 +22,7 @@ __all__ = [
     "Ukf",
     "UkfEstimator",
     "UkfNoise",
+    "elastic_tension",
     "initial_covariance",
     "tension_from_forces",
 ]

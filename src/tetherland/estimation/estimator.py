@@ -7,7 +7,9 @@ motion-capture update needs them, i.e. at the control rate. The cable tension is
 estimated from the rotors' actual thrust (commanded speeds through the motor lag) and the
 bias-corrected specific force, projected on the estimated link direction; the link state
 and the tension of an estimate come from one compiled call as well
-(:func:`tetherland.estimation.kernels.estimate_into`).
+(:func:`tetherland.estimation.kernels.estimate_into`). With an elastic cable the link
+state is that of the stretched cable (direction and rates from the actual distance, not
+l) and :meth:`UkfEstimator.cable` reports the estimated stretch.
 """
 
 from __future__ import annotations
@@ -19,10 +21,18 @@ from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
 from tetherland.estimation import kernels
-from tetherland.estimation.tension import MotorLagThrust, TensionEstimate, TensionEstimator
+from tetherland.estimation.tension import (
+    CableEstimate,
+    MotorLagThrust,
+    TensionEstimate,
+    TensionEstimator,
+    elastic_tension,
+    tension_filter_time_constant,
+)
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, ImuSample, MocapSample, StateEstimate
+from tetherland.rotations import quat_to_rotmat
 from tetherland.state import LinkState, RigidBodyState
 
 _BUFFER = 16
@@ -47,8 +57,9 @@ class UkfEstimator:
     noise_inflation : float
         Process/measurement noise multiplier (>= 1 makes the filter more robust to
         unmodelled effects) [-].
-    tension_time_constant : float
-        Low-pass time constant of the tension estimate [s].
+    tension_time_constant : float, optional
+        Low-pass time constant of the tension estimate (default: from the believed
+        cable's stiffness, :func:`~tetherland.estimation.tension.tension_filter_time_constant`) [s].
     """
 
     def __init__(
@@ -60,7 +71,7 @@ class UkfEstimator:
         rotor_speeds0: ArrayLike | None = None,
         P0: ArrayLike | None = None,
         noise_inflation: float = 1.0,
-        tension_time_constant: float = 0.02,
+        tension_time_constant: float | None = None,
     ) -> None:
         v = scenario.vehicle
         self.mass = v.mass
@@ -72,9 +83,11 @@ class UkfEstimator:
             imu_rate_hz=scenario.sensors.imu.rate_hz,
         )
         geo = LandingGeometry.from_scenario(scenario)
-        self._geo = kernels.pack_geometry(
-            np.asarray(v.cable_attachment, dtype=float), geo.p_A, geo.R_WA
-        )
+        self._p_A, self._r_att = geo.p_A, np.asarray(v.cable_attachment, dtype=float)
+        self._geo = kernels.pack_geometry(self._r_att, geo.p_A, geo.R_WA)
+        self._length, self._stiffness = scenario.tether.length, scenario.tether.stiffness
+        if tension_time_constant is None:
+            tension_time_constant = tension_filter_time_constant(self._stiffness, v.mass)
         self.tension = TensionEstimator(
             v.mass,
             scenario.mission.tension_threshold,
@@ -147,6 +160,16 @@ class UkfEstimator:
             tension=tension.filtered,
         )
         return self._cached
+
+    def cable(self) -> CableEstimate:
+        """The cable seen from the current estimate: distance, stretch and, for an elastic
+        cable, the tension k max(D - l, 0) the stretch implies (docs/tether.md)."""
+        body = self.estimate().body
+        p_att = body.p_W + quat_to_rotmat(body.q_WB) @ self._r_att
+        D = float(np.linalg.norm(p_att - self._p_A))
+        k = self._stiffness
+        f = None if k is None else elastic_tension(D, self._length, k)
+        return CableEstimate(D, D - self._length, f)
 
     # ------------------------------------------------------------------ CommandAware
     def command_sent(self, t: float, command: Command) -> None:

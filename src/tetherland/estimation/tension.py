@@ -5,6 +5,13 @@ Newton in F_B with the IMU at the centre of mass and no contact:
 so  f_L = d_B . (f_R e3 - m a_m)  (projection on the link), or, when d is unknown,
 f_L = ||f_R e3 - m a_m||. The thrust f_R is the rotors' actual thrust, predicted from the
 commanded speeds through the motor lag; the estimate is low-pass filtered.
+
+Elastic cables (docs/tether.md): the force balance holds whatever the cable's stretch, so
+the estimate needs no cable model; the link direction d is that of the stretched cable
+(anchor to attachment point, at distance l + s). The stretch gives a second, geometric
+reading of the tension, f_L = k (|p_att - p_A| - l) while taut (:func:`elastic_tension`),
+with an error of k times the position error: useful for soft lines (k = 1.2e3 N/m for
+1 m of nylon: 1.2 N per mm), not for stiff ones (Dyneema: 15 N per mm).
 """
 
 from __future__ import annotations
@@ -32,6 +39,53 @@ def tension_from_forces(
     if d_B is None:
         return float(np.linalg.norm(residual))
     return float(np.asarray(d_B, dtype=float) @ residual)
+
+
+TENSION_FILTER_SLOW = 0.02
+"""Low-pass time constant of the tension estimate with an inextensible cable [s]."""
+TENSION_FILTER_FAST = 0.005
+"""Shortest time constant: below it the accelerometer noise dominates the estimate [s]."""
+
+
+def tension_filter_time_constant(stiffness: float | None, mass: float) -> float:
+    """Low-pass time constant of the tension estimate for a cable of spring constant k
+    (None: inextensible) holding ``mass`` [kg] [s].
+
+    A taut elastic cable oscillates axially at w = sqrt(k/m) (5.5 Hz for 1 m of 1 mm
+    nylon, 19 Hz for Dyneema), which a 20 ms filter lags by 35-68 deg: the time constant
+    is 0.2/w (11 deg of lag), between :data:`TENSION_FILTER_FAST` and
+    :data:`TENSION_FILTER_SLOW`.
+    """
+    if stiffness is None:
+        return TENSION_FILTER_SLOW
+    tau = 0.2 / math.sqrt(stiffness / mass)
+    return min(TENSION_FILTER_SLOW, max(TENSION_FILTER_FAST, tau))
+
+
+def elastic_tension(distance: float, length: float, stiffness: float) -> float:
+    """Tension k (D - l) of an elastic cable of unstretched length l [m] and spring constant
+    k [N/m] whose ends are D [m] apart; 0 when slack (D <= l) [N]."""
+    x = distance - length
+    return stiffness * x if x > 0.0 else 0.0
+
+
+@dataclass(frozen=True)
+class CableEstimate:
+    """The cable as the estimated pose sees it.
+
+    Attributes
+    ----------
+    distance : float
+        Distance anchor -> attachment point D [m].
+    stretch : float
+        D - l (negative when slack) [m].
+    elastic_tension : float or None
+        k max(D - l, 0) for an elastic cable, None for an inextensible one [N].
+    """
+
+    distance: float
+    stretch: float
+    elastic_tension: float | None
 
 
 @dataclass(frozen=True)

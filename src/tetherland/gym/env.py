@@ -48,7 +48,13 @@ from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
 from tetherland.config import Scenario, load_scenario, with_overrides
 from tetherland.errors import ConfigError
 from tetherland.estimation import UkfEstimator
-from tetherland.geometry import FloatArray, LandingGeometry, link_angles, theta_A_from_z_B
+from tetherland.geometry import (
+    FloatArray,
+    LandingGeometry,
+    cable_stretch,
+    link_angles,
+    theta_A_from_z_B,
+)
 from tetherland.interfaces import Command, StateEstimate
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
@@ -111,10 +117,19 @@ def _observe(est: StateEstimate) -> FloatArray:
 
 
 def initial_state(plan: Trajectory, scenario: Scenario) -> tuple[RigidBodyState, FloatArray]:
-    """The plan's first state (cable taut) and rotor speeds [rad/s] (flatness, 6.6.1)."""
+    """The plan's first state (cable taut) and rotor speeds [rad/s] (flatness, 6.6.1).
+
+    An elastic cable holds the plan's start tension stretched by f_L l/EA: the attachment
+    point starts that much farther from the anchor along the cable, so that the plant's
+    cable pulls with the planned tension from the first step.
+    """
     nom = plan.nominal(0.0)
     r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
-    x0 = RigidBodyState(nom.p_W - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
+    t = scenario.tether
+    stretch = cable_stretch(float(nom.tension), t.length, t.effective_axial_stiffness)
+    p_A = LandingGeometry.from_scenario(scenario).p_A
+    p_att = p_A + (nom.p_W - p_A) * (1.0 + stretch / t.length)
+    x0 = RigidBodyState(p_att - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
                         nom.omega_B)  # fmt: skip
     return x0, RotorModel.from_config(scenario.vehicle).speed(nom.rotor_thrusts)
 

@@ -26,6 +26,7 @@ and arrays, ``casadi`` for symbols); parameters may be numbers or CasADi symbols
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -38,6 +39,7 @@ from numpy.typing import ArrayLike
 from tetherland import GRAVITY
 from tetherland.errors import ConfigError
 from tetherland.geometry import FloatArray
+from tetherland.models.integrators import rk4
 from tetherland.models.quadrotor import RotorLayout
 
 if TYPE_CHECKING:
@@ -161,16 +163,21 @@ class PlanarParams:
         """y_A in F_B: the body axis of the planar rotation."""
         return np.array([math.sin(self.heading), math.cos(self.heading), 0.0])
 
-    @property
+    @functools.cached_property
     def Gamma_M(self) -> FloatArray:
-        """(2, 4) map f -> [f_R, tau_y] (6.19)."""
-        return np.vstack((np.ones(4), self.torque_row))
+        """(2, 4) map f -> [f_R, tau_y] (6.19) (computed once; read-only)."""
+        GM = np.vstack((np.ones(4), self.torque_row))
+        GM.setflags(write=False)
+        return GM
 
-    @property
+    @functools.cached_property
     def G(self) -> FloatArray:
-        """(4, 2) map [f_R, tau_y] -> rotor thrusts with zero roll and yaw torque [-, 1/m]."""
+        """(4, 2) map [f_R, tau_y] -> rotor thrusts with zero roll and yaw torque [-, 1/m]
+        (computed once; read-only)."""
         Gi = np.linalg.inv(self.allocation)
-        return np.column_stack((Gi[:, 0], Gi[:, 1:4] @ self.e_B))
+        G = np.column_stack((Gi[:, 0], Gi[:, 1:4] @ self.e_B))
+        G.setflags(write=False)
+        return G
 
 
 def planar_terms(
@@ -404,12 +411,8 @@ def parametric_rk4_step() -> ca.Function:
         mass=c[0], length=c[1], inertia=c[2], gravity=c[3], torque_row=[c[4 + i] for i in range(4)]
     )
 
-    def f(z: ca.SX) -> ca.SX:
-        return rotor_form_rhs(z, u, coeffs, CASADI)
+    def f(z: ca.SX, v: ca.SX) -> ca.SX:
+        return rotor_form_rhs(z, v, coeffs, CASADI)
 
-    k1 = f(x)
-    k2 = f(x + 0.5 * h * k1)
-    k3 = f(x + 0.5 * h * k2)
-    k4 = f(x + h * k3)
-    x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    x_next = rk4(f, x, u, h)
     return ca.Function("planar_rk4", [x, u, h, c], [x_next], ["x", "u", "h", "c"], ["x_next"])

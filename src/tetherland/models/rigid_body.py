@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike
 from tetherland import GRAVITY
 from tetherland.config import VehicleConfig
 from tetherland.geometry import FloatArray
+from tetherland.models.integrators import rk4
 from tetherland.rotations import quat_multiply, quat_to_rotmat
 from tetherland.state import RigidBodyState
 
@@ -151,16 +152,11 @@ def rk4_step(
     tau_ext_B: ArrayLike | None = None,
 ) -> RigidBodyState:
     """One classical Runge-Kutta step with inputs held constant; renormalises q."""
-    x = state_to_vector(state)
 
-    def f(v: FloatArray) -> FloatArray:
+    def f(v: FloatArray, _u: None) -> FloatArray:
         return rigid_body_rhs(v, f_R, tau_B, params, f_ext_W, tau_ext_B)
 
-    k1 = f(x)
-    k2 = f(x + 0.5 * dt * k1)
-    k3 = f(x + 0.5 * dt * k2)
-    k4 = f(x + dt * k3)
-    return state_from_vector(x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4))
+    return state_from_vector(rk4(f, state_to_vector(state), None, dt))
 
 
 def kinetic_energy(state: RigidBodyState, params: RigidBodyParams) -> float:

@@ -5,17 +5,30 @@
   compiled solver per problem structure.
 * :mod:`.maneuver` builds the tethered landing/takeoff OCP (6.21) from a scenario.
 * :mod:`.spline` is the planner-free rest-to-rest polynomial reference.
-* :mod:`.trajectory` samples a plan (outputs with derivatives, nominal state and input)
-  and saves/loads it as CSV; :mod:`.verify` re-checks it; :mod:`.planner` ties it together.
+* :mod:`.driver` is the one verified-OCP driver of every planner (solver cache, fallback
+  solver, integrator refinement, verification call, :class:`PlanStatus` and the result
+  base :class:`VerifiedResult`); :mod:`.checks` is the verification core.
+* :mod:`.shooting` integrates held inputs into dense RK4 tables; :mod:`.trajectory`
+  samples a plan (outputs with derivatives, nominal state and input) and saves/loads it
+  with the CSV :mod:`.codec`; :mod:`.verify` re-checks it; :mod:`.planner` ties it
+  together (:meth:`Planner.plan`, and :meth:`Planner.replan` for online re-planning).
 """
 
+from tetherland.planning.checks import CheckResult, CheckScope
+from tetherland.planning.driver import (
+    Attempt,
+    OcpDriver,
+    PlanningError,
+    PlanStatus,
+    SolvePolicy,
+    VerifiedResult,
+)
 from tetherland.planning.maneuver import Maneuver, ManeuverSpec, build_ocp, precheck
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.planner import (
     Planner,
-    PlanningError,
     PlanResult,
-    PlanStatus,
+    ReplanSettings,
     plan,
     spline_trajectory,
     trajectory_meta,
@@ -37,13 +50,17 @@ from tetherland.planning.trajectory import (
     trajectory_from_csv,
 )
 from tetherland.planning.transcription import MultipleShooting, Transcript
-from tetherland.planning.verify import Tolerances, Verification, verify
+from tetherland.planning.verify import Tolerances, Verification, verify, verify_nodes
 
 __all__ = [
+    "Attempt",
+    "CheckResult",
+    "CheckScope",
     "InitialGuess",
     "Maneuver",
     "ManeuverSpec",
     "MultipleShooting",
+    "OcpDriver",
     "OcpProblem",
     "OcpSolution",
     "OcpSolver",
@@ -52,7 +69,9 @@ __all__ = [
     "Planner",
     "PlanningError",
     "PolynomialTrajectory",
+    "ReplanSettings",
     "ShootingTrajectory",
+    "SolvePolicy",
     "SolveStatus",
     "SolverSettings",
     "Tolerances",
@@ -61,6 +80,7 @@ __all__ = [
     "TrajectorySamples",
     "Transcript",
     "Verification",
+    "VerifiedResult",
     "build_ocp",
     "load_trajectory",
     "plan",
@@ -69,4 +89,5 @@ __all__ = [
     "trajectory_from_csv",
     "trajectory_meta",
     "verify",
+    "verify_nodes",
 ]

@@ -23,12 +23,14 @@ the optimum.
 from __future__ import annotations
 
 import enum
+import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
 
 from tetherland.analysis.statics import hover_tilt_for_tension, inclined_hover
 from tetherland.config import PlannerWeights, Scenario
@@ -46,6 +48,8 @@ from tetherland.models.planar import (
 from tetherland.planning.ocp import OcpProblem
 
 StateForm = Literal["wrench", "rotor"]
+MIN_REMAINDER = 0.1
+"""Shortest rest of a maneuver a re-plan accepts (:meth:`ManeuverSpec.remainder`) [s]."""
 _WEIGHT_NAMES = (
     "k_phi", "k_theta", "k_phi_dot", "k_theta_dot", "k_phi_ddot", "k_theta_ddot",
     "k_theta_near", "k_rates_near", "k_thrust_accel", "k_final_theta_dot", "k_final_phi_dot",
@@ -89,6 +93,9 @@ class ManeuverSpec:
     weights : PlannerWeights
     bump_width : float
         w of h(phi) [rad].
+    start_state : (12,) array or None
+        Rotor-form extended state the maneuver starts from when it is not the start
+        hover: the rest of a maneuver re-planned from the current state (:meth:`remainder`).
     """
 
     maneuver: Maneuver
@@ -110,6 +117,7 @@ class ManeuverSpec:
     tension_ramp: float
     weights: PlannerWeights
     bump_width: float
+    start_state: FloatArray | None = None
 
     @classmethod
     def from_scenario(
@@ -154,8 +162,48 @@ class ManeuverSpec:
 
     @property
     def x_start(self) -> FloatArray:
-        """Rotor-form extended state of the start hover (12,)."""
+        """Rotor-form extended state (12,) of the start hover (or ``start_state``)."""
+        if self.start_state is not None:
+            return self.start_state.copy()
         return self.model.hover_state(self.phi_start, self.theta_start)
+
+    @functools.cached_property
+    def start_tension(self) -> float:
+        """f_L at the start: of the start hover, or of ``start_state`` [N] (computed once)."""
+        if self.start_state is None:
+            return self.hover("start")[1]
+        return float(self.model.derivatives(self.start_state)["tension"])
+
+    def remainder(self, x0: ArrayLike, elapsed: float) -> ManeuverSpec:
+        """The rest of this maneuver from the state ``x0`` reached ``elapsed`` s after its
+        start: same final hover, limits and gains, duration T - elapsed.
+
+        The tension bound keeps its absolute ramp length ``tension_ramp`` T at the end,
+        and ramps from the tension of ``x0`` when that is below f_L_min (as from a
+        boundary hover).
+
+        Parameters
+        ----------
+        x0 : (12,) array
+            Rotor-form extended state [phi, theta_A, phi', theta_A', f, f'] [rad, rad/s,
+            N, N/s].
+        elapsed : float
+            Time since the start of this maneuver [s], in [0, T - MIN_REMAINDER].
+        """
+        x = np.asarray(x0, dtype=float).reshape(-1)
+        if x.shape != (12,) or not np.all(np.isfinite(x)):
+            raise ValueError(f"x0 must be 12 finite numbers (rotor-form state), got {x.shape}")
+        if not 0.0 <= elapsed <= self.duration - MIN_REMAINDER:
+            raise ValueError(
+                f"elapsed must be in [0, {self.duration - MIN_REMAINDER:g}] s (the maneuver "
+                f"lasts {self.duration:g} s; at least {MIN_REMAINDER:g} s must remain), "
+                f"got {elapsed:g}"
+            )
+        rest = self.duration - elapsed
+        return replace(
+            self, duration=rest, phi_start=float(x[0]), theta_start=float(x[1]),
+            start_state=x, tension_ramp=self.tension_ramp * self.duration / rest,
+        )  # fmt: skip
 
     @property
     def x_final(self) -> FloatArray:
@@ -175,7 +223,7 @@ class ManeuverSpec:
         """Lower bound on f_L at time ``t`` [N]: f_L_min, ramped near a boundary whose
         hover tension is lower (linearly over ``tension_ramp`` of the duration)."""
         t = np.asarray(t, dtype=float)
-        a0 = max(0.0, self.min_tension - self.hover("start")[1])
+        a0 = max(0.0, self.min_tension - self.start_tension)
         aT = max(0.0, self.min_tension - self.hover("final")[1])
         ramp = self.tension_ramp * self.duration
         return (
@@ -248,6 +296,10 @@ _PARAM_NAMES = (
     "theta_s", "width", "f_R_f", "f_L_min", "a0", "aT", "ramp", *_WEIGHT_NAMES,
 )  # fmt: skip
 _PARAM_SIZES = {"torque_row": 4, "G": 8}
+_PARAM_OFFSETS = {
+    name: int(sum(_PARAM_SIZES.get(n, 1) for n in _PARAM_NAMES[:i]))
+    for i, name in enumerate(_PARAM_NAMES)
+}
 
 
 def _param_values(spec: ManeuverSpec) -> dict[str, float | FloatArray]:
@@ -260,7 +312,7 @@ def _param_values(spec: ManeuverSpec) -> dict[str, float | FloatArray]:
         "phi_f": spec.phi_final, "theta_f": spec.theta_final,
         "phi_s": spec.phi_surface, "theta_s": spec.theta_surface, "width": spec.bump_width,
         "f_R_f": f_R_final, "f_L_min": spec.min_tension,
-        "a0": max(0.0, spec.min_tension - spec.hover("start")[1]),
+        "a0": max(0.0, spec.min_tension - spec.start_tension),
         "aT": max(0.0, spec.min_tension - f_L_final),
         "ramp": spec.tension_ramp,
     }  # fmt: skip
@@ -333,6 +385,21 @@ def build_ocp(
             raise ValueError(f"template is not a {form}-form problem")
         return template.with_numbers(**numbers)
     return OcpProblem(**_statement(form), **numbers)
+
+
+def remainder_ocp(problem: OcpProblem, spec: ManeuverSpec) -> OcpProblem:
+    """The OCP of ``spec``, the rest of the maneuver whose OCP is ``problem``
+    (:meth:`ManeuverSpec.remainder`): only the duration, the initial state and the
+    tension-ramp parameters change, so they are all that is recomputed (online re-plans).
+    """
+    x0 = spec.x_start
+    if problem.nx == 8:
+        G_M = spec.params.Gamma_M
+        x0 = np.concatenate((x0[:4], G_M @ x0[4:8], G_M @ x0[8:12]))
+    p_value = problem.p_value.copy()
+    p_value[_PARAM_OFFSETS["a0"]] = max(0.0, spec.min_tension - spec.start_tension)
+    p_value[_PARAM_OFFSETS["ramp"]] = spec.tension_ramp
+    return problem.with_numbers(duration=spec.duration, x0=x0, p_value=p_value)
 
 
 def _statement(form: StateForm) -> dict[str, object]:

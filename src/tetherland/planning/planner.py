@@ -10,23 +10,54 @@
 A result is :attr:`PlanStatus.SOLVED` only when its trajectory passed
 :func:`~tetherland.planning.verify.verify` (the fine re-simulation meets the final
 conditions, thrust and tension bounds); otherwise ``trajectory`` is None and
-``message`` says why.
+``message`` says why. Solving, fallback, refinement and the result base are the shared
+:mod:`~tetherland.planning.driver`'s; this module states the maneuver's OCP job.
+
+Online re-planning (receding horizon): :meth:`Planner.replan` plans the rest of the
+maneuver from the current state on the same compiled solver, warm-started from the plan
+being flown, and by default checks only the solver's nodes
+(:func:`~tetherland.planning.verify.verify_nodes`; ``verification.scope`` says so):
+
+>>> x = result.trajectory.state(2.0)          # mid-way, with an error in phi
+>>> x[0] += 0.01
+>>> rest = planner.replan(result, x, elapsed=2.0)
+>>> rest.status.name, rest.verification.scope.value, rest.spec.duration
+('SOLVED', 'nodes', 2.0)
 """
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from tetherland.analysis.feasibility import landed_hover_rotor_reason
-from tetherland.config import PlannerConfig, Scenario
-from tetherland.errors import TetherlandError
-from tetherland.geometry import LandingGeometry
-from tetherland.planning.maneuver import Maneuver, ManeuverSpec, StateForm, build_ocp, precheck
+from tetherland.config import Scenario
+from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.planning.checks import CheckScope
+from tetherland.planning.driver import (
+    MAX_REFINEMENTS,
+    Attempt,
+    Candidate,
+    OcpDriver,
+    PlanningError,
+    PlanStatus,
+    SolvePolicy,
+    SolveSession,
+    VerifiedResult,
+    usable_warm_start,
+)
+from tetherland.planning.maneuver import (
+    Maneuver,
+    ManeuverSpec,
+    StateForm,
+    build_ocp,
+    precheck,
+    remainder_ocp,
+)
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.solvers import (
     InitialGuess,
@@ -34,7 +65,6 @@ from tetherland.planning.solvers import (
     OcpSolver,
     SolverName,
     SolverSettings,
-    SolveStatus,
 )
 from tetherland.planning.trajectory import (
     PlanarSimulator,
@@ -44,134 +74,52 @@ from tetherland.planning.trajectory import (
     TrajectoryMeta,
 )
 from tetherland.planning.transcription import MultipleShooting
-from tetherland.planning.verify import Tolerances, Verification, verify
+from tetherland.planning.verify import Tolerances, Verification, verify, verify_nodes
 
 Method = Literal["ocp", "spline"]
 
-
-class PlanningError(TetherlandError):
-    """A plan was requested but could not be produced (one-line message)."""
-
-
-class PlanStatus(enum.Enum):
-    """Outcome of a planning request."""
-
-    SOLVED = "solved"
-    """A verified trajectory is available."""
-    INFEASIBLE = "infeasible"
-    """The maneuver cannot be done within the limits (pre-check, solver or spline check)."""
-    MAX_ITER = "max_iter"
-    """The solver hit its iteration limit."""
-    FAILED = "failed"
-    """The solver failed, or its solution did not pass the re-simulation check."""
+__all__ = [
+    "MAX_REFINEMENTS",
+    "Attempt",
+    "PlanResult",
+    "PlanStatus",
+    "Planner",
+    "PlanningError",
+    "ReplanSettings",
+    "plan",
+    "spline_trajectory",
+    "trajectory_meta",
+]
 
 
-MAX_REFINEMENTS = 2
-"""How often a solution failing the re-simulation is re-solved with twice the integrator
-steps per shooting interval."""
+@dataclass(frozen=True, kw_only=True)
+class PlanResult(VerifiedResult[Trajectory, Verification]):
+    """What :meth:`Planner.plan` and :meth:`Planner.replan` return.
 
-
-@dataclass(frozen=True)
-class Attempt:
-    """One NLP solve made for a plan.
+    The fields of :class:`~tetherland.planning.driver.VerifiedResult` (status, message,
+    solver, cost, trajectory, verification, solution, attempts) and:
 
     Attributes
     ----------
-    solver : str
-    steps : int
-        RK4 steps per shooting interval.
-    status : SolveStatus
-    return_status : str
-        The solver's own status.
-    iterations : int
-    solve_time_s, build_time_s : float
-        Solver wall time and solver construction time (0 when cached) [s].
-    verified : bool or None
-        Whether the re-simulated solution passed :func:`verify` (None: not checked).
-    """
-
-    solver: str
-    steps: int
-    status: SolveStatus
-    return_status: str
-    iterations: int
-    solve_time_s: float
-    build_time_s: float
-    verified: bool | None = None
-
-
-def _totals(attempts: list[Attempt]) -> dict[str, Any]:
-    return {
-        "solve_time_s": sum(a.solve_time_s for a in attempts),
-        "build_time_s": sum(a.build_time_s for a in attempts),
-        "iterations": sum(a.iterations for a in attempts),
-    }
-
-
-def _usable(warm: OcpSolution | None, problem: OcpProblem, nodes: int) -> bool:
-    return (
-        warm is not None
-        and warm.structure_key == problem.structure_key
-        and warm.X.shape[0] == nodes + 1
-        and bool(np.all(np.isfinite(warm.X)))
-    )
-
-
-@dataclass(frozen=True)
-class PlanResult:
-    """What :meth:`Planner.plan` returns.
-
-    Attributes
-    ----------
-    status : PlanStatus
-    message : str
-        Why (one line); ``"ok"`` when solved.
     maneuver : Maneuver
     method : {"ocp", "spline"}
-    solver : str or None
-        NLP solver (ocp only).
-    cost : float or None
-        Optimal cost J (ocp only).
-    solve_time_s : float
-        Wall time of the NLP solve (0 for the spline) [s].
-    build_time_s : float
-        Time spent building the solver for this call (0 when cached) [s].
-    iterations : int
-    trajectory : Trajectory or None
-        Present only when ``status`` is SOLVED.
-    verification : Verification or None
-    solution : OcpSolution or None
-        Raw output of the last solve (also when not solved: for warm starts and diagnosis).
     spec : ManeuverSpec
-    attempts : tuple of Attempt
-        Every NLP solve made (fallback solver, integrator refinements), in order;
-        ``solve_time_s``, ``build_time_s`` and ``iterations`` are their totals.
+        The maneuver planned (for a re-plan: the rest of the maneuver, from its state).
+    start_time : float
+        Time since the start of the maneuver at which this plan's t = 0 lies (0 for
+        :meth:`Planner.plan`, the ``elapsed`` time of a re-plan) [s].
+
+    ``verification.scope`` says what was checked: the dense re-simulation, or for an
+    online re-plan possibly the solver's nodes only.
     """
 
-    status: PlanStatus
-    message: str
     maneuver: Maneuver
     method: str
-    solver: str | None
-    cost: float | None
-    solve_time_s: float
-    build_time_s: float
-    iterations: int
-    trajectory: Trajectory | None
-    verification: Verification | None
-    solution: OcpSolution | None
     spec: ManeuverSpec
-    attempts: tuple[Attempt, ...] = ()
+    start_time: float = 0.0
 
-    @property
-    def success(self) -> bool:
-        return self.status is PlanStatus.SOLVED
-
-    def require(self) -> Trajectory:
-        """The trajectory, or :class:`PlanningError` with the reason."""
-        if self.status is not PlanStatus.SOLVED or self.trajectory is None:
-            raise PlanningError(f"{self.maneuver.value} plan {self.status.value}: {self.message}")
-        return self.trajectory
+    def _label(self) -> str:
+        return f"{self.maneuver.value} plan"
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready key numbers (``final_error`` etc. are None when unavailable)."""
@@ -187,18 +135,9 @@ class PlanResult:
             "iterations": self.iterations,
             "cost": self.cost,
             "duration_s": self.spec.duration,
-            "attempts": [
-                {
-                    "solver": a.solver,
-                    "steps_per_interval": a.steps,
-                    "status": a.status.value,
-                    "return_status": a.return_status,
-                    "iterations": a.iterations,
-                    "solve_time_s": a.solve_time_s,
-                    "verified": a.verified,
-                }
-                for a in self.attempts
-            ],
+            "start_time_s": self.start_time,
+            "checked": None if v is None else v.scope.value,
+            "attempts": [a.to_json() for a in self.attempts],
             "final_error": None if v is None else dict(v.final_error),
             "min_tension_N": None if v is None else v.min_tension,
             "min_rotor_thrust_N": None if v is None else v.min_rotor_thrust,
@@ -212,11 +151,47 @@ class PlanResult:
         }
 
 
-_STATUS = {
-    SolveStatus.INFEASIBLE: PlanStatus.INFEASIBLE,
-    SolveStatus.MAX_ITER: PlanStatus.MAX_ITER,
-    SolveStatus.FAILED: PlanStatus.FAILED,
-}
+@dataclass(frozen=True)
+class ReplanSettings:
+    """How :meth:`Planner.replan` solves and checks (online use: one solve, no fallback).
+
+    Attributes
+    ----------
+    solver : {"fatrop", "ipopt"}
+    tol : float
+        KKT tolerance of the solve [-].
+    constr_viol_tol : float
+        Constraint violation tolerance (terminal conditions, gaps, bounds) [-].
+    max_iter : int
+        Iteration limit; a re-plan near the previous solution needs 3-6.
+    warm_mu_init : float
+        Initial barrier parameter of the warm start [-].
+    check : CheckScope
+        NODES (default): the cheap check of the solver's nodes
+        (:func:`~tetherland.planning.verify.verify_nodes`, about 0.1 ms);
+        RESIMULATION: the dense re-simulation of :meth:`Planner.plan` (about 5 ms).
+    jit : bool
+        Compile the NLP's functions to C first (about 20 s once, then 2-3x faster
+        evaluations; the speed needed for 2 ms re-plans, see ``bench_planner.py``).
+    max_refinements : int
+        Integrator-step doublings after a failed check (0: report the failure; the
+        caller keeps flying the previous plan).
+    """
+
+    solver: SolverName = "fatrop"
+    tol: float = 1e-4
+    constr_viol_tol: float = 1e-6
+    max_iter: int = 30
+    warm_mu_init: float = 1e-8
+    check: CheckScope = CheckScope.NODES
+    jit: bool = False
+    max_refinements: int = 0
+
+    def solver_settings(self) -> SolverSettings:
+        return SolverSettings(
+            self.solver, self.tol, self.max_iter, None, warm_mu_init=self.warm_mu_init,
+            constr_viol_tol=self.constr_viol_tol, jit=self.jit,
+        )  # fmt: skip
 
 
 def trajectory_meta(scenario: Scenario, spec: ManeuverSpec) -> TrajectoryMeta:
@@ -244,6 +219,59 @@ def spline_trajectory(meta: TrajectoryMeta, spec: ManeuverSpec) -> PolynomialTra
     )
 
 
+class _ManeuverOcp:
+    """The landing/takeoff OCP of one request, as the driver's :class:`VerifiedOcp`."""
+
+    def __init__(
+        self,
+        planner: Planner,
+        spec: ManeuverSpec,
+        meta: TrajectoryMeta,
+        problem: OcpProblem,
+        transcription: MultipleShooting,
+        warm: OcpSolution | InitialGuess | None,
+        check: CheckScope = CheckScope.RESIMULATION,
+    ) -> None:
+        self.planner, self.spec, self.meta, self.problem = planner, spec, meta, problem
+        self.transcription, self.warm, self.check = transcription, warm, check
+
+    def candidate(self, session: SolveSession) -> Candidate:
+        warm = self.warm if session.primary else None
+        if isinstance(warm, OcpSolution) and not usable_warm_start(
+            warm, self.problem, self.transcription.nodes
+        ):
+            warm = None
+        guess = warm or self.planner.initial_guess(self.meta, self.spec, self.transcription.nodes)
+        # An InitialGuess as warm start is a previous solution shifted in time (re-plan):
+        # start with the warm-start options, without its multipliers.
+        force = True if isinstance(warm, InitialGuess) else None
+        sol = session.solve(self.problem, self.transcription, guess, warm=force)
+        return Candidate(self.problem, self.transcription, sol)
+
+    def accept(self, candidate: Candidate) -> tuple[Trajectory, Verification]:
+        sol, spec = candidate.solution, self.spec
+        U = self.planner.rotor_inputs(spec, sol)
+        if self.check is CheckScope.NODES:
+            X = self.planner.rotor_states(spec, sol)
+            check = verify_nodes(
+                spec, sol.times, X, U, candidate.transcription.steps, self.planner.tolerances
+            )
+            traj: Trajectory = ShootingTrajectory(
+                self.meta, sol.times, X, U, simulator=self.planner.simulator
+            )
+            return traj, check
+        traj = ShootingTrajectory.simulate(
+            self.meta, sol.times, spec.x_start, U, self.planner.simulator
+        )
+        return traj, verify(traj, spec, self.planner.tolerances)
+
+    def failure_message(self, solution: OcpSolution) -> str:
+        return (
+            f"{solution.solver} did not solve the OCP: {solution.return_status} "
+            f"after {solution.iterations} iterations"
+        )
+
+
 class Planner:
     """Plans landing and takeoff trajectories; keeps one compiled solver per structure.
 
@@ -261,16 +289,13 @@ class Planner:
     def __init__(self, form: StateForm = "wrench", tolerances: Tolerances | None = None) -> None:
         self.form: StateForm = form
         self.tolerances = tolerances or Tolerances()
-        self._solvers: dict[tuple[MultipleShooting, SolverSettings], OcpSolver] = {}
+        self.driver = OcpDriver()
         self._template: OcpProblem | None = None
         self.simulator = PlanarSimulator()
 
     def ocp_solver(self, transcription: MultipleShooting, settings: SolverSettings) -> OcpSolver:
         """The cached :class:`OcpSolver` for these settings."""
-        key = (transcription, settings)
-        if key not in self._solvers:
-            self._solvers[key] = OcpSolver(transcription, settings)
-        return self._solvers[key]
+        return self.driver.ocp_solver(transcription, settings)
 
     def problem(
         self, scenario: Scenario, maneuver: Maneuver | str = Maneuver.LANDING
@@ -308,10 +333,8 @@ class Planner:
         spec = ManeuverSpec.from_scenario(scenario, maneuver)
         meta = trajectory_meta(scenario, spec)
         base = PlanResult(
-            status=PlanStatus.FAILED, message="", maneuver=spec.maneuver, method=method,
-            solver=None, cost=None, solve_time_s=0.0, build_time_s=0.0, iterations=0,
-            trajectory=None, verification=None, solution=None, spec=spec,
-        )  # fmt: skip
+            status=PlanStatus.FAILED, message="", maneuver=spec.maneuver, method=method, spec=spec
+        )
         reasons = precheck(spec)
         landed = landed_hover_rotor_reason(scenario)
         if landed is not None and not reasons:
@@ -320,88 +343,102 @@ class Planner:
             return replace(base, status=PlanStatus.INFEASIBLE, message="; ".join(reasons))
         if method == "spline":
             traj = spline_trajectory(meta, spec)
-            return self._accept(base, traj, infeasible_if_bad=True)
+            check = verify(traj, spec, self.tolerances)
+            if check.ok:
+                return replace(
+                    base, status=PlanStatus.SOLVED, message="ok", trajectory=traj,
+                    verification=check,
+                )  # fmt: skip
+            return replace(
+                base, status=PlanStatus.INFEASIBLE, verification=check,
+                message="the spline reference fails its check: " + "; ".join(check.problems),
+            )  # fmt: skip
         if method != "ocp":
             raise ValueError(f"method must be 'ocp' or 'spline', got {method!r}")
-        return self._plan_ocp(base, meta, cfg, solver or cfg.solver, warm_start)
-
-    def _plan_ocp(
-        self,
-        base: PlanResult,
-        meta: TrajectoryMeta,
-        cfg: PlannerConfig,
-        primary: SolverName,
-        warm_start: PlanResult | OcpSolution | None,
-    ) -> PlanResult:
-        spec = base.spec
-        problem = self._problem(spec)
-        steps = max(1, math.ceil(spec.duration / (cfg.nodes * cfg.integrator_step) - 1e-9))
         if isinstance(warm_start, PlanResult):
             warm_start = warm_start.solution
-        order: list[SolverName] = [primary]
-        if cfg.fallback_solver and primary != "ipopt":
-            order.append("ipopt")
-        attempts: list[Attempt] = []
-        last: PlanResult = base
-        for name in order:
-            settings = SolverSettings(name, cfg.tolerance, cfg.max_iter, cfg.mu_init)
-            guess: InitialGuess | OcpSolution
-            if _usable(warm_start, problem, cfg.nodes) and name == primary:
-                guess = warm_start  # type: ignore[assignment]
-            else:
-                guess = self.initial_guess(meta, spec, cfg.nodes)
-            for refine in range(MAX_REFINEMENTS + 1):
-                transcription = MultipleShooting(cfg.nodes, "rk4", steps * 2**refine)
-                sol = self.ocp_solver(transcription, settings).solve(problem, guess)
-                attempt = Attempt(
-                    solver=name, steps=transcription.steps, status=sol.status,
-                    return_status=sol.return_status, iterations=sol.iterations,
-                    solve_time_s=sol.solve_time, build_time_s=sol.build_time,
-                )  # fmt: skip
-                last = replace(
-                    base, solver=name, cost=sol.cost, solution=sol,
-                    **_totals([*attempts, attempt]), attempts=(*attempts, attempt),
-                )  # fmt: skip
-                if not sol.success:
-                    attempts.append(attempt)
-                    last = replace(
-                        last,
-                        status=_STATUS[sol.status],
-                        message=f"{name} did not solve the OCP: {sol.return_status} "
-                        f"after {sol.iterations} iterations",
-                    )
-                    break
-                traj = ShootingTrajectory.simulate(
-                    meta, sol.times, spec.x_start, self._rotor_inputs(spec, sol), self.simulator
-                )
-                check = verify(traj, spec, self.tolerances)
-                attempt = replace(attempt, verified=check.ok)
-                attempts.append(attempt)
-                last = replace(last, attempts=tuple(attempts), verification=check)
-                if check.ok:
-                    return replace(last, status=PlanStatus.SOLVED, message="ok", trajectory=traj)
-                # A converged solution that fails the fine re-simulation: the shooting
-                # integrator was too coarse. Refine it, warm-started from this solution.
-                last = replace(
-                    last,
-                    status=PlanStatus.FAILED,
-                    message="re-simulated solution fails its check: " + "; ".join(check.problems),
-                )
-                guess = sol
-        if len(attempts) > 1:
-            tried = "; ".join(
-                f"{a.solver} (steps {a.steps}): {a.return_status}"
-                + (
-                    ""
-                    if a.verified is None
-                    else f", re-simulation {'ok' if a.verified else 'failed'}"
-                )
-                for a in attempts
-            )
-            statuses = {a.status for a in attempts}
-            status = PlanStatus.INFEASIBLE if statuses == {SolveStatus.INFEASIBLE} else last.status
-            return replace(last, status=status, message=f"{last.message} [attempts: {tried}]")
-        return last
+        steps = max(1, math.ceil(spec.duration / (cfg.nodes * cfg.integrator_step) - 1e-9))
+        job = _ManeuverOcp(
+            self, spec, meta, self._problem(spec), MultipleShooting(cfg.nodes, "rk4", steps),
+            warm_start,
+        )  # fmt: skip
+        outcome = self.driver.run(job, SolvePolicy.from_config(cfg, solver))
+        return replace(base, **base.outcome_fields(outcome))
+
+    def replan(
+        self,
+        plan: PlanResult,
+        x0: ArrayLike,
+        elapsed: float = 0.0,
+        *,
+        nodes: int | None = None,
+        settings: ReplanSettings | None = None,
+    ) -> PlanResult:
+        """Plan the rest of a maneuver again from the state ``x0`` (online re-planning).
+
+        The same compiled solver serves every re-plan (the initial state, the duration and
+        the tension bound are numbers of the statement), warm-started from ``plan``
+        shifted to the new node times, with the options of :class:`ReplanSettings`
+        (tolerance, warm barrier parameter, no fallback solver, by default the cheap node
+        check: ``result.verification.scope`` says what was checked).
+
+        Parameters
+        ----------
+        plan : PlanResult
+            The solved plan being flown (from :meth:`plan` or an earlier re-plan).
+        x0 : (12,) array
+            Rotor-form planar state [phi, theta_A, phi', theta_A', f_1..4, f_1'..4'] at
+            ``elapsed`` [rad, rad/s, N, N/s] (e.g. the estimate, or
+            ``plan.trajectory.state(t)`` with errors).
+        elapsed : float
+            Time since the start of the maneuver [s]; the re-plan lasts the rest,
+            ``spec.duration - elapsed`` (plan.start_time + plan.spec.duration - elapsed).
+        nodes : int, optional
+            Shooting intervals N (default: those of ``plan``'s solution).
+        settings : ReplanSettings, optional
+
+        Returns
+        -------
+        PlanResult
+            With ``start_time = elapsed`` and ``spec`` the rest of the maneuver.
+        """
+        settings = settings or ReplanSettings()
+        if plan.trajectory is None or plan.method != "ocp" or plan.solution is None:
+            raise PlanningError("replan needs a solved OCP plan to start from")
+        prev = plan.solution
+        N = nodes or len(prev.U)
+        into = elapsed - plan.start_time  # time into the previous plan [s]
+        spec = plan.spec.remainder(x0, into)
+        if prev.X.shape[1] != (8 if self.form == "wrench" else 12):
+            raise PlanningError("replan: the plan was made by a planner of another state form")
+        # The statement and all numbers but x0, T and the tension ramp are the plan's.
+        problem = self._problem(spec) if self._template is None else remainder_ocp(
+            self._template, spec
+        )  # fmt: skip
+        # Node times of the re-plan on the previous plan's clock; its nodes interpolated
+        # there (inputs held) start the solver; the first node is the new initial state.
+        t_new = into + np.linspace(0.0, spec.duration, N + 1)
+        k = np.clip(np.searchsorted(prev.times, t_new, side="right") - 1, 0, len(prev.U) - 1)
+        w = ((t_new - prev.times[k]) / (prev.times[k + 1] - prev.times[k]))[:, None]
+        X = (1.0 - w) * prev.X[k] + w * prev.X[k + 1]
+        X[0] = problem.x0
+        guess = InitialGuess(X=X, U=prev.U[k[:-1]])
+        # The previous plan's integrator step length, at most (one compiled solver).
+        candidate = [a for a in plan.attempts if a.candidate]
+        steps0 = candidate[-1].steps if candidate else 1
+        step = plan.spec.duration / len(prev.U) / steps0
+        steps = max(1, math.ceil(spec.duration / (N * step) - 1e-9))
+        job = _ManeuverOcp(
+            self, spec, plan.trajectory.meta, problem, MultipleShooting(N, "rk4", steps), guess,
+            settings.check,
+        )  # fmt: skip
+        policy = SolvePolicy((settings.solver_settings(),), settings.max_refinements)
+        outcome = self.driver.run(job, policy)
+        base = PlanResult(
+            status=PlanStatus.FAILED, message="", maneuver=spec.maneuver, method="ocp",
+            spec=spec, start_time=elapsed,
+        )  # fmt: skip
+        return replace(base, **base.outcome_fields(outcome))
 
     def initial_guess(self, meta: TrajectoryMeta, spec: ManeuverSpec, nodes: int) -> InitialGuess:
         """The spline reference at the nodes, in the OCP's state coordinates (cold start)."""
@@ -414,23 +451,16 @@ class Planner:
             X = np.column_stack((X[:, :4], s.thrusts @ GM.T, s.thrust_rates @ GM.T))
         return InitialGuess(X=X, U=v)
 
-    def _rotor_inputs(self, spec: ManeuverSpec, sol: OcpSolution) -> np.ndarray:
-        # The OCP input is v = [f_R'', tau_y'']; the rotors' is f'' = G v.
+    def rotor_inputs(self, spec: ManeuverSpec, sol: OcpSolution) -> FloatArray:
+        """The rotors' f'' = G v of the OCP input v = [f_R'', tau_y''] (N, 4) [N/s^2]."""
         return sol.U @ spec.params.G.T
 
-    def _accept(self, base: PlanResult, traj: Trajectory, *, infeasible_if_bad: bool) -> PlanResult:
-        check = verify(traj, base.spec, self.tolerances)
-        if check.ok:
-            return replace(
-                base, status=PlanStatus.SOLVED, message="ok", trajectory=traj, verification=check
-            )
-        what = "the spline reference" if infeasible_if_bad else "re-simulated solution"
-        return replace(
-            base,
-            status=PlanStatus.INFEASIBLE if infeasible_if_bad else PlanStatus.FAILED,
-            message=f"{what} fails its check: " + "; ".join(check.problems),
-            verification=check,
-        )
+    def rotor_states(self, spec: ManeuverSpec, sol: OcpSolution) -> FloatArray:
+        """The solution's node states in rotor form (N+1, 12)."""
+        if self.form == "rotor":
+            return sol.X
+        G = spec.params.G
+        return np.hstack((sol.X[:, :4], sol.X[:, 4:6] @ G.T, sol.X[:, 6:8] @ G.T))
 
 
 def plan(

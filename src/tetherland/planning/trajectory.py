@@ -15,22 +15,20 @@ Two kinds share this interface:
 * :class:`PolynomialTrajectory` (``spline``): 9th-order rest-to-rest polynomials for phi
   and theta_A; thrusts and tension from planar flatness.
 
-CSV files start with ``#`` header lines (format, kind, scenario, maneuver, version and a
-JSON ``meta`` line with the model constants), then one row per node (ocp) or sample
-(spline); :func:`load_trajectory` rebuilds the same trajectory.
+CSV files (:mod:`tetherland.planning.codec`) have ``#`` header lines (format, kind,
+scenario, maneuver, version and a JSON ``meta`` line with the model constants), then one
+row per node (ocp) or sample (spline); :func:`load_trajectory` rebuilds the same
+trajectory.
 """
 
 from __future__ import annotations
 
-import io
-import json
-import math
+import functools
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
-import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -46,17 +44,20 @@ from tetherland.models.planar import (
     parametric_rk4_step,
     planar_flat_inputs,
 )
+from tetherland.planning import codec
+from tetherland.planning.shooting import DENSE_STEP, HeldInputMotion, HeldInputSimulator
 from tetherland.planning.spline import rest_to_rest
 
-FORMAT_VERSION = 1
-DENSE_STEP = 2e-3
-"""Largest RK4 step between the nodes of a :class:`ShootingTrajectory` [s]."""
-
+FORMAT_VERSION = codec.FORMAT_VERSION
 _COLUMNS = (
-    ["t"] + [f"phi_d{k}" for k in range(5)] + [f"theta_A_d{k}" for k in range(5)]
-    + [f"f{i}" for i in range(1, 5)] + [f"f{i}_dot" for i in range(1, 5)]
-    + [f"f{i}_ddot" for i in range(1, 5)] + ["f_R", "tension"]
+    "t", *(f"phi_d{k}" for k in range(5)), *(f"theta_A_d{k}" for k in range(5)),
+    *(f"f{i}" for i in range(1, 5)), *(f"f{i}_dot" for i in range(1, 5)),
+    *(f"f{i}_ddot" for i in range(1, 5)), "f_R", "tension",
 )  # fmt: skip
+OCP_SCHEMA = codec.CsvSchema("ocp", _COLUMNS)
+"""CSV columns of a :class:`ShootingTrajectory` (one row per node)."""
+SPLINE_SCHEMA = codec.CsvSchema("spline", _COLUMNS)
+"""CSV columns of a :class:`PolynomialTrajectory` (rows on a uniform grid)."""
 
 
 @dataclass(frozen=True)
@@ -97,37 +98,19 @@ class TrajectoryMeta:
     gravity: float = GRAVITY
     version: str = __version__
 
-    @property
+    @functools.cached_property
     def params(self) -> PlanarParams:
+        """The planar model constants (computed once)."""
         return PlanarParams.from_matrices(
             self.mass, self.length, self.inertia_B, self.allocation, self.heading, self.gravity
         )
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "scenario": self.scenario,
-            "maneuver": self.maneuver,
-            "mass": self.mass,
-            "length": self.length,
-            "inertia_B": np.asarray(self.inertia_B).tolist(),
-            "allocation": np.asarray(self.allocation).tolist(),
-            "heading": self.heading,
-            "R_WA": np.asarray(self.R_WA).tolist(),
-            "p_A": np.asarray(self.p_A).tolist(),
-            "gravity": self.gravity,
-            "version": self.version,
-        }
+        return codec.meta_to_json(self)
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> TrajectoryMeta:
-        arrays = {
-            k: np.asarray(d[k], dtype=float) for k in ("inertia_B", "allocation", "R_WA", "p_A")
-        }
-        scalars = {
-            k: d[k]
-            for k in ("scenario", "maneuver", "mass", "length", "heading", "gravity", "version")
-        }
-        return cls(**scalars, **arrays)
+        return codec.meta_from_json(cls, d)
 
 
 @dataclass(frozen=True)
@@ -171,49 +154,16 @@ class TrajectorySamples:
         )  # fmt: skip
 
 
-class PlanarSimulator:
+class PlanarSimulator(HeldInputSimulator):
     """Integrates (6.20) with f'' held on each interval, in fixed RK4 substeps.
 
-    The CasADi functions are compiled once per step count and reused (keep one
-    simulator for repeated plans, as :class:`~tetherland.planning.Planner` does).
+    ``run``/``restart`` take the model constants ``PlanarParams.coefficients``. The
+    CasADi chains are compiled once per length and reused (keep one simulator for
+    repeated plans, as :class:`~tetherland.planning.Planner` does).
     """
 
     def __init__(self) -> None:
-        self._step = parametric_rk4_step()
-        self._chains: dict[tuple[str, int, int], ca.Function] = {}
-
-    def _chain(self, kind: str, n: int, m: int) -> ca.Function:
-        key = (kind, n, m)
-        if key not in self._chains:
-            chain = self._step.mapaccum(n)
-            self._chains[key] = chain.map(m) if kind == "restart" else chain
-        return self._chains[key]
-
-    def run(
-        self, params: PlanarParams, times: FloatArray, x0: FloatArray, U: FloatArray, sub: int
-    ) -> FloatArray:
-        """States after every substep, (N, sub, 12), integrating through all intervals."""
-        N = len(times) - 1
-        h = np.repeat(np.diff(times) / sub, sub)[None, :]
-        ends = self._chain("through", N * sub, 1)(
-            x0, np.repeat(U.T, sub, axis=1), h, params.coefficients
-        )
-        return np.asarray(ends).T.reshape(N, sub, 12)
-
-    def restart(
-        self, params: PlanarParams, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
-    ) -> FloatArray:
-        """States after every substep, (N, sub, 12), each interval started at its node X[k]."""
-        N = len(times) - 1
-        h = np.repeat(np.diff(times) / sub, sub)[None, :]
-        ends = self._chain("restart", sub, N)(
-            X[:-1].T, np.repeat(U.T, sub, axis=1), h, params.coefficients
-        )
-        return np.asarray(ends).T.reshape(N, sub, 12)
-
-
-def _substeps(interval: float) -> int:
-    return max(1, math.ceil(interval / DENSE_STEP - 1e-9))
+        super().__init__(parametric_rk4_step())
 
 
 class Trajectory(ABC):
@@ -314,24 +264,17 @@ class Trajectory(ABC):
 
     # -- files -----------------------------------------------------------------------
     def to_csv(self) -> str:
-        """The CSV text (header lines, column names, rows)."""
+        """The CSV text (:mod:`tetherland.planning.codec`: header lines, column names, rows)."""
         s = self.sample(self._rows())
         data = np.column_stack(
             (s.t, s.phi, s.theta_A, s.thrusts, s.thrust_rates, s.thrust_accels, s.f_R, s.tension)
         )
         meta = {**self.meta.to_json(), "duration": self.duration, **self._extra_meta()}
-        head = [
-            "# tetherland trajectory",
-            f"# format: {FORMAT_VERSION}",
-            f"# kind: {self.kind}",
-            f"# scenario: {self.meta.scenario}",
-            f"# maneuver: {self.meta.maneuver}",
-            f"# version: {self.meta.version}",
-            f"# meta: {json.dumps(meta)}",
-            ",".join(_COLUMNS),
-        ]
-        body = "\n".join(",".join(format(v, ".17g") for v in row) for row in data)
-        return "\n".join(head) + "\n" + body + "\n"
+        schema = OCP_SCHEMA if self.kind == OCP_SCHEMA.kind else SPLINE_SCHEMA
+        return codec.encode(
+            schema, data, meta, scenario=self.meta.scenario, maneuver=self.meta.maneuver,
+            version=self.meta.version,
+        )  # fmt: skip
 
     def save_csv(self, path: str | Path) -> Path:
         """Write :meth:`to_csv` to ``path`` atomically."""
@@ -355,37 +298,22 @@ class ShootingTrajectory(Trajectory):
         U: ArrayLike,
         substeps: int | None = None,
         simulator: PlanarSimulator | None = None,
-        _table: FloatArray | None = None,
+        _motion: HeldInputMotion | None = None,
     ) -> None:
         times = np.asarray(times, dtype=float)
         super().__init__(meta, float(times[-1] - times[0]))
-        self.times = times - times[0]
-        self.X = np.asarray(X, dtype=float)
-        self.U = np.asarray(U, dtype=float)
-        N = len(self.times) - 1
-        if self.X.shape != (N + 1, 12) or self.U.shape != (N, 4):
+        N = len(times) - 1
+        if np.shape(X) != (N + 1, 12) or np.shape(U) != (N, 4):
             raise ValueError(
-                f"need X (N+1, 12) and U (N, 4) for {N + 1} times, "
-                f"got {self.X.shape}, {self.U.shape}"
+                f"need X (N+1, 12) and U (N, 4) for {N + 1} times, got {np.shape(X)}, {np.shape(U)}"
             )
-        if np.any(np.diff(self.times) <= 0):
-            raise ValueError("node times must increase")
         # Dense table: the state at every substep of every interval (substeps no longer
         # than DENSE_STEP), integrated from the node states with the input held.
-        self._sub = substeps or _substeps(float(np.max(np.diff(self.times))))
-        if _table is None:
-            sim = simulator or PlanarSimulator()
-            ends = sim.restart(self.params, self.times, self.X, self.U, self._sub)
-            _table = np.concatenate((self.X[:-1, None, :], ends[:, :-1, :]), axis=1)
-        self._table = _table
-
-    def _rk4(self, x: FloatArray, u: FloatArray, h: FloatArray | float) -> FloatArray:
-        f = self.model.rhs
-        k1 = f(x, u)
-        k2 = f(x + 0.5 * h * k1, u)
-        k3 = f(x + 0.5 * h * k2, u)
-        k4 = f(x + h * k3, u)
-        return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        self._motion = _motion or HeldInputMotion(
+            simulator or PlanarSimulator(), self.params.coefficients, self.model.rhs,
+            times, X, U, substeps,
+        )  # fmt: skip
+        self.times, self.X, self.U = self._motion.times, self._motion.X, self._motion.U
 
     @classmethod
     def simulate(
@@ -398,24 +326,15 @@ class ShootingTrajectory(Trajectory):
     ) -> ShootingTrajectory:
         """Integrate (6.20) from ``x0`` with the inputs ``U`` held on each interval (RK4
         steps of at most :data:`DENSE_STEP`) and keep the continuous node states."""
-        times = np.asarray(times, dtype=float)
-        U = np.asarray(U, dtype=float)
-        x0 = np.asarray(x0, dtype=float)
-        sub = _substeps(float(np.max(np.diff(times))))
-        sim = simulator or PlanarSimulator()
-        ends = sim.run(meta.params, times, x0, U, sub)
-        X = np.vstack((x0[None, :], ends[:, -1, :]))
-        table = np.concatenate((X[:-1, None, :], ends[:, :-1, :]), axis=1)
-        return cls(meta, times, X, U, sub, simulator=sim, _table=table)
+        params = meta.params
+        motion = HeldInputMotion.simulate(
+            simulator or PlanarSimulator(), params.coefficients,
+            ExtendedPlanarModel(params).rhs, times, x0, U,
+        )  # fmt: skip
+        return cls(meta, motion.times, motion.X, motion.U, _motion=motion)
 
     def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        N = len(self.times) - 1
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, N - 1)
-        h_sub = (self.times[k + 1] - self.times[k]) / self._sub
-        j = np.clip(np.floor((t - self.times[k]) / h_sub).astype(int), 0, self._sub - 1)
-        x0 = self._table[k, j].T  # (12, n)
-        u = self.U[k].T  # (4, n)
-        x = self._rk4(x0, u, t - (self.times[k] + j * h_sub))
+        x, u = self._motion.states(t)
         d = self.model.derivatives(x, u)
         phi = np.stack((x[0], x[2], d["phi_ddot"], d["phi_dddot"], d["phi_ddddot"]), axis=1)
         theta = np.stack((x[1], x[3], d["theta_ddot"], d["theta_dddot"], d["theta_ddddot"]), axis=1)
@@ -425,7 +344,7 @@ class ShootingTrajectory(Trajectory):
         return self.times
 
     def _extra_meta(self) -> dict[str, Any]:
-        return {"substeps": self._sub}
+        return {"substeps": self._motion.sub}
 
 
 class PolynomialTrajectory(Trajectory):
@@ -463,56 +382,37 @@ class PolynomialTrajectory(Trajectory):
         return {"phi_ends": list(self.phi_ends), "theta_A_ends": list(self.theta_ends)}
 
 
-def _parse(text: str) -> tuple[dict[str, str], FloatArray]:
-    header: dict[str, str] = {}
-    lines = text.splitlines()
-    i = 0
-    while i < len(lines) and lines[i].startswith("#"):
-        key, sep, value = lines[i][1:].partition(":")
-        if sep:
-            header[key.strip()] = value.strip()
-        i += 1
-    if i >= len(lines) or lines[i].split(",") != _COLUMNS:
-        raise ConfigError("trajectory CSV: missing or unexpected column header")
-    data = np.loadtxt(io.StringIO("\n".join(lines[i + 1 :])), delimiter=",", ndmin=2)
-    return header, data
-
-
 def trajectory_from_csv(text: str) -> Trajectory:
     """Rebuild a trajectory from :meth:`Trajectory.to_csv` text."""
-    header, data = _parse(text)
-    if header.get("format") != str(FORMAT_VERSION):
-        raise ConfigError(f"trajectory CSV: unsupported format {header.get('format')!r}")
+    doc = codec.decode(text, (OCP_SCHEMA, SPLINE_SCHEMA))
     try:
-        meta_json = json.loads(header["meta"])
-        meta = TrajectoryMeta.from_json(meta_json)
-    except (KeyError, json.JSONDecodeError) as err:
-        raise ConfigError(f"trajectory CSV: bad meta header ({err})") from None
-    kind = header.get("kind")
-    if kind == ShootingTrajectory.kind:
-        t = data[:, 0]
-        X = np.column_stack((data[:, 1], data[:, 6], data[:, 2], data[:, 7], data[:, 11:19]))
-        return ShootingTrajectory(meta, t, X, data[:-1, 19:23], substeps=int(meta_json["substeps"]))
-    if kind == PolynomialTrajectory.kind:
+        meta = TrajectoryMeta.from_json(doc.meta)
+        if doc.kind == ShootingTrajectory.kind:
+            data = doc.data
+            X = np.column_stack((data[:, 1], data[:, 6], data[:, 2], data[:, 7], data[:, 11:19]))
+            return ShootingTrajectory(
+                meta, data[:, 0], X, data[:-1, 19:23], substeps=int(doc.meta["substeps"])
+            )
         return PolynomialTrajectory(
             meta,
-            meta_json["duration"],
-            tuple(meta_json["phi_ends"]),
-            tuple(meta_json["theta_A_ends"]),
+            doc.meta["duration"],
+            tuple(doc.meta["phi_ends"]),
+            tuple(doc.meta["theta_A_ends"]),
         )
-    raise ConfigError(f"trajectory CSV: unknown kind {kind!r}")
+    except KeyError as err:
+        raise ConfigError(f"trajectory CSV: bad meta header (no {err})") from None
 
 
 def load_trajectory(path: str | Path) -> Trajectory:
     """Read a trajectory CSV written by :meth:`Trajectory.save_csv`."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as err:
-        raise ConfigError(f"cannot read trajectory file '{path}': {err}") from None
-    return trajectory_from_csv(text)
+    return trajectory_from_csv(codec.read_text(path))
 
 
 __all__ = [
+    "DENSE_STEP",
+    "OCP_SCHEMA",
+    "SPLINE_SCHEMA",
+    "PlanarSimulator",
     "PolynomialTrajectory",
     "ShootingTrajectory",
     "Trajectory",

@@ -17,28 +17,17 @@ P = [p, T, x_init], so one transcription serves every problem of the same struct
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
 
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
+from tetherland.models import integrators
 from tetherland.planning.ocp import OcpProblem
 
-Integrator = Literal["rk4", "euler"]
-
-
-def _step(f: Callable[[ca.SX], ca.SX], x: ca.SX, h: ca.SX, method: Integrator) -> ca.SX:
-    if method == "euler":
-        return x + h * f(x)
-    k1 = f(x)
-    k2 = f(x + 0.5 * h * k1)
-    k3 = f(x + 0.5 * h * k2)
-    k4 = f(x + h * k3)
-    return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+Integrator = integrators.Method
 
 
 @dataclass(frozen=True)
@@ -64,7 +53,7 @@ class MultipleShooting:
             raise ValueError(f"nodes must be >= 2, got {self.nodes}")
         if self.steps < 1:
             raise ValueError(f"steps must be >= 1, got {self.steps}")
-        if self.integrator not in ("rk4", "euler"):
+        if self.integrator not in integrators.METHODS:
             raise ValueError(f"integrator must be 'rk4' or 'euler', got {self.integrator!r}")
 
     def transcribe(self, problem: OcpProblem) -> Transcript:
@@ -77,7 +66,7 @@ class MultipleShooting:
         x_s, u_s = ca.SX.sym("xs", nx), ca.SX.sym("us", nu)
         xf = x_s
         for _ in range(self.steps):
-            xf = _step(lambda z: fn["ode"](z, u_s, p), xf, h, self.integrator)
+            xf = integrators.step(self.integrator, lambda z, v: fn["ode"](z, v, p), xf, u_s, h)
         F = ca.Function("F", [x_s, u_s, p, T], [xf])
 
         X = [ca.SX.sym(f"x_{k}", nx) for k in range(N + 1)]
@@ -148,6 +137,7 @@ class Transcript:
     nx: int
     nu: int
     interval_map: ca.Function = field(repr=False)
+    _path_index: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def nodes(self) -> int:
@@ -165,7 +155,7 @@ class Transcript:
         """w from node states (N+1, nx) and inputs (N, nu)."""
         X = np.asarray(X, dtype=float).reshape(self.nodes + 1, self.nx)
         U = np.asarray(U, dtype=float).reshape(self.nodes, self.nu)
-        return np.concatenate([np.concatenate((X[k], U[k])) for k in range(self.nodes)] + [X[-1]])
+        return np.concatenate((np.hstack((X[:-1], U)).reshape(-1), X[-1]))
 
     def unpack(self, w: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Node states (N+1, nx) and inputs (N, nu) from w."""
@@ -184,23 +174,30 @@ class Transcript:
         if problem.structure_key != self.structure_key:
             raise ValueError("problem structure differs from the transcribed one")
         N = self.nodes
-        inf_x = np.full(self.nx, np.inf)
-        lbX = [problem.x_lb if 0 < k < N else -inf_x for k in range(N + 1)]
-        ubX = [problem.x_ub if 0 < k < N else inf_x for k in range(N + 1)]
-        lbx = self.pack(lbX, [problem.u_lb] * N)
-        ubx = self.pack(ubX, [problem.u_ub] * N)
-        lbg, ubg = [], []
-        for kind, n in self.layout:
-            if kind == "path":
-                lbg.append(problem.path_lb)
-                ubg.append(problem.path_ub)
-            else:
-                lbg.append(np.zeros(n))
-                ubg.append(np.zeros(n))
+        lbX, ubX = np.tile(problem.x_lb, (N + 1, 1)), np.tile(problem.x_ub, (N + 1, 1))
+        lbX[[0, N]], ubX[[0, N]] = -np.inf, np.inf
+        lbx = self.pack(lbX, np.tile(problem.u_lb, (N, 1)))
+        ubx = self.pack(ubX, np.tile(problem.u_ub, (N, 1)))
+        rows = self.path_index
+        path = rows >= 0
+        lbg, ubg = np.zeros(len(rows)), np.zeros(len(rows))
+        lbg[path], ubg[path] = problem.path_lb[rows[path]], problem.path_ub[rows[path]]
         return {
             "lbx": lbx,
             "ubx": ubx,
-            "lbg": np.concatenate(lbg),
-            "ubg": np.concatenate(ubg),
-            "p": np.concatenate((problem.p_value, [problem.duration], problem.x0)),
+            "lbg": lbg,
+            "ubg": ubg,
+            "p": self.parameters(problem),
         }
+
+    def parameters(self, problem: OcpProblem) -> FloatArray:
+        """The NLP parameters P = [p, T, x_init] of one problem of this structure."""
+        return np.concatenate((problem.p_value, [problem.duration], problem.x0))
+
+    @property
+    def path_index(self) -> np.ndarray:
+        """Per constraint row: its index in the path constraints g, or -1 (equalities)."""
+        if self._path_index is None:
+            blocks = [np.arange(n) if kind == "path" else np.full(n, -1) for kind, n in self.layout]
+            object.__setattr__(self, "_path_index", np.concatenate(blocks))
+        return self._path_index  # type: ignore[return-value]

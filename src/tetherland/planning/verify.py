@@ -3,21 +3,33 @@
 The trajectory is sampled densely (a :class:`ShootingTrajectory` *is* the fine
 re-simulation of the OCP's inputs, not the solver's node values) and checked against
 the maneuver: final state, rotor thrust bounds, cable tension bound (6.21d) and the
-surface (phi >= phi*).
+surface (phi >= phi*). The generic parts are :mod:`.checks`; :func:`verify_nodes` is the
+cheap check of the solver's nodes for online re-planning.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from tetherland.geometry import FloatArray
+from tetherland.planning import kernels
+from tetherland.planning.checks import (
+    CHECK_STEP,
+    CheckResult,
+    CheckScope,
+    check_times,
+    collect,
+    finite_problem,
+    floor_problem,
+    thrust_problem,
+    tolerance_problem,
+)
 from tetherland.planning.maneuver import ManeuverSpec
 from tetherland.planning.trajectory import Trajectory
 
-CHECK_STEP = 1e-3
-"""Sampling step of the checks [s] (node times are added)."""
+__all__ = ["CHECK_STEP", "Tolerances", "Verification", "verify", "verify_nodes"]
 
 
 @dataclass(frozen=True)
@@ -37,6 +49,8 @@ class Tolerances:
         Tension below the bound f_L_min(t) [N].
     surface : float
         phi below phi* [rad].
+    gap : float
+        Node check only: largest shooting gap |x_{k+1} - F(x_k, u_k)| [state units].
     """
 
     angle: float = 1e-4
@@ -44,11 +58,12 @@ class Tolerances:
     thrust: float = 1e-6
     tension: float = 1e-2
     surface: float = 1e-4
+    gap: float = 1e-6
 
 
 @dataclass(frozen=True)
-class Verification:
-    """Result of :func:`verify`.
+class Verification(CheckResult):
+    """Result of :func:`verify` (or of :func:`verify_nodes`, ``scope`` NODES).
 
     Attributes
     ----------
@@ -63,8 +78,8 @@ class Verification:
         Extreme rotor thrusts [N].
     surface_margin : float
         min over t of phi - phi* [rad].
-    problems : tuple of str
-        What is out of tolerance (empty when the trajectory is accepted).
+
+    With ``problems`` and ``scope`` of :class:`~tetherland.planning.checks.CheckResult`.
     """
 
     final_error: dict[str, float]
@@ -73,11 +88,62 @@ class Verification:
     min_rotor_thrust: float
     max_rotor_thrust: float
     surface_margin: float
-    problems: tuple[str, ...]
 
-    @property
-    def ok(self) -> bool:
-        return not self.problems
+
+def _final_error(spec: ManeuverSpec, x_end: FloatArray) -> dict[str, float]:
+    return {
+        "phi_rad": float(x_end[0] - spec.phi_final),
+        "theta_A_rad": float(x_end[1] - spec.theta_final),
+        "phi_rate": float(x_end[2]),
+        "theta_A_rate": float(x_end[3]),
+    }
+
+
+def _check(
+    spec: ManeuverSpec,
+    tol: Tolerances,
+    t: FloatArray,
+    phi: FloatArray,
+    tension: FloatArray,
+    thrust_t: FloatArray,
+    thrusts: FloatArray,
+    err: dict[str, float],
+    scope: CheckScope,
+    extra: str | None = None,
+) -> Verification:
+    """The tethered criteria: phi and tension sampled at times ``t`` (n,), rotor thrusts
+    (m, 4) at ``thrust_t`` (m,)."""
+    tension_margin, tension_issue = floor_problem(
+        "cable tension (6.21d)", tension, spec.tension_floor(t), t, tol.tension, "N"
+    )
+    surface_margin, surface_issue = floor_problem(
+        "link elevation phi", phi, spec.phi_surface, t, tol.surface, "rad"
+    )
+    problems = collect(
+        tolerance_problem(
+            "final angle error", {"phi": err["phi_rad"], "theta_A": err["theta_A_rad"]},
+            tol.angle, "rad",
+        ),
+        tolerance_problem(
+            "final rates", {"phi'": err["phi_rate"], "theta_A'": err["theta_A_rate"]},
+            tol.rate, "rad/s",
+        ),
+        thrust_problem(thrusts, thrust_t, spec.f_lo, spec.f_hi, tol.thrust),
+        tension_issue,
+        surface_issue,
+        extra,
+        finite_problem(thrusts, phi),
+    )  # fmt: skip
+    return Verification(
+        final_error=err,
+        min_tension=float(tension.min()),
+        tension_margin=tension_margin,
+        min_rotor_thrust=float(thrusts.min()),
+        max_rotor_thrust=float(thrusts.max()),
+        surface_margin=surface_margin,
+        problems=problems,
+        scope=scope,
+    )
 
 
 def verify(
@@ -85,58 +151,62 @@ def verify(
 ) -> Verification:
     """Sample ``trajectory`` every :data:`CHECK_STEP` (and at its nodes) and check it."""
     tol = tol or Tolerances()
-    T = trajectory.duration
-    times = np.linspace(0.0, T, max(2, math.ceil(T / CHECK_STEP) + 1))
-    nodes = getattr(trajectory, "times", None)
-    if nodes is not None:
-        times = np.union1d(times, nodes)
+    times = check_times(trajectory.duration, getattr(trajectory, "times", None))
     s = trajectory.sample(times)
-    end = trajectory.sample([T])
-    err = {
-        "phi_rad": float(end.phi[0, 0] - spec.phi_final),
-        "theta_A_rad": float(end.theta_A[0, 0] - spec.theta_final),
-        "phi_rate": float(end.phi[0, 1]),
-        "theta_A_rate": float(end.theta_A[0, 1]),
-    }
-    problems = []
-    if max(abs(err["phi_rad"]), abs(err["theta_A_rad"])) > tol.angle:
-        problems.append(
-            f"final angle error phi {err['phi_rad']:.2e} rad, theta_A {err['theta_A_rad']:.2e} rad "
-            f"(tolerance {tol.angle:g})"
-        )
-    if max(abs(err["phi_rate"]), abs(err["theta_A_rate"])) > tol.rate:
-        problems.append(
-            f"final rates phi' {err['phi_rate']:.2e}, theta_A' {err['theta_A_rate']:.2e} rad/s "
-            f"(tolerance {tol.rate:g})"
-        )
-    f_lo, f_hi = float(s.thrusts.min()), float(s.thrusts.max())
-    if f_lo < spec.f_lo - tol.thrust or f_hi > spec.f_hi + tol.thrust:
-        i = int(np.argmax(np.maximum(spec.f_lo - s.thrusts, s.thrusts - spec.f_hi).max(axis=1)))
-        problems.append(
-            f"rotor thrusts {f_lo:.3f}..{f_hi:.3f} N leave [{spec.f_lo:g}, {spec.f_hi:g}] N "
-            f"(f_min/f_max with the control margin) near t = {s.t[i]:.2f} s"
-        )
-    margin = s.tension - spec.tension_floor(s.t)
-    if margin.min() < -tol.tension:
-        i = int(np.argmin(margin))
-        problems.append(
-            f"cable tension {s.tension[i]:.3f} N below its bound "
-            f"{spec.tension_floor(s.t[i]):.3f} N at t = {s.t[i]:.2f} s (6.21d)"
-        )
-    surface = s.phi[:, 0] - spec.phi_surface
-    if surface.min() < -tol.surface:
-        i = int(np.argmin(surface))
-        problems.append(
-            f"link below the landing elevation phi* by {-surface[i]:.2e} rad at t = {s.t[i]:.2f} s"
-        )
-    if not np.all(np.isfinite(s.thrusts)) or not np.all(np.isfinite(s.phi)):
-        problems.append("trajectory contains NaN or infinite values")
-    return Verification(
-        final_error=err,
-        min_tension=float(s.tension.min()),
-        tension_margin=float(margin.min()),
-        min_rotor_thrust=f_lo,
-        max_rotor_thrust=f_hi,
-        surface_margin=float(surface.min()),
-        problems=tuple(problems),
+    end = trajectory.sample([trajectory.duration])
+    x_end = np.array([end.phi[0, 0], end.theta_A[0, 0], end.phi[0, 1], end.theta_A[0, 1]])
+    return _check(
+        spec, tol, s.t, s.phi[:, 0], s.tension, s.t, s.thrusts, _final_error(spec, x_end),
+        CheckScope.RESIMULATION,
+    )  # fmt: skip
+
+
+def verify_nodes(
+    spec: ManeuverSpec,
+    times: FloatArray,
+    X: FloatArray,
+    U: FloatArray,
+    steps: int,
+    tol: Tolerances | None = None,
+) -> Verification:
+    """The cheap check of a solver's nodes (online re-planning; scope NODES).
+
+    Parameters
+    ----------
+    spec : ManeuverSpec
+    times : (N+1,) array
+        Node times [s].
+    X : (N+1, 12) array
+        Rotor-form node states.
+    U : (N, 4) array
+        Rotor thrust accelerations f'' held on each interval [N/s^2].
+    steps : int
+        RK4 steps per interval of the transcription that produced the nodes.
+
+    Checks, at the nodes: the final conditions, the tension floor (6.21d) and the
+    surface; the rotor thrusts on each whole interval through the Bernstein coefficients
+    f_k, f_k + f_k' h/2, f_{k+1} of the quadratic arc (its hull bounds the arc exactly);
+    and that every shooting gap x_{k+1} - F(x_k, u_k) is closed, F being ``steps`` RK4
+    steps of the rotor-form model (6.20) (:func:`~tetherland.planning.kernels.interval_ends`,
+    apart from the OCP's own transcription, which integrates the wrench form). About
+    0.1 ms.
+    """
+    tol = tol or Tolerances()
+    X = np.ascontiguousarray(X, dtype=float)
+    U = np.ascontiguousarray(U, dtype=float)
+    h = np.diff(times)
+    ends = kernels.interval_ends(X, U, h, steps, spec.params.coefficients)
+    gap = float(np.max(np.abs(ends - X[1:])))
+    gap_issue = (
+        f"shooting gaps up to {gap:.2e} (tolerance {tol.gap:g}): the solver's nodes are not "
+        f"one motion"
+        if not gap <= tol.gap
+        else None
     )
+    f0, df0 = X[:-1, 4:8], X[:-1, 8:12]
+    arcs = np.stack((f0, f0 + 0.5 * h[:, None] * df0, X[1:, 4:8]), axis=1)  # (N, 3, 4)
+    tension = np.asarray(spec.model.derivatives(X.T)["tension"])
+    return _check(
+        spec, tol, times, X[:, 0], tension, np.repeat(times[:-1], 3), arcs.reshape(-1, 4),
+        _final_error(spec, X[-1]), CheckScope.NODES, extra=gap_issue,
+    )  # fmt: skip

@@ -5,9 +5,19 @@ The scene: a quadrotor (one rigid body with a free joint, mass and principal ine
 the centre of mass), four rotor sites with thrust actuators (force along z_B, yaw drag
 torque sigma_i c_tau per newton), the landing surface (a tilted box for a plane, a tilted
 cylinder for a pipe), a horizontal ground plane for the start pad, the anchor site, and
-the cable as a spatial tendon from the anchor to the attachment site r_att, limited to
-[0, l]. Sensors (in ``sensordata`` order, see :data:`SENSOR_LAYOUT`): IMU accelerometer
-and gyro at the centre of mass, cable limit force and length, lander touch forces and a
+the cable (docs/tether.md), by ``tether.cable_model``:
+
+- ideal: the spatial tendon ``cable`` from the anchor to the attachment site r_att,
+  limited to [0, l] (a unilateral constraint at l);
+- elastic: the same tendon without a limit, pulled by the actuator ``cable`` whose control
+  the plant sets to the unilateral spring-damper force each step;
+- chain: ``segments`` links hanging from the anchor (:func:`add_chain`) and the inactive
+  connect ``hook`` to the attachment site; the tendon stays, hidden, to measure the
+  anchor-attachment distance.
+
+Sensors (in ``sensordata`` order, see :data:`SENSOR_LAYOUT`): IMU accelerometer and gyro
+at the centre of mass, cable tension at the attachment (``tendonlimitfrc``,
+``actuatorfrc`` or a user sensor the plant writes) and length, lander touch forces and a
 touch sensor around the frame (crash detection).
 
 Names are fixed (``vehicle``, ``attachment``, ``cable``, ...): the plant, the renderer and
@@ -25,7 +35,7 @@ from types import MappingProxyType
 import numpy as np
 
 from tetherland import GRAVITY
-from tetherland.config import Scenario
+from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.models.airframe import (
     HUB_HALF_SIZE,
@@ -41,6 +51,17 @@ SURFACE_HALF_THICKNESS = 0.05
 START_CLEARANCE = 1.0
 """Default horizontal distance of the start pad beyond the foot of the surface patch [m]."""
 
+
+CABLE_GROUP_VISIBLE, CABLE_GROUP_HIDDEN = 0, 5
+"""Tendon and geom groups of the engaged (drawn) and disengaged (hidden) cable."""
+CHAIN_RADIUS = 0.002
+"""Radius of the drawn chain links (visual only: the links do not collide) [m]."""
+CHAIN_DAMPING_TIME = 0.2
+"""Time constant of the chain's joint damping on the links' own inertia [s]: air drag and
+internal friction damp a thin line's transverse vibration within about a second."""
+CHAIN_W_DT = 0.5
+"""Highest angular frequency times the time step allowed for a link's swing about its
+joint under the largest tension (the armature of :func:`chain_spec`) [-]."""
 
 SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("accelerometer", 3),
@@ -126,6 +147,156 @@ class SceneLayout:
             approach_W=approach_W,
             prop_radius=PROP_RADIUS_FRACTION * scenario.vehicle.arm_length,
         )
+
+
+@dataclass(frozen=True)
+class ChainSpec:
+    """The massive cable as a chain of rigid links with ball joints (docs/tether.md).
+
+    Attributes
+    ----------
+    segments : int
+        Number of links N.
+    link_length : float
+        l_s = l/N [m].
+    link_mass : float
+        rho l_s [kg].
+    armature : float
+        Rotor-like inertia added to each ball joint so that a link swinging about its joint
+        under the largest tension stays resolvable by the time step [kg m^2].
+    joint_damping : float
+        Viscous damping of each ball joint [N m s/rad].
+    """
+
+    segments: int
+    link_length: float
+    link_mass: float
+    armature: float
+    joint_damping: float = 0.0
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of the cable [kg]."""
+        return self.segments * self.link_mass
+
+
+def chain_armature(
+    tension_max: float, link_length: float, link_mass: float, timestep: float
+) -> float:
+    """Ball-joint armature a that keeps w dt <= :data:`CHAIN_W_DT` for every link [kg m^2].
+
+    A link of length l_s pulled straight by tension T swings about its joint with
+    w^2 = T l_s / (I + a), I = m_s l_s^2 / 3. Real 1 mm lines are so light (0.6 g/m) that
+    w dt reaches 1-2 at 1 ms and the explicit chain diverges; the armature slows these
+    swings to what the step resolves and changes nothing in statics:
+    a = max(0, T_max l_s dt^2 / (w dt)_max^2 - I).
+    """
+    inertia = link_mass * link_length**2 / 3.0
+    return max(0.0, tension_max * link_length * timestep**2 / CHAIN_W_DT**2 - inertia)
+
+
+def chain_design_tension(scenario: Scenario) -> float:
+    """Tension the chain's armature is designed for: the vehicle's full thrust plus its
+    weight [N] (the plant raises the armature above it while snap loads last)."""
+    v = scenario.vehicle
+    return 4.0 * v.f_max + v.mass * GRAVITY
+
+
+def chain_spec(scenario: Scenario) -> ChainSpec:
+    """The chain of ``scenario.tether`` (segments >= 1), its armature designed for
+    :func:`chain_design_tension`."""
+    t = scenario.tether
+    n = t.segments
+    if n < 1:
+        raise ValueError("chain_spec needs tether.segments >= 1")
+    l_s = t.length / n
+    m_s = t.mass_per_length * l_s
+    a = chain_armature(chain_design_tension(scenario), l_s, m_s, scenario.sim.timestep)
+    damping = m_s * l_s * l_s / 3.0 / CHAIN_DAMPING_TIME
+    return ChainSpec(n, l_s, m_s, a, damping)
+
+
+def hook_timeconst(scenario: Scenario) -> float:
+    """Time constant of the chain's hook connection [s]: ``sim.cable_timeconst``, or for
+    an elastic line at least 1/sqrt(k/m), so that a cable snapping taut stops the vehicle
+    no faster than the line's own spring would (snap load about v sqrt(k m))."""
+    sim, t = scenario.sim, scenario.tether
+    tau = max(sim.cable_timeconst, 2.0 * sim.timestep)  # MuJoCo's floor: two steps
+    k = t.stiffness
+    return tau if k is None else max(tau, math.sqrt(scenario.vehicle.mass / k))
+
+
+def add_chain(
+    world: ET.Element,
+    root: ET.Element,
+    p_A: FloatArray,
+    spec: ChainSpec,
+    *,
+    solref: str,
+    end_site: str = "attachment",
+) -> None:
+    """Add the chain hanging straight down from ``p_A`` and its hook connection.
+
+    Bodies ``cable_link0`` (jointed to the world at p_A) to ``cable_link{N-1}``, each a
+    ball joint at its start and its length along its local x; site ``cable_end`` at the
+    far end of the last link (the hook). Equality ``hook`` (a connect, inactive) holds
+    ``cable_end`` at ``end_site`` when the cable is engaged. The links do not collide;
+    each link's inertia about its axis equals its transverse inertia (see the body).
+    """
+    l_s, m_s = spec.link_length, spec.link_mass
+    i_t = m_s * l_s * l_s / 12.0
+    # About its own axis a link gets its transverse inertia: a line's own (m r^2/2, 1e-9
+    # of it) would make the twist of the ball joints unresolvable at any usable step.
+    i_a = i_t
+    parent = world
+    for i in range(spec.segments):
+        attrs = {"pos": _fmt(p_A), "quat": _fmt((math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0))}
+        if i > 0:
+            attrs = {"pos": _fmt((l_s, 0.0, 0.0))}
+        body = _sub(parent, "body", name=f"cable_link{i}", **attrs)
+        _sub(
+            body,
+            "joint",
+            name=f"cable_joint{i}",
+            type="ball",
+            armature=f"{spec.armature:.12g}",
+            damping=f"{spec.joint_damping:.12g}",
+        )
+        _sub(
+            body,
+            "inertial",
+            pos=_fmt((0.5 * l_s, 0.0, 0.0)),
+            mass=f"{m_s:.12g}",
+            diaginertia=_fmt((i_a, i_t, i_t)),
+        )
+        _sub(
+            body,
+            "geom",
+            name=f"cable_link{i}",
+            type="capsule",
+            fromto=_fmt((0.0, 0.0, 0.0, l_s, 0.0, 0.0)),
+            size=f"{CHAIN_RADIUS:.12g}",
+            contype="0",
+            conaffinity="0",
+            mass="0",
+            group=str(CABLE_GROUP_HIDDEN),
+            rgba=".95 .85 .2 1",
+        )
+        parent = body
+    _sub(parent, "site", name="cable_end", pos=_fmt((l_s, 0.0, 0.0)), size="0.006", group="4")
+    equality = root.find("equality")
+    if equality is None:
+        equality = _sub(root, "equality")
+    _sub(
+        equality,
+        "connect",
+        name="hook",
+        site1="cable_end",
+        site2=end_site,
+        active="false",
+        solref=solref,
+        solimp="0.99 0.999 0.001",
+    )
 
 
 def _fmt(values: FloatArray | tuple[float, ...] | list[float]) -> str:
@@ -386,17 +557,26 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             group="1",
         )
 
+    cable_model = tether.cable_model
+    if cable_model == CableModel.CHAIN:
+        add_chain(
+            world,
+            root,
+            p_A,
+            chain_spec(scenario),
+            solref=_fmt((hook_timeconst(scenario), sim.cable_dampratio)),
+        )
     tendon = _sub(root, "tendon")
-    cable = _sub(
-        tendon,
-        "spatial",
-        name="cable",
-        limited="true",
-        range=_fmt((0.0, tether.length)),
-        width="0.004",
-        rgba=".95 .85 .2 1",
-        solreflimit=_fmt((sim.cable_timeconst, sim.cable_dampratio)),
-    )
+    cable_attrs = {"width": "0.004", "rgba": ".95 .85 .2 1"}
+    if cable_model == CableModel.IDEAL:
+        cable_attrs.update(
+            limited="true",
+            range=_fmt((0.0, tether.length)),
+            solreflimit=_fmt((sim.cable_timeconst, sim.cable_dampratio)),
+        )
+    elif cable_model == CableModel.CHAIN:
+        cable_attrs["group"] = str(CABLE_GROUP_HIDDEN)  # the links are drawn instead
+    cable = _sub(tendon, "spatial", name="cable", **cable_attrs)
     _sub(cable, "site", site="anchor")
     _sub(cable, "site", site="attachment")
 
@@ -413,11 +593,19 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             gear=_fmt((0, 0, 1, 0, 0, sigma * c_tau)),
             ctrlrange=_fmt((0.0, v.f_max)),
         )
+    if cable_model == CableModel.ELASTIC:
+        # ctrl = cable tension f_L >= 0 [N], set by the plant each step; gear -1 shortens.
+        _sub(act, "general", name="cable", tendon="cable", gear="-1", ctrllimited="false")
 
     sensor = _sub(root, "sensor")
     _sub(sensor, "accelerometer", name="accelerometer", site="imu")
     _sub(sensor, "gyro", name="gyro", site="imu")
-    _sub(sensor, "tendonlimitfrc", name="cable_force", tendon="cable")
+    if cable_model == CableModel.IDEAL:
+        _sub(sensor, "tendonlimitfrc", name="cable_force", tendon="cable")
+    elif cable_model == CableModel.ELASTIC:
+        _sub(sensor, "actuatorfrc", name="cable_force", actuator="cable")
+    else:  # written by the plant from the hook connection's constraint force
+        _sub(sensor, "user", name="cable_force", dim="1", needstage="acc", datatype="real")
     _sub(sensor, "tendonpos", name="cable_length", tendon="cable")
     for i in range(4):
         _sub(sensor, "touch", name=f"lander{i}_touch", site=f"lander{i}_zone")

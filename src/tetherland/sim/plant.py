@@ -31,6 +31,7 @@ from tetherland.errors import SimulationError
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import StateEstimate
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.cable import Cable, make_cable
 from tetherland.sim.hook import Hook, HookState
 from tetherland.sim.mjcf import SENSOR_SLICES, SceneLayout, build_mjcf
 from tetherland.state import LinkState, RigidBodyState, link_state_of
@@ -40,20 +41,6 @@ _BAD_STATE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQVEL),
     int(mujoco.mjtWarning.mjWARN_BADQACC),
 )
-CABLE_GROUP_VISIBLE, CABLE_GROUP_HIDDEN = 0, 5
-"""Tendon groups of the engaged (drawn) and disengaged (hidden) cable."""
-
-
-def set_cable_visible(model: mujoco.MjModel, visible: bool) -> None:
-    """Draw the cable tendon (engaged) or hide it (disengaged); physics unaffected.
-
-    Hidden means moved to tendon group 5, which MuJoCo's renderers do not draw by default
-    (a transparent tendon would still cast a shadow).
-    """
-    cable = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "cable")
-    model.tendon_group[cable] = CABLE_GROUP_VISIBLE if visible else CABLE_GROUP_HIDDEN
-
-
 def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
     """R_WB with third column ``z_B`` and x_B the projection of ``x_hint`` orthogonal to it."""
     z = np.asarray(z_B, dtype=float)
@@ -77,9 +64,11 @@ class Plant:
     layout : SceneLayout
         Anchor, surface frame, ground and start pad positions.
     model, data : mujoco.MjModel, mujoco.MjData
-        The MuJoCo model (owned: the hook toggles ``model.tendon_limited``) and its data.
+        The MuJoCo model (owned: engaging and releasing the cable changes it) and its data.
     hook : Hook
         The hook state machine and its events.
+    cable : Cable
+        The cable model of ``scenario.tether`` (ideal, elastic or chain, docs/tether.md).
     xml : str
         The generated MJCF.
     """
@@ -91,7 +80,6 @@ class Plant:
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = mujoco.MjData(self.model)
         m = self.model
-        self._cable = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, "cable")
         self._att_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "attachment")
         self.dt = float(m.opt.timestep)
         self.steps_per_second = scenario.sim.steps_per_second
@@ -108,11 +96,13 @@ class Plant:
         self._spinning_up = True  # False once the speeds equal the command (no work to do)
         self._settle_tol = 1e-12 * self._w_max
         # Views into MjData (stable for the life of ``data``).
-        self._ctrl = self.data.ctrl
+        self._ctrl = self.data.ctrl[0:4]  # rotor thrusts (the elastic cable owns ctrl[4])
         self._p_att_view = self.data.site_xpos[self._att_site]
+        self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
         self.sensordata = self.data.sensordata
         geo = self.layout.geometry
+        self.cable: Cable = make_cable(m, self.data, scenario, geo.p_A, geo.R_WA[:, 0])
         self.hook = Hook(
             geo.p_A,
             self.layout.approach_W,
@@ -173,7 +163,7 @@ class Plant:
         """
         mujoco.mj_resetData(self.model, self.data)
         self._tick = 0
-        self.set_state(self.start_state() if state is None else state)
+        self._write_state(self.start_state() if state is None else state)
         w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
         self.command(w0)
         self._w = list(self._w_cmd)
@@ -187,16 +177,34 @@ class Plant:
         """Overwrite position, attitude and velocities (time and rotors unchanged).
 
         Kinematics and sensors are recomputed, and the hook starts tracking from the new
-        position (teleporting never counts as crossing the capture disk).
+        position (teleporting never counts as crossing the capture disk). An engaged
+        massive cable is laid out again, at rest, to the new attachment point.
         """
+        self._write_state(state)
+        self.cable.follow_vehicle()
+        self.forward()
+        self._track_hook_point()
+
+    def show_pose(self, qpos_vehicle: ArrayLike, engaged: bool) -> None:
+        """Put the vehicle at rest at ``qpos_vehicle`` = [p_W (3), q_WB (4)] with the cable
+        engaged or not, for drawing a logged pose (replay; time and rotors unchanged).
+
+        A massive cable is laid out at rest from the anchor to the attachment point.
+        """
+        d = self.data
+        d.qpos[0:7] = np.asarray(qpos_vehicle, dtype=float)
+        d.qvel[:] = 0.0
+        self._set_cable(engaged)
+        self.hook.reset(engaged)
+        self.forward()
+
+    def _write_state(self, state: RigidBodyState) -> None:
         d = self.data
         d.qpos[0:3] = state.p_W
         q = np.asarray(state.q_WB, dtype=float)
         d.qpos[3:7] = q / np.linalg.norm(q)
         d.qvel[0:3] = state.v_W
         d.qvel[3:6] = state.omega_B
-        self.forward()
-        self._track_hook_point()
 
     def state(self) -> RigidBodyState:
         """Ground truth at :attr:`time` (copies)."""
@@ -210,18 +218,19 @@ class Plant:
 
     @property
     def qpos(self) -> FloatArray:
-        """MuJoCo qpos view: [p_W (3), q_WB (4)] at :attr:`time` (do not write)."""
-        return self.data.qpos
+        """The vehicle's qpos view: [p_W (3), q_WB (4)] at :attr:`time` (do not write; a
+        massive cable's joints follow in ``data.qpos``)."""
+        return self._qpos
 
     @property
     def qvel(self) -> FloatArray:
-        """MuJoCo qvel view: [v_W (3), omega_B (3)] at :attr:`time` (do not write)."""
-        return self.data.qvel
+        """The vehicle's qvel view: [v_W (3), omega_B (3)] at :attr:`time` (do not write)."""
+        return self._qvel
 
     def forward(self) -> None:
         """Recompute kinematics, forces and sensors at the current state (no time step)."""
         self._ctrl[:] = [self._c_f * w * w for w in self._w]
-        mujoco.mj_forward(self.model, self.data)
+        self.cable.forward()
 
     def attachment_point(self) -> FloatArray:
         """Cable attachment point p_R + R_WB r_att at :attr:`time` [m]."""
@@ -234,7 +243,7 @@ class Plant:
         phi and delta as in docs/theory.md section 3 (F_A), whether the cable is taut or not.
         """
         geo = self.layout.geometry
-        x = np.concatenate((self.data.qpos, self.data.qvel))
+        x = np.concatenate((self._qpos, self._qvel))
         return link_state_of(x, self._r_att, geo.p_A, geo.R_WA)
 
     def truth_estimate(self) -> StateEstimate:
@@ -329,14 +338,12 @@ class Plant:
         self._hook_side = self.hook.side(x, y, z) >= 0.0
 
     def _set_cable(self, engaged: bool) -> None:
-        # The cable is a spatial tendon limited to [0, l]; disengaged, its limit is turned
-        # off (no constraint row, zero force) and it is not drawn.
-        self.model.tendon_limited[self._cable] = 1 if engaged else 0
-        set_cable_visible(self.model, engaged)
+        # Disengaged, the cable exerts no force and is not drawn (sim/cable.py).
+        self.cable.set_engaged(engaged)
 
     @property
     def tension(self) -> float:
-        """Cable tension f_L from ``tendonlimitfrc`` at the start of the last step [N]."""
+        """Cable tension f_L at the attachment point at the start of the last step [N]."""
         return float(self.sensordata[SENSOR_SLICES["cable_force"]][0])
 
     @property
@@ -366,7 +373,7 @@ class Plant:
         SimulationError
             If MuJoCo reports a non-finite or diverging state.
         """
-        m, d = self.model, self.data
+        advance = self.cable.advance  # mj_step with the cable force (sim/cable.py)
         ctrl = self._ctrl
         w, cmd = self._w, self._w_cmd
         c_f, a = self._c_f, self._alpha
@@ -387,7 +394,7 @@ class Plant:
                 ctrl[1] = c_f * m1 * m1
                 ctrl[2] = c_f * m2 * m2
                 ctrl[3] = c_f * m3 * m3
-            mujoco.mj_step(m, d)
+            advance()
             k = self._tick
             self._tick = k + 1
             if self._spinning_up:

@@ -25,7 +25,7 @@ from tetherland.geometry import FloatArray
 from tetherland.io import atomic_path
 from tetherland.sim.log import SimLog
 from tetherland.sim.mjcf import SceneLayout
-from tetherland.sim.plant import Plant, set_cable_visible
+from tetherland.sim.plant import Plant
 
 DEFAULT_FPS = 30
 DEFAULT_SIZE = (640, 480)
@@ -226,12 +226,7 @@ def render_log(
         )
         try:
             for i in rows:
-                plant.data.qpos[:] = qpos[i]
-                plant.data.qvel[:] = 0.0
-                engaged = bool(hook[i] == 1)
-                set_cable_visible(plant.model, engaged)
-                plant.hook.reset(engaged)
-                mujoco.mj_forward(plant.model, plant.data)
+                plant.show_pose(qpos[i], bool(hook[i] == 1))
                 writer.append_data(renderer.render())
         finally:
             writer.close()
@@ -332,9 +327,7 @@ def view_log(log: SimLog, *, scenario: Scenario | None = None, speed: float = 1.
         while viewer.is_running() and i < len(t):
             target = t[0] + (time.perf_counter() - wall0) * speed
             i = int(np.searchsorted(t, target, side="right")) - 1
-            plant.data.qpos[:] = qpos[max(i, 0)]
-            set_cable_visible(plant.model, bool(hook[max(i, 0)] == 1))
-            mujoco.mj_forward(plant.model, plant.data)
+            plant.show_pose(qpos[max(i, 0)], bool(hook[max(i, 0)] == 1))
             viewer.sync()
             time.sleep(1.0 / 60.0)
             if i >= len(t) - 1:

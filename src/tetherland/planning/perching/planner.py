@@ -12,12 +12,12 @@ fallback). Free final time: the duration T minimises J*(T) + k_time T over
 found on a coarse grid and refined by Brent's bounded search (each solve warm-started
 from the nearest one). The chosen solution is re-simulated with fine RK4 steps from the
 initial state (:meth:`FreeFlightTrajectory.simulate`) and checked (:func:`verify_perch`);
-only a trajectory that passes is handed out.
+only a trajectory that passes is handed out. Solving, fallback, refinement and the result
+record are the shared :mod:`tetherland.planning.driver`'s.
 """
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import dataclass, replace
 from typing import Any
@@ -26,8 +26,16 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import minimize_scalar
 
-from tetherland.config import Scenario
-from tetherland.errors import TetherlandError
+from tetherland.config import PerchingConfig, Scenario
+from tetherland.planning.driver import (
+    Candidate,
+    OcpDriver,
+    PlanningError,
+    PlanStatus,
+    SolvePolicy,
+    SolveSession,
+    VerifiedResult,
+)
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.perching.model import PerchSpec
 from tetherland.planning.perching.problem import build_perching_ocp
@@ -48,88 +56,43 @@ GRID = 4
 """Durations tried on the coarse grid of the free-final-time search."""
 SEARCH_TOL = 0.05
 """Absolute tolerance on the duration of the bounded scalar search [s]."""
-MAX_REFINEMENTS = 2
-"""Integrator-step halvings after a failed re-simulation check."""
 
 
-class PerchingError(TetherlandError):
+class PerchingError(PlanningError):
     """A perching plan was required but none could be made (one-line message)."""
 
 
-class PerchStatus(enum.Enum):
-    """Outcome of a perching plan request."""
-
-    SOLVED = "solved"
-    """A verified trajectory is available."""
-    INFEASIBLE = "infeasible"
-    """No trajectory meets the conditions within the limits (pre-check or solver)."""
-    MAX_ITER = "max_iter"
-    """The solver hit its iteration limit."""
-    FAILED = "failed"
-    """The solver failed, or its solution did not pass the re-simulation check."""
+PerchStatus = PlanStatus
+"""Outcome of a perching plan request: the planners' one :class:`PlanStatus`."""
 
 
-_FROM_SOLVE = {
-    SolveStatus.INFEASIBLE: PerchStatus.INFEASIBLE,
-    SolveStatus.MAX_ITER: PerchStatus.MAX_ITER,
-    SolveStatus.FAILED: PerchStatus.FAILED,
-}
-
-
-@dataclass(frozen=True)
-class PerchResult:
+@dataclass(frozen=True, kw_only=True)
+class PerchResult(VerifiedResult[FreeFlightTrajectory, PerchVerification]):
     """What :meth:`PerchingPlanner.plan` returns.
+
+    The fields of :class:`~tetherland.planning.driver.VerifiedResult` (``cost`` is
+    J*(T) of the chosen duration, without the time term; ``attempts`` holds every search
+    point, fallback and refinement) and:
 
     Attributes
     ----------
-    status : PerchStatus
-    message : str
-        Why (one line); ``"ok"`` when solved.
-    cost : float or None
-        Optimal cost J*(T) of the chosen duration (without the time term).
-    duration : float or None
-        Chosen maneuver duration t_L - t_0 [s].
-    solve_time_s : float
-        Total NLP solver wall time of this request (all solves) [s].
-    build_time_s : float
-        Solver construction time (0 when cached) [s].
-    iterations : int
-        Total solver iterations.
-    solves : int
-        NLP solves made (search points, fallbacks and refinements).
-    solver : str or None
-        Solver of the chosen solution.
-    trajectory : FreeFlightTrajectory or None
-        Present only when SOLVED.
-    verification : PerchVerification or None
-    solution : OcpSolution or None
-        Raw solver output of the chosen (or last) solve.
     spec : PerchSpec
+    duration : float or None
+        Chosen maneuver duration t_L - t_0 [s] (None when no solve was made).
     """
 
-    status: PerchStatus
-    message: str
-    cost: float | None
-    duration: float | None
-    solve_time_s: float
-    build_time_s: float
-    iterations: int
-    solves: int
-    solver: str | None
-    trajectory: FreeFlightTrajectory | None
-    verification: PerchVerification | None
-    solution: OcpSolution | None
     spec: PerchSpec
+    duration: float | None = None
+
+    error = PerchingError
 
     @property
-    def success(self) -> bool:
-        return self.status is PerchStatus.SOLVED
+    def solves(self) -> int:
+        """NLP solves made (search points, fallbacks and refinements)."""
+        return len(self.attempts)
 
-    def require(self) -> FreeFlightTrajectory:
-        """The trajectory, or :class:`PerchingError` with the reason."""
-        if self.status is not PerchStatus.SOLVED or self.trajectory is None:
-            raise PerchingError(f"perching plan {self.status.value}: {self.message}")
-        return self.trajectory
+    def _label(self) -> str:
+        return "perching plan"
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready key numbers."""
@@ -215,16 +178,82 @@ def _rescaled(sol: OcpSolution, duration: float) -> InitialGuess:
     return InitialGuess(X=X, U=sol.U * r * r)
 
 
-@dataclass(frozen=True)
-class _Point:
-    duration: float
-    solution: OcpSolution
-    transcription: MultipleShooting
-    settings: SolverSettings
+def _objective(candidate: Candidate) -> float:
+    sol = candidate.solution
+    return sol.cost if sol.success else math.inf
 
-    @property
-    def objective(self) -> float:
-        return self.solution.cost if self.solution.success else math.inf
+
+class _PerchOcp:
+    """The perching OCP of one request (fixed or free final time), for the driver."""
+
+    def __init__(
+        self, planner: PerchingPlanner, spec: PerchSpec, cfg: PerchingConfig, duration: float | None
+    ) -> None:
+        self.planner, self.spec, self.cfg, self.duration = planner, spec, cfg, duration
+        self.meta = FreeFlightMeta.from_spec(spec)
+        # One step count for every duration of the request: one compiled solver.
+        longest = cfg.max_duration if duration is None else duration
+        steps = max(1, math.ceil(longest / (cfg.nodes * cfg.integrator_step) - 1e-9))
+        self.transcription = MultipleShooting(cfg.nodes, "rk4", steps)
+
+    def candidate(self, session: SolveSession) -> Candidate:
+        if self.duration is not None:
+            return self._solve(session, self.duration, None)
+        return self._search(session, (self.cfg.min_duration, self.cfg.max_duration))
+
+    def _solve(
+        self, session: SolveSession, duration: float, guess: InitialGuess | None
+    ) -> Candidate:
+        problem = self.planner.problem(self.spec, duration)
+        guess = guess or cold_guess(self.spec, duration, self.transcription.nodes)
+        sol = session.solve(problem, self.transcription, guess)
+        return Candidate(problem, self.transcription, sol)
+
+    def _search(self, session: SolveSession, bounds: tuple[float, float]) -> Candidate:
+        """Free final time: coarse grid, then a bounded scalar search around the best point."""
+        k_time = self.spec.weights.k_time
+        points: dict[float, Candidate] = {}
+
+        def evaluate(T: float) -> float:
+            if T not in points:
+                near = [p for p in points.values() if p.solution.success]
+                guess = None
+                if near:
+                    closest = min(near, key=lambda p: abs(p.problem.duration - T))
+                    guess = _rescaled(closest.solution, T)
+                points[T] = self._solve(session, T, guess)
+            return _objective(points[T]) + k_time * T
+
+        grid = np.geomspace(bounds[0], bounds[1], GRID)[::-1]  # long (easy) first
+        values = [evaluate(float(T)) for T in grid]
+        i = int(np.argmin(values))
+        if not math.isfinite(values[i]):
+            return points[float(grid[0])]  # nothing solved: report the longest (easiest) try
+        lo = float(grid[min(i + 1, GRID - 1)])
+        hi = float(grid[max(i - 1, 0)])
+        if hi > lo:
+            minimize_scalar(
+                evaluate, bounds=(lo, hi), method="bounded", options={"xatol": SEARCH_TOL}
+            )
+        return min(points.values(), key=lambda p: _objective(p) + k_time * p.problem.duration)
+
+    def accept(self, candidate: Candidate) -> tuple[FreeFlightTrajectory, PerchVerification]:
+        sol = candidate.solution
+        traj = FreeFlightTrajectory.simulate(self.meta, sol.times, self.spec.x_start, sol.U)
+        return traj, verify_perch(traj, self.spec, self.planner.tolerances)
+
+    def failure_message(self, solution: OcpSolution) -> str:
+        spec = self.spec
+        what = (
+            f"cannot reach z_B = z_S at the landing point with rotor limits "
+            f"[{spec.f_lo:g}, {spec.f_hi:g}] N per rotor"
+        )
+        if solution.status is SolveStatus.INFEASIBLE:
+            return f"infeasible: {what} ({solution.solver}: {solution.return_status})"
+        return (
+            f"{solution.solver} found no perching trajectory ({solution.return_status} after "
+            f"{solution.iterations} iterations); possibly {what}"
+        )
 
 
 class PerchingPlanner:
@@ -240,16 +269,12 @@ class PerchingPlanner:
 
     def __init__(self, tolerances: PerchTolerances | None = None) -> None:
         self.tolerances = tolerances or PerchTolerances()
-        self._solvers: dict[tuple[MultipleShooting, SolverSettings], OcpSolver] = {}
+        self.driver = OcpDriver()
         self._template: OcpProblem | None = None
-        self._log: list[OcpSolution] = []
 
     def ocp_solver(self, transcription: MultipleShooting, settings: SolverSettings) -> OcpSolver:
         """The cached :class:`OcpSolver` for these settings."""
-        key = (transcription, settings)
-        if key not in self._solvers:
-            self._solvers[key] = OcpSolver(transcription, settings)
-        return self._solvers[key]
+        return self.driver.ocp_solver(transcription, settings)
 
     def problem(self, spec: PerchSpec, duration: float) -> OcpProblem:
         """The perching OCP of ``spec`` over ``duration`` (statement built once)."""
@@ -281,146 +306,19 @@ class PerchingPlanner:
             Overrides ``planner.solver``.
         """
         spec = PerchSpec.from_scenario(scenario, start, approach_speed)
-        cfg, pcfg = scenario.perching, scenario.planner
+        cfg = scenario.perching
         duration = cfg.duration if duration is None else duration
-        base = PerchResult(
-            status=PerchStatus.FAILED, message="", cost=None, duration=None, solve_time_s=0.0,
-            build_time_s=0.0, iterations=0, solves=0, solver=None, trajectory=None,
-            verification=None, solution=None, spec=spec,
-        )  # fmt: skip
+        base = PerchResult(status=PlanStatus.FAILED, message="", spec=spec)
         reasons = precheck(spec)
         if reasons:
-            return replace(base, status=PerchStatus.INFEASIBLE, message="; ".join(reasons))
-        order: list[SolverName] = [solver or pcfg.solver]
-        if pcfg.fallback_solver and order[0] != "ipopt":
-            order.append("ipopt")
-        self._log = []
-        result = base
-        for name in order:
-            settings = SolverSettings(name, pcfg.tolerance, pcfg.max_iter, pcfg.mu_init)
-            # One step count for every duration of the request: one compiled solver.
-            longest = cfg.max_duration if duration is None else duration
-            steps = max(1, math.ceil(longest / (cfg.nodes * cfg.integrator_step) - 1e-9))
-            transcription = MultipleShooting(cfg.nodes, "rk4", steps)
-            if duration is not None:
-                best = self._solve(spec, duration, settings, transcription, None)
-            else:
-                bounds = (cfg.min_duration, cfg.max_duration)
-                best = self._search(spec, settings, transcription, bounds)
-            result = self._finish(base, spec, best)
-            if result.success:
-                break
-        return result
-
-    # -- solving -------------------------------------------------------------------------
-    def _solve(
-        self,
-        spec: PerchSpec,
-        duration: float,
-        settings: SolverSettings,
-        transcription: MultipleShooting,
-        guess: InitialGuess | None,
-    ) -> _Point:
-        problem = self.problem(spec, duration)
-        sol = self.ocp_solver(transcription, settings).solve(
-            problem, guess or cold_guess(spec, duration, transcription.nodes)
-        )
-        self._log.append(sol)
-        return _Point(duration, sol, transcription, settings)
-
-    def _search(
-        self,
-        spec: PerchSpec,
-        settings: SolverSettings,
-        transcription: MultipleShooting,
-        bounds: tuple[float, float],
-    ) -> _Point:
-        """Free final time: coarse grid, then a bounded scalar search around the best point."""
-        k_time = spec.weights.k_time
-        points: dict[float, _Point] = {}
-
-        def evaluate(T: float) -> float:
-            if T not in points:
-                near = [p for p in points.values() if p.solution.success]
-                guess = None
-                if near:
-                    closest = min(near, key=lambda p: abs(p.duration - T))
-                    guess = _rescaled(closest.solution, T)
-                points[T] = self._solve(spec, T, settings, transcription, guess)
-            return points[T].objective + k_time * T
-
-        grid = np.geomspace(bounds[0], bounds[1], GRID)[::-1]  # long (easy) first
-        values = [evaluate(float(T)) for T in grid]
-        i = int(np.argmin(values))
-        if not math.isfinite(values[i]):
-            return points[float(grid[0])]  # nothing solved: report the longest (easiest) try
-        lo = float(grid[min(i + 1, GRID - 1)])
-        hi = float(grid[max(i - 1, 0)])
-        if hi > lo:
-            minimize_scalar(
-                evaluate, bounds=(lo, hi), method="bounded", options={"xatol": SEARCH_TOL}
-            )
-        return min(points.values(), key=lambda p: p.objective + k_time * p.duration)
-
-    def _finish(self, base: PerchResult, spec: PerchSpec, best: _Point) -> PerchResult:
-        meta = FreeFlightMeta.from_spec(spec)
-        point = best
-        for refine in range(MAX_REFINEMENTS + 1):
-            sol = point.solution
-            result = self._totals(base, point)
-            if not sol.success:
-                return replace(
-                    result,
-                    status=_FROM_SOLVE[sol.status],
-                    message=self._failure_message(spec, point),
-                )
-            traj = FreeFlightTrajectory.simulate(meta, sol.times, spec.x_start, sol.U)
-            check = verify_perch(traj, spec, self.tolerances)
-            result = replace(result, verification=check)
-            if check.ok:
-                return replace(result, status=PerchStatus.SOLVED, message="ok", trajectory=traj)
-            if refine == MAX_REFINEMENTS:
-                return replace(
-                    result,
-                    status=PerchStatus.FAILED,
-                    message="re-simulated solution fails its check: " + "; ".join(check.problems),
-                )
-            # The shooting integrator was too coarse: halve its step, warm-started.
-            steps = point.transcription.steps * 2
-            transcription = MultipleShooting(point.transcription.nodes, "rk4", steps)
-            problem = self.problem(spec, point.duration)
-            guess = InitialGuess(X=sol.X, U=sol.U)
-            new = self.ocp_solver(transcription, point.settings).solve(problem, guess)
-            self._log.append(new)
-            point = _Point(point.duration, new, transcription, point.settings)
-        raise AssertionError("unreachable")  # pragma: no cover
-
-    def _totals(self, base: PerchResult, point: _Point) -> PerchResult:
-        sol = point.solution
+            return replace(base, status=PlanStatus.INFEASIBLE, message="; ".join(reasons))
+        job = _PerchOcp(self, spec, cfg, duration)
+        outcome = self.driver.run(job, SolvePolicy.from_config(scenario.planner, solver))
+        chosen = outcome.candidate
         return replace(
-            base,
-            cost=sol.cost if sol.success else None,
-            duration=point.duration,
-            solve_time_s=sum(s.solve_time for s in self._log),
-            build_time_s=sum(s.build_time for s in self._log),
-            iterations=sum(s.iterations for s in self._log),
-            solves=len(self._log),
-            solver=sol.solver,
-            solution=sol,
-        )
-
-    def _failure_message(self, spec: PerchSpec, point: _Point) -> str:
-        sol = point.solution
-        what = (
-            f"cannot reach z_B = z_S at the landing point with rotor limits "
-            f"[{spec.f_lo:g}, {spec.f_hi:g}] N per rotor"
-        )
-        if sol.status is SolveStatus.INFEASIBLE:
-            return f"infeasible: {what} ({sol.solver}: {sol.return_status})"
-        return (
-            f"{sol.solver} found no perching trajectory ({sol.return_status} after "
-            f"{sol.iterations} iterations); possibly {what}"
-        )
+            base, **base.outcome_fields(outcome),
+            duration=None if chosen is None else chosen.problem.duration,
+        )  # fmt: skip
 
 
 def plan_perching(

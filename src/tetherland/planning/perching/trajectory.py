@@ -13,15 +13,14 @@ up to the snap and the yaw, and the nominal attitude R_WB, body rate and angular
 acceleration, total thrust, body torque and rotor thrusts with their rates. Before 0 and
 after T the end values are held with zero derivatives.
 
-CSV: ``#`` header lines (format, kind, scenario, version, a JSON ``meta`` line with the
-model constants), then one row per node: t, the 10 states and the 2 inputs (the last
-row's inputs are zero). :func:`load_free_flight_trajectory` rebuilds the same trajectory.
+CSV (:mod:`tetherland.planning.codec`): ``#`` header lines (format, kind, scenario,
+version, a JSON ``meta`` line with the model constants), then one row per node: t, the 10
+states and the 2 inputs (the last row's inputs are zero).
+:func:`load_free_flight_trajectory` rebuilds the same trajectory.
 """
 
 from __future__ import annotations
 
-import io
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +34,8 @@ from tetherland import GRAVITY, __version__
 from tetherland.errors import ConfigError
 from tetherland.geometry import FloatArray
 from tetherland.io import atomic_write_text
+from tetherland.models.integrators import rk4
+from tetherland.planning import codec
 from tetherland.planning.perching.model import (
     CASADI,
     NU,
@@ -45,12 +46,23 @@ from tetherland.planning.perching.model import (
     flat_derivatives,
     rhs,
 )
+from tetherland.planning.shooting import DENSE_STEP, HeldInputMotion, HeldInputSimulator
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = codec.FORMAT_VERSION
 KIND = "free-flight"
-DENSE_STEP = 2e-3
-"""Largest RK4 step between the nodes [s]."""
-_COLUMNS = ["t", *STATE_NAMES, "f_R_ddot", "tau_ddot"]
+SCHEMA = codec.CsvSchema(KIND, ("t", *STATE_NAMES, "f_R_ddot", "tau_ddot"))
+"""CSV columns of a :class:`FreeFlightTrajectory`: one row per node (the last row's
+inputs are zero)."""
+__all__ = [
+    "DENSE_STEP",
+    "SCHEMA",
+    "FreeFlightMeta",
+    "FreeFlightSamples",
+    "FreeFlightTrajectory",
+    "free_flight_rk4_step",
+    "free_flight_trajectory_from_csv",
+    "load_free_flight_trajectory",
+]
 
 
 @dataclass(frozen=True)
@@ -114,20 +126,11 @@ class FreeFlightMeta:
         return self.p_L + self.h_R * self.z_S
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "scenario": self.scenario, "mass": self.mass, "inertia": self.inertia,
-            "G": np.asarray(self.G).tolist(), "R_WA": np.asarray(self.R_WA).tolist(),
-            "p_L": np.asarray(self.p_L).tolist(), "beta": self.beta, "h_R": self.h_R,
-            "approach_speed": self.approach_speed, "gravity": self.gravity,
-            "version": self.version,
-        }  # fmt: skip
+        return codec.meta_to_json(self)
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> FreeFlightMeta:
-        arrays = {k: np.asarray(d[k], dtype=float) for k in ("G", "R_WA", "p_L")}
-        scalars = {k: d[k] for k in ("scenario", "mass", "inertia", "beta", "h_R",
-                                     "approach_speed", "gravity", "version")}  # fmt: skip
-        return cls(**scalars, **arrays)
+        return codec.meta_from_json(cls, d)
 
 
 @dataclass(frozen=True)
@@ -175,36 +178,32 @@ class FreeFlightSamples:
         return self.R_WB[:, :, 2]
 
 
-_STEP_CACHE: dict[str, ca.Function] = {}
+def free_flight_rk4_step() -> ca.Function:
+    """``step(x[10], u[2], h, c[3]) -> x(t + h)``: one RK4 step of the free-flight model
+    with the input held, for the constants c = [m, J_y, g]."""
+    x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", 3)
+
+    def f(z: ca.SX, v: ca.SX) -> ca.SX:
+        return rhs(z, v, c[0], c[1], c[2], CASADI)
+
+    return ca.Function("perch_rk4", [x, u, h, c], [rk4(f, x, u, h)])
 
 
-def _rk4_function() -> ca.Function:
-    """``step(x[10], u[2], h, c[3]) -> x(t + h)`` with c = [m, J_y, g]."""
-    if "step" not in _STEP_CACHE:
-        x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", 3)
-
-        def f(z: ca.SX) -> ca.SX:
-            return rhs(z, u, c[0], c[1], c[2], CASADI)
-
-        k1 = f(x)
-        k2 = f(x + 0.5 * h * k1)
-        k3 = f(x + 0.5 * h * k2)
-        k4 = f(x + h * k3)
-        x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        _STEP_CACHE["step"] = ca.Function("perch_rk4", [x, u, h, c], [x_next])
-    return _STEP_CACHE["step"]
+_SIMULATOR: list[HeldInputSimulator] = []
 
 
-def _chain(n: int, restart: int | None = None) -> ca.Function:
-    key = f"chain{n}" if restart is None else f"restart{n}x{restart}"
-    if key not in _STEP_CACHE:
-        chain = _rk4_function().mapaccum(n)
-        _STEP_CACHE[key] = chain if restart is None else chain.map(restart)
-    return _STEP_CACHE[key]
+def _simulator() -> HeldInputSimulator:
+    """The module's simulator (built on first use; its compiled chains are shared)."""
+    if not _SIMULATOR:
+        _SIMULATOR.append(HeldInputSimulator(free_flight_rk4_step()))
+    return _SIMULATOR[0]
 
 
-def _substeps(interval: float) -> int:
-    return max(1, math.ceil(interval / DENSE_STEP - 1e-9))
+def _numpy_rhs(meta: FreeFlightMeta) -> Any:
+    def f(x: FloatArray, u: FloatArray) -> FloatArray:
+        return rhs(x, u, meta.mass, meta.inertia, meta.gravity, NUMPY)  # type: ignore[no-any-return]
+
+    return f
 
 
 class FreeFlightTrajectory:
@@ -232,31 +231,21 @@ class FreeFlightTrajectory:
         X: ArrayLike,
         U: ArrayLike,
         substeps: int | None = None,
-        _table: FloatArray | None = None,
+        _motion: HeldInputMotion | None = None,
     ) -> None:
-        times = np.asarray(times, dtype=float)
-        self.meta = meta
-        self.times = times - times[0]
-        self.X = np.asarray(X, dtype=float)
-        self.U = np.asarray(U, dtype=float)
-        N = len(self.times) - 1
-        if N < 1 or self.X.shape != (N + 1, NX) or self.U.shape != (N, NU):
+        N = len(np.atleast_1d(times)) - 1
+        if N < 1 or np.shape(X) != (N + 1, NX) or np.shape(U) != (N, NU):
             raise ValueError(
                 f"need X (N+1, {NX}) and U (N, {NU}) for {N + 1} times, "
-                f"got {self.X.shape}, {self.U.shape}"
+                f"got {np.shape(X)}, {np.shape(U)}"
             )
-        if np.any(np.diff(self.times) <= 0):
-            raise ValueError("node times must increase")
-        self.duration = float(self.times[-1])
-        self._c = np.array([meta.mass, meta.inertia, meta.gravity])
-        self._sub = substeps or _substeps(float(np.max(np.diff(self.times))))
-        if _table is None:
-            h = np.repeat(np.diff(self.times) / self._sub, self._sub)[None, :]
-            ends = _chain(self._sub, N)(self.X[:-1].T, np.repeat(self.U.T, self._sub, axis=1),
-                                        h, self._c)  # fmt: skip
-            ends = np.asarray(ends).T.reshape(N, self._sub, NX)
-            _table = np.concatenate((self.X[:-1, None, :], ends[:, :-1, :]), axis=1)
-        self._table = _table
+        self.meta = meta
+        self._motion = _motion or HeldInputMotion(
+            _simulator(), [meta.mass, meta.inertia, meta.gravity], _numpy_rhs(meta),
+            times, X, U, substeps,
+        )  # fmt: skip
+        self.times, self.X, self.U = self._motion.times, self._motion.X, self._motion.U
+        self.duration = self._motion.duration
 
     @classmethod
     def simulate(
@@ -264,40 +253,16 @@ class FreeFlightTrajectory:
     ) -> FreeFlightTrajectory:
         """Integrate the model from ``x0`` with ``U`` held on each interval (RK4 steps of
         at most :data:`DENSE_STEP`) through all intervals; keep the continuous nodes."""
-        times = np.asarray(times, dtype=float)
-        U = np.asarray(U, dtype=float)
-        N = len(times) - 1
-        sub = _substeps(float(np.max(np.diff(times))))
-        h = np.repeat(np.diff(times) / sub, sub)[None, :]
-        c = np.array([meta.mass, meta.inertia, meta.gravity])
-        ends = _chain(N * sub)(np.asarray(x0, dtype=float), np.repeat(U.T, sub, axis=1), h, c)
-        ends = np.asarray(ends).T.reshape(N, sub, NX)
-        X = np.vstack((np.asarray(x0, dtype=float)[None, :], ends[:, -1, :]))
-        table = np.concatenate((X[:-1, None, :], ends[:, :-1, :]), axis=1)
-        return cls(meta, times, X, U, sub, _table=table)
+        motion = HeldInputMotion.simulate(
+            _simulator(), [meta.mass, meta.inertia, meta.gravity], _numpy_rhs(meta),
+            times, x0, U,
+        )  # fmt: skip
+        return cls(meta, motion.times, motion.X, motion.U, _motion=motion)
 
     # -- evaluation --------------------------------------------------------------------
-    def _rk4(self, x: FloatArray, u: FloatArray, h: FloatArray) -> FloatArray:
-        m, J, g = self._c
-
-        def f(z: FloatArray) -> FloatArray:
-            return rhs(z, u, m, J, g, NUMPY)
-
-        k1 = f(x)
-        k2 = f(x + 0.5 * h * k1)
-        k3 = f(x + 0.5 * h * k2)
-        k4 = f(x + h * k3)
-        return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-
     def states(self, times: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Planar states (n, 10) and inputs (n, 2) at ``times`` clipped to [0, T]."""
-        t = np.clip(np.atleast_1d(np.asarray(times, dtype=float)), 0.0, self.duration)
-        N = len(self.times) - 1
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, N - 1)
-        h_sub = (self.times[k + 1] - self.times[k]) / self._sub
-        j = np.clip(np.floor((t - self.times[k]) / h_sub).astype(int), 0, self._sub - 1)
-        u = self.U[k].T
-        x = self._rk4(self._table[k, j].T, u, t - (self.times[k] + j * h_sub))
+        x, u = self._motion.states(times)
         return x.T.copy(), u.T.copy()
 
     def sample(self, times: ArrayLike) -> FreeFlightSamples:
@@ -368,22 +333,15 @@ class FreeFlightTrajectory:
 
     # -- files -------------------------------------------------------------------------
     def to_csv(self) -> str:
-        """CSV text: header lines, column names, one row per node."""
+        """CSV text (:mod:`tetherland.planning.codec`): header lines, column names, one
+        row per node."""
         U = np.vstack((self.U, np.zeros((1, NU))))
         data = np.column_stack((self.times, self.X, U))
-        meta = {**self.meta.to_json(), "duration": self.duration, "substeps": self._sub}
-        head = [
-            "# tetherland trajectory",
-            f"# format: {FORMAT_VERSION}",
-            f"# kind: {self.kind}",
-            f"# scenario: {self.meta.scenario}",
-            "# maneuver: perching",
-            f"# version: {self.meta.version}",
-            f"# meta: {json.dumps(meta)}",
-            ",".join(_COLUMNS),
-        ]
-        body = "\n".join(",".join(format(v, ".17g") for v in row) for row in data)
-        return "\n".join(head) + "\n" + body + "\n"
+        meta = {**self.meta.to_json(), "duration": self.duration, "substeps": self._motion.sub}
+        return codec.encode(
+            SCHEMA, data, meta, scenario=self.meta.scenario, maneuver="perching",
+            version=self.meta.version,
+        )  # fmt: skip
 
     def save_csv(self, path: str | Path) -> Path:
         """Write :meth:`to_csv` to ``path`` atomically."""
@@ -392,36 +350,18 @@ class FreeFlightTrajectory:
 
 def free_flight_trajectory_from_csv(text: str) -> FreeFlightTrajectory:
     """Rebuild a trajectory from :meth:`FreeFlightTrajectory.to_csv` text."""
-    header: dict[str, str] = {}
-    lines = text.splitlines()
-    i = 0
-    while i < len(lines) and lines[i].startswith("#"):
-        key, sep, value = lines[i][1:].partition(":")
-        if sep:
-            header[key.strip()] = value.strip()
-        i += 1
-    if header.get("kind") != KIND:
-        raise ConfigError(f"trajectory CSV: kind {header.get('kind')!r} is not {KIND!r}")
-    if header.get("format") != str(FORMAT_VERSION):
-        raise ConfigError(f"trajectory CSV: unsupported format {header.get('format')!r}")
-    if i >= len(lines) or lines[i].split(",") != _COLUMNS:
-        raise ConfigError("trajectory CSV: missing or unexpected column header")
+    doc = codec.decode(text, (SCHEMA,))
     try:
-        meta_json = json.loads(header["meta"])
-        meta = FreeFlightMeta.from_json(meta_json)
-    except (KeyError, json.JSONDecodeError) as err:
-        raise ConfigError(f"trajectory CSV: bad meta header ({err})") from None
-    data = np.loadtxt(io.StringIO("\n".join(lines[i + 1 :])), delimiter=",", ndmin=2)
+        meta = FreeFlightMeta.from_json(doc.meta)
+        substeps = int(doc.meta["substeps"])
+    except KeyError as err:
+        raise ConfigError(f"trajectory CSV: bad meta header (no {err})") from None
+    data = doc.data
     return FreeFlightTrajectory(
-        meta, data[:, 0], data[:, 1 : 1 + NX], data[:-1, 1 + NX :],
-        substeps=int(meta_json["substeps"]),
-    )  # fmt: skip
+        meta, data[:, 0], data[:, 1 : 1 + NX], data[:-1, 1 + NX :], substeps=substeps
+    )
 
 
 def load_free_flight_trajectory(path: str | Path) -> FreeFlightTrajectory:
     """Read a trajectory CSV written by :meth:`FreeFlightTrajectory.save_csv`."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as err:
-        raise ConfigError(f"cannot read trajectory file '{path}': {err}") from None
-    return free_flight_trajectory_from_csv(text)
+    return free_flight_trajectory_from_csv(codec.read_text(path))

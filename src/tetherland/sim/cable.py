@@ -1,0 +1,526 @@
+"""The cable in the plant: ideal, massless elastic, or a massive chain (docs/tether.md).
+
+Each model implements :class:`Cable`: it advances MuJoCo by one step with its force
+included (:meth:`Cable.advance`), recomputes the state without stepping
+(:meth:`Cable.forward`), and engages or releases (:meth:`Cable.set_engaged`). Every model
+leaves the tension at the vehicle's attachment point in the ``cable_force`` sensor slot,
+evaluated at the start of the last step like the other sensors.
+
+- :class:`IdealCable`: the limited tendon of the chapter, a unilateral constraint at l.
+- :class:`ElasticCable`: massless, f_L = max(0, k x + c x') while taut (x = L - l > 0),
+  0 while slack, with k = EA/l and c = 2 zeta sqrt(k m). The force is computed from the
+  tendon length and velocity between ``mj_step1`` and ``mj_step2`` and applied by a
+  tendon actuator: exact at the step's start state, like every force of the
+  semi-implicit Euler step (the scenario checks sqrt(k/m) dt for stability).
+- :class:`ChainCable`: ``segments`` rigid links with ball joints from the anchor, the
+  last link's end held at the attachment point by a connect equality when engaged. The
+  elongation of the line is quasi-static (its axial modes are kHz): a Kelvin-Voigt
+  element k s + c s' = f_L, integrated implicitly with the tension of the last step,
+  lengthens the last link. Disengaged, the chain is parked hanging from the anchor,
+  inactive and hidden; engaging lays it at rest from the anchor to the attachment point,
+  in its hanging equilibrium.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import Protocol, runtime_checkable
+
+import mujoco
+import numpy as np
+from scipy.optimize import least_squares
+
+from tetherland.config import CableModel, Scenario
+from tetherland.geometry import FloatArray
+from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.mjcf import (
+    CABLE_GROUP_HIDDEN,
+    CABLE_GROUP_VISIBLE,
+    SENSOR_SLICES,
+    chain_armature,
+    chain_spec,
+    hook_timeconst,
+)
+
+_Z = np.array([0.0, 0.0, 1.0])
+ARMATURE_DECAY = 0.99
+"""Per-step decay of the tension the chain's armature is held for (0.1 s at 1 ms) [-]."""
+
+
+def set_cable_visible(model: mujoco.MjModel, visible: bool) -> None:
+    """Draw the cable (engaged) or hide it (disengaged); physics unaffected.
+
+    Hidden means moved to group 5, which MuJoCo's renderers do not draw by default (a
+    transparent element would still cast a shadow). The ideal and elastic cables are the
+    tendon ``cable``; the chain is its link geoms (its tendon stays hidden).
+    """
+    group = CABLE_GROUP_VISIBLE if visible else CABLE_GROUP_HIDDEN
+    first = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "cable_link0")
+    if first < 0:
+        cable = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "cable")
+        model.tendon_group[cable] = group
+        return
+    i = 0
+    while (g := mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"cable_link{i}")) >= 0:
+        model.geom_group[g] = group
+        i += 1
+
+
+@runtime_checkable
+class Cable(Protocol):
+    """The cable role of the plant (one implementation per :class:`CableModel`)."""
+
+    kind: CableModel
+
+    @property
+    def engaged(self) -> bool: ...
+
+    def advance(self) -> None:
+        """One physics step (``mj_step``) with the cable force included."""
+        ...
+
+    def forward(self) -> None:
+        """Recompute kinematics, forces and sensors at the current state (no step)."""
+        ...
+
+    def set_engaged(self, engaged: bool) -> None:
+        """Attach the cable to the anchor (True) or release it (False), now."""
+        ...
+
+    def follow_vehicle(self) -> None:
+        """The vehicle was moved by hand: keep the engaged cable attached to it."""
+        ...
+
+
+class IdealCable:
+    """Inextensible massless cable: the tendon ``cable`` limited to [0, l]."""
+
+    kind = CableModel.IDEAL
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        self._model = model
+        self._tendon = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "cable")
+        self._engaged = False
+        self.advance = functools.partial(mujoco.mj_step, model, data)
+        self.forward = functools.partial(mujoco.mj_forward, model, data)
+
+    @property
+    def engaged(self) -> bool:
+        return self._engaged
+
+    def set_engaged(self, engaged: bool) -> None:
+        # Disengaged, the limit is off: no constraint row, zero force.
+        self._engaged = bool(engaged)
+        self._model.tendon_limited[self._tendon] = 1 if engaged else 0
+        set_cable_visible(self._model, engaged)
+
+    def follow_vehicle(self) -> None:
+        return None
+
+
+class ElasticCable:
+    """Massless elastic cable: a unilateral spring-damper on the tendon ``cable``.
+
+    Parameters
+    ----------
+    model, data
+        The plant's MuJoCo model and data (built with ``cable_model = elastic``).
+    stiffness : float
+        k = EA/l [N/m].
+    damping : float
+        c [N s/m].
+    length : float
+        Unstretched length l [m].
+    """
+
+    kind = CableModel.ELASTIC
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        stiffness: float,
+        damping: float,
+        length: float,
+    ) -> None:
+        self._model, self._data = model, data
+        tendon = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "cable")
+        act = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, "cable")
+        if tendon < 0 or act < 0:
+            raise ValueError("the model has no elastic cable (tendon and actuator 'cable')")
+        self.k, self.c, self.length = float(stiffness), float(damping), float(length)
+        self._tendon = tendon
+        self._len = data.ten_length[tendon : tendon + 1]
+        self._vel = data.ten_velocity[tendon : tendon + 1]
+        self._ctrl = data.ctrl[act : act + 1]
+        self._engaged = False
+
+    @property
+    def engaged(self) -> bool:
+        return self._engaged
+
+    def force(self, length: float, rate: float) -> float:
+        """f_L = max(0, k x + c x') for x = length - l > 0, else 0 [N] (length [m],
+        rate [m/s])."""
+        x = length - self.length
+        if x <= 0.0:
+            return 0.0
+        f = self.k * x + self.c * rate
+        return f if f > 0.0 else 0.0
+
+    def advance(self) -> None:
+        m, d = self._model, self._data
+        mujoco.mj_step1(m, d)  # positions, velocities, tendon length and rate at t_k
+        if self._engaged:
+            x = self._len[0] - self.length
+            if x > 0.0:
+                f = self.k * x + self.c * self._vel[0]
+                self._ctrl[0] = f if f > 0.0 else 0.0
+            else:
+                self._ctrl[0] = 0.0
+        mujoco.mj_step2(m, d)  # actuation, acceleration, constraints, integration
+
+    def forward(self) -> None:
+        m, d = self._model, self._data
+        mujoco.mj_fwdPosition(m, d)
+        mujoco.mj_fwdVelocity(m, d)
+        self._ctrl[0] = self.force(self._len[0], self._vel[0]) if self._engaged else 0.0
+        mujoco.mj_forward(m, d)
+
+    def set_engaged(self, engaged: bool) -> None:
+        self._engaged = bool(engaged)
+        if not engaged:
+            self._ctrl[0] = 0.0
+        set_cable_visible(self._model, engaged)
+
+    def follow_vehicle(self) -> None:
+        return None
+
+
+class ChainCable:
+    """Massive cable: a chain of rigid links from the anchor, the hook at its end.
+
+    Parameters
+    ----------
+    model, data
+        The plant's MuJoCo model and data (built with ``cable_model = chain``); the model's
+        chain entries are adjusted (see below).
+    scenario : Scenario
+        Tether, vehicle and time step.
+    p_A : (3,) array
+        Anchor [m].
+    side_W : (3,) array
+        Horizontal direction in which a slack chain is laid out when the attachment point
+        is straight above or below the anchor (unit) [-].
+
+    Notes
+    -----
+    MuJoCo softens an equality constraint by an impedance built from the bodies' mean
+    inverse inertia at qpos0 (``body_invweight0``). For grams-light links this makes the
+    hook connection centimetres soft; the links are given the vehicle's values instead,
+    so the connection is as stiff as the ideal cable's limit (the taut connection's true
+    inverse inertia is the vehicle's: the straight chain cannot move along itself).
+    """
+
+    kind = CableModel.CHAIN
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        scenario: Scenario,
+        p_A: FloatArray,
+        side_W: FloatArray,
+    ) -> None:
+        self._model, self._data = model, data
+        t = scenario.tether
+        self.spec = chain_spec(scenario)
+        self.length = t.length
+        k = t.stiffness
+        self.k = math.inf if k is None else k
+        self.c = t.damping(scenario.vehicle.mass)
+        self.dt = scenario.sim.timestep
+        sim = scenario.sim
+        tau = hook_timeconst(scenario)
+        self._k_c = scenario.vehicle.mass / (tau * sim.cable_dampratio) ** 2
+        self._p_A = np.asarray(p_A, dtype=float)
+        self._side = np.asarray(side_W, dtype=float)
+        self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+        if model.neq != 1:
+            raise ValueError("the chain cable expects the hook connect as the only equality")
+        self._eq = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_EQUALITY, "hook")
+        self._end = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "cable_end")
+        n = self.spec.segments
+        joint, body = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_BODY
+        joints = [mujoco.mj_name2id(model, joint, f"cable_joint{i}") for i in range(n)]
+        self._qadr = [int(model.jnt_qposadr[j]) for j in joints]
+        self._vadr = [int(model.jnt_dofadr[j]) for j in joints]
+        bodies = [mujoco.mj_name2id(model, body, f"cable_link{i}") for i in range(n)]
+        vehicle = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "vehicle")
+        for b in bodies:
+            model.body_invweight0[b] = model.body_invweight0[vehicle]
+        self._slot = SENSOR_SLICES["cable_force"].start
+        self._sensordata = data.sensordata
+        self._site_x = model.site_pos[self._end : self._end + 1, 0]
+        self._engaged = False
+        self.stretch = 0.0
+        """Current elongation s of the line (quasi-static Kelvin-Voigt element) [m]."""
+        v0 = self._vadr[0]
+        self._armature = model.dof_armature[v0 : v0 + 3 * n]
+        self._link_inertia = self.spec.link_mass * self.spec.link_length**2 / 3.0
+        self._t_held = 0.0
+        self._t_set = 0.0
+        self._set_armature(0.0)
+
+
+    @property
+    def engaged(self) -> bool:
+        return self._engaged
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of the simulated cable [kg]."""
+        return self.spec.total_mass
+
+    def advance(self) -> None:
+        mujoco.mj_step(self._model, self._data)
+        if not self._engaged:
+            return
+        e = self._data.efc_force  # the connect's three rows come first (the only equality)
+        f = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+        self._sensordata[self._slot] = f
+        self._set_stretch(self._relax(self.stretch, f))
+        # armature for the tension: twice the current one, held and decaying over ~0.1 s
+        held = self._t_held * ARMATURE_DECAY
+        self._t_held = held if held > 2.0 * f else 2.0 * f
+        if not (self._t_set * 0.8 <= self._t_held <= self._t_set):
+            self._set_armature(self._t_held)
+
+    def _set_armature(self, tension: float) -> None:
+        """Armature for links pulled by ``tension`` (w dt <= CHAIN_W_DT); raising it scales
+        the links' joint rates down by (I + a_old)/(I + a_new), so that changing the
+        inertia never adds kinetic energy (lowering it keeps the rates)."""
+        spec, d = self.spec, self._data
+        a_old = self._armature[0]
+        a = chain_armature(tension, spec.link_length, spec.link_mass, self.dt)
+        if a > a_old:
+            scale = (self._link_inertia + a_old) / (self._link_inertia + a)
+            for adr in self._vadr:
+                d.qvel[adr : adr + 3] *= scale
+        self._armature[:] = a
+        self._t_set = tension
+
+    def _relax(self, s: float, tension: float) -> float:
+        """Next elongation of the Kelvin-Voigt element k s + c s' = f_L [m].
+
+        Implicit Euler over dt with the tension's response to the elongation itself:
+        moving the hook point by ds makes the connection pull back K_c ds, K_c = m/tau^2
+        (the vehicle mass held by a constraint of time constant tau), so
+        k s + c (s - s_k)/dt = f_k - K_c (s - s_k). Without the K_c term the update
+        overshoots and diverges (loop gain K_c/k > 1 for soft lines).
+        """
+        k = self.k
+        if k == math.inf:
+            return 0.0
+        b = self.c / self.dt + self._k_c
+        return (tension + b * s) / (k + b)
+
+    def _set_stretch(self, s: float) -> None:
+        self.stretch = s
+        self._site_x[0] = self.spec.link_length + s
+
+    def forward(self) -> None:
+        mujoco.mj_forward(self._model, self._data)
+        if self._engaged:
+            e = self._data.efc_force
+            self._sensordata[self._slot] = math.sqrt(e[0] ** 2 + e[1] ** 2 + e[2] ** 2)
+
+    def set_engaged(self, engaged: bool) -> None:
+        self._engaged = bool(engaged)
+        d = self._data
+        if engaged:
+            self._lay_out()
+            d.eq_active[self._eq] = 1
+        else:
+            d.eq_active[self._eq] = 0
+            self._park()
+        set_cable_visible(self._model, engaged)
+
+    def follow_vehicle(self) -> None:
+        if self._engaged:
+            self._lay_out()
+
+    # -- chain configuration --------------------------------------------------------
+
+    def attachment_point(self) -> FloatArray:
+        """Attachment point from the vehicle's qpos (valid before kinematics) [m]."""
+        q = self._data.qpos
+        return q[0:3] + quat_to_rotmat(q[3:7]) @ self._r_att
+
+    def _park(self) -> None:
+        d = self._data
+        self._t_held = 0.0
+        self._set_armature(0.0)
+        for a in self._qadr:
+            d.qpos[a : a + 4] = (1.0, 0.0, 0.0, 0.0)
+        for a in self._vadr:
+            d.qvel[a : a + 3] = 0.0
+        self._set_stretch(0.0)
+
+    def _lay_out(self) -> None:
+        """Lay the chain at rest from p_A to the attachment point: straight when the
+        distance D >= l (the excess is the initial stretch of an elastic line), else
+        hanging in its discrete catenary (:func:`chain_nodes`)."""
+        nodes, stretch = chain_nodes(
+            self._p_A, self.attachment_point(), self.length, self.spec.segments, self._side
+        )
+        if self.k == math.inf:
+            stretch = 0.0
+        quats = joint_quaternions(nodes)
+        d = self._data
+        for a, q in zip(self._qadr, quats, strict=True):
+            d.qpos[a : a + 4] = q
+        for a in self._vadr:
+            d.qvel[a : a + 3] = 0.0
+        self._set_stretch(stretch)
+
+
+# -- chain geometry (plain numpy: runs at hook events only) ------------------------------
+
+
+def hanging_chain_angles(
+    n: int, span: float, rise: float, link_length: float
+) -> FloatArray | None:
+    """Upward slopes theta_i of n uniform rigid links hanging at rest between two points
+    ``span`` apart horizontally and ``rise`` apart vertically [rad], i = 0 from the first;
+    None when no such shape exists (ends nearly on one vertical: the rest shape folds back).
+
+    Each link lies along the mean force on it (its weight at its middle):
+    tan(theta_i) = ((i + 1/2) w - V_0)/H, V_0 the first support's vertical force and H
+    the horizontal tension (w = 1: the shape does not depend on the weight), found from
+    sum l_s cos(theta_i) = span and sum l_s sin(theta_i) = rise: the exact discrete
+    catenary, for sqrt(span^2 + rise^2) < n l_s.
+    """
+    mid = np.arange(n) + 0.5
+
+    def angles(x: FloatArray) -> FloatArray:
+        return np.arctan2(mid - x[1], math.exp(x[0]))
+
+    def residual(x: FloatArray) -> FloatArray:
+        th = angles(x)
+        return np.array([np.cos(th).sum() - span / link_length,
+                         np.sin(th).sum() - rise / link_length])  # fmt: skip
+
+    starts = [(math.log(h), f * n) for h in (1e-2, 1.0, 1e2) for f in (0.25, 0.5, 0.75)]
+    best = min(starts, key=lambda x: float(np.sum(residual(np.array(x)) ** 2)))
+    sol = least_squares(residual, best, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=500)
+    if float(np.max(np.abs(sol.fun))) > 1e-9:
+        return None
+    return angles(sol.x)
+
+
+def chain_nodes(
+    p_A: FloatArray, p_B: FloatArray, length: float, segments: int, side_W: FloatArray
+) -> tuple[FloatArray, float]:
+    """Joint positions of a chain of ``segments`` equal links from ``p_A`` to ``p_B``.
+
+    Returns the (segments + 1, 3) nodes and the excess distance max(0, D - l) that the
+    straight chain leaves to ``p_B``. A slack chain (D < l) hangs at rest in its exact
+    discrete catenary (:func:`hanging_chain_angles`) in the vertical plane through both
+    ends. With the ends nearly on one vertical, where that shape folds back, it is laid
+    as a V instead: its corner at node N // 2, as low as the two straight legs allow, out
+    along ``side_W`` (the chain then swings into its rest shape).
+    """
+    p_A, p_B = np.asarray(p_A, dtype=float), np.asarray(p_B, dtype=float)
+    n = int(segments)
+    l_s = length / n
+    chord = p_B - p_A
+    D = float(np.linalg.norm(chord))
+    if D >= length:
+        return p_A + np.outer(np.arange(n + 1) * l_s, chord / D), D - length
+    rise = float(chord[2])
+    horizontal = chord - rise * _Z
+    span = float(np.linalg.norm(horizontal))
+    side = np.asarray(side_W, dtype=float)
+    theta = hanging_chain_angles(n, span, rise, l_s) if span > 1e-9 * length else None
+    if theta is not None:
+        e_h = horizontal / span
+        steps = l_s * (np.outer(np.cos(theta), e_h) + np.outer(np.sin(theta), _Z))
+        return p_A + np.vstack((np.zeros(3), np.cumsum(steps, axis=0))), 0.0
+    e = chord / D if D > 1e-9 else side
+    j = n // 2
+    a, b = j * l_s, (n - j) * l_s
+    # corner on the circle |c - p_A| = a, |c - p_B| = b (empty only if D < b - a = l_s:
+    # odd N with the ends closer than a link; then the last leg falls short of p_B)
+    x = (a * a - b * b + D * D) / (2.0 * D) if D > 1e-9 else 0.0
+    x = min(max(x, -a), a)
+    rho = math.sqrt(max(a * a - x * x, 0.0))
+    down = -_Z + (_Z @ e) * e
+    if float(np.linalg.norm(down)) < 1e-9:  # vertical chord: lay the V out along side_W
+        down = side - (side @ e) * e
+    w = down / np.linalg.norm(down)
+    corner = p_A + x * e + rho * w
+    nodes = np.empty((n + 1, 3))
+    for i in range(j + 1):
+        nodes[i] = p_A + (i / j) * (corner - p_A) if j > 0 else p_A
+    for i in range(j, n + 1):
+        nodes[i] = corner + ((i - j) / (n - j)) * (p_B - corner)
+    return nodes, 0.0
+
+
+def _min_rotation(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Smallest rotation taking unit vector ``a`` to unit vector ``b``."""
+    v = np.cross(a, b)
+    c = float(a @ b)
+    s = float(np.linalg.norm(v))
+    if s < 1e-12:
+        if c > 0.0:
+            return np.eye(3)
+        helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        axis = np.cross(a, helper)
+        axis /= np.linalg.norm(axis)
+        return 2.0 * np.outer(axis, axis) - np.eye(3)
+    k = v / s
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + s * K + (1.0 - c) * K @ K
+
+
+_R_PARK = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+"""World rotation of the first link's body frame at qpos0: local x along -z_W."""
+
+
+def joint_quaternions(nodes: FloatArray) -> list[FloatArray]:
+    """Ball-joint quaternions (w, x, y, z) that put the chain's joints at ``nodes``.
+
+    Each link's x axis runs from its node to the next; the frames are carried from the
+    parked chain (hanging along -z_W) by the smallest rotations, so no link twists.
+    """
+    dirs = np.diff(nodes, axis=0)
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    quats = []
+    W_prev, u_prev = _R_PARK, -_Z  # the first joint's parent frame: the body's fixed frame
+    for u in dirs:
+        W = _min_rotation(u_prev, u) @ W_prev
+        quats.append(rotmat_to_quat(W_prev.T @ W))  # children: parent frame = previous link
+        W_prev, u_prev = W, u
+    return quats
+
+
+def make_cable(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    scenario: Scenario,
+    p_A: FloatArray,
+    side_W: FloatArray,
+) -> Cable:
+    """The :class:`Cable` implementation of ``scenario.tether.cable_model``."""
+    t = scenario.tether
+    kind = t.cable_model
+    if kind == CableModel.IDEAL:
+        return IdealCable(model, data)
+    if kind == CableModel.ELASTIC:
+        k = t.stiffness
+        assert k is not None
+        return ElasticCable(model, data, k, t.damping(scenario.vehicle.mass), t.length)
+    return ChainCable(model, data, scenario, p_A, side_W)
