@@ -28,18 +28,21 @@ from tetherland.sim.runner import Runner
 from tetherland.sim.sensors import Imu, Mocap
 
 BEFORE_COMMIT = "d57bf1a"
-BEFORE_RTF = {"hierarchical": 11.6, "dfl": 10.9}
-"""Median real-time factor on slope50 at commit d57bf1a (3 seeds)."""
+BEFORE_RTF = {"hierarchical": 8.4, "dfl": 8.1}
+"""Median real-time factor on slope50 at commit d57bf1a (3 seeds, this script). The machine
+is shared: its speed varies by 25 % and more between sessions (d57bf1a measured 11.7x in a
+quieter one), so compare runs made back to back."""
 BEFORE_TICK_US = {
-    "estimator (IMU predict, estimate, mocap update)": 67.0,
-    "controller (incl. allocation)": 52.0,
-    "supervisor (reference)": 19.6,
-    "plant (2 MuJoCo steps, rotors, hook)": 17.6,
-    "sensors (2 IMU samples, mocap)": 7.9,
-    "log row": 9.6,
-    "runner (scheduling, the rest)": 16.4,
+    "estimator (IMU predict, estimate, mocap update)": 84.2,
+    "controller (incl. allocation)": 61.9,
+    "supervisor (reference)": 23.7,
+    "plant (2 MuJoCo steps, rotors, hook)": 21.0,
+    "sensors (2 IMU samples, mocap)": 6.5,
+    "log row": 9.4,
+    "runner (scheduling, the rest)": 15.9,
 }
-"""Wall time per control tick at commit d57bf1a, hierarchical controller, seed 0 [us]."""
+"""Wall time per control tick at commit d57bf1a, hierarchical controller, seed 0, measured
+with this script right before the after-numbers of the README [us]."""
 TARGET_RTF = {"hierarchical": 20.0, "dfl": 15.0}
 
 ROLES = (
