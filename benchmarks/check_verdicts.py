@@ -11,7 +11,8 @@ Run: .venv/bin/python benchmarks/check_verdicts.py --out /tmp/verdicts.jsonl
 
 ``verdicts_d57bf1a.jsonl`` is the record of commit d57bf1a (before the compiled loop of
 issue 13), ``verdicts_27d15a3.jsonl`` that of main 27d15a3 (elastic cable, new planner; the
-last main merged before the compiled loop went in). About 2 minutes at 20x real time (20 missions of 60-80 s).
+last main merged before the compiled loop went in). About 2 minutes at 20x real time
+(20 missions of 60-80 s).
 """
 
 from __future__ import annotations
