@@ -124,6 +124,10 @@ def test_runs_are_deterministic_for_a_seed_and_round_trip(scenario, tmp_path):
     assert loaded.status is RunStatus.COMPLETED
     raw = np.load(path)
     assert raw["hook"].dtype == np.int64 and raw["p_W"].shape == (len(a), 3)
+    # deflated on request: smaller, same content
+    small = a.save(tmp_path / "run_compressed.npz", compress=True)
+    assert small.stat().st_size < path.stat().st_size
+    assert np.array_equal(SimLog.load(small).matrix, a.matrix, equal_nan=True)
 
 
 def test_truth_estimator_and_log_agree_with_the_plant():

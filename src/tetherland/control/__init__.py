@@ -2,10 +2,10 @@
 Gamma_HC^b and dynamic-feedback-linearising Gamma_DFL^b, and bumpless switching."""
 
 from tetherland.control.attitude import AttitudeController, AttitudeGains, attitude_error
-from tetherland.control.common import Mixer
 from tetherland.control.dfl import DflController
 from tetherland.control.free_flight import FreeFlightController
 from tetherland.control.hierarchical import HierarchicalController
+from tetherland.control.mixer import Mixer
 from tetherland.control.position import PositionController, PositionReference, WrenchCommand
 from tetherland.control.switching import SwitchingController, SwitchRecord, make_tethered_controller
 

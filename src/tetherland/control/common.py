@@ -1,4 +1,4 @@
-"""Pieces shared by the controllers: attitude parametrisation of y^b, cable torque, mixer.
+"""Pieces shared by the controllers: attitude parametrisation of y^b and the cable torque.
 
 The tethered output y^b = [phi, delta, theta_A, psi] uses the attitude parametrisation
 of :mod:`tetherland.models.flatness`: R_AB = R_y(theta_e) R_x(roll) R_z(psi), where
@@ -8,19 +8,11 @@ theta_e and roll are the two angles of z_B and psi the rotation about z_B.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from types import MappingProxyType
 
 import numpy as np
 
-from tetherland.config import VehicleConfig
 from tetherland.geometry import FloatArray
-from tetherland.interfaces import Command
-from tetherland.models.quadrotor import RotorLayout, RotorModel, Saturation
 from tetherland.rotations import cross3
-
-_EMPTY: Mapping[str, float] = MappingProxyType({})
-_SATURATION_LEVEL = {s: i for i, s in enumerate(Saturation)}  # 0 none ... 3 thrust clipped
 
 
 def rot_x(a: float) -> FloatArray:
@@ -58,34 +50,3 @@ def cable_torque(r_att_B: FloatArray, tension: float, d_B: FloatArray) -> FloatA
     """tau_L = r_att x (-f_L d_B): torque of the cable about the centre of mass, F_B [N m]
     (section 6.6.5); d_B is the unit link direction (anchor -> robot) in F_B."""
     return cross3(r_att_B, -tension * d_B)
-
-
-class Mixer:
-    """Wrench -> rotor thrusts (allocation with saturation) -> rotor speed commands.
-
-    Saturation keeps total thrust and roll/pitch torque before yaw
-    (:meth:`RotorLayout.allocate`). Optional per-rotor thrust rates feed the motor-lag
-    compensation of :meth:`RotorModel.speed_command`.
-    """
-
-    def __init__(self, vehicle: VehicleConfig):
-        self.layout = RotorLayout.from_config(vehicle)
-        self.rotors = RotorModel.from_config(vehicle)
-
-    def command(
-        self,
-        thrust: float,
-        torque_B: FloatArray,
-        diagnostics: Mapping[str, float] = _EMPTY,
-        thrust_rates: FloatArray | None = None,
-    ) -> Command:
-        alloc = self.layout.allocate(np.array([thrust, torque_B[0], torque_B[1], torque_B[2]]))
-        speeds = self.rotors.speed_command(alloc.thrusts, thrust_rates)
-        diag = dict(diagnostics)
-        diag["saturation"] = float(_SATURATION_LEVEL[alloc.saturation])
-        return Command(
-            rotor_speeds=speeds,
-            thrust=float(alloc.wrench[0]),
-            torque_B=np.asarray(alloc.wrench[1:4], dtype=float),
-            diagnostics=diag,
-        )

@@ -6,18 +6,24 @@ Approach, hooking, cable stretching, unhooking and return (chapter 6.6.2) use it
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from tetherland.config import Scenario
-from tetherland.control.common import Mixer
-from tetherland.control.position import PositionController, PositionReference
+from tetherland.control import kernels
+from tetherland.control.mixer import Mixer, command_from
+from tetherland.control.position import PositionController
+from tetherland.errors import SingularityError
 from tetherland.interfaces import Command, Reference, StateEstimate
-
-_ZERO3 = np.zeros(3)
 
 
 class FreeFlightController:
     """Geometric position + SO(3) attitude control (Lee et al. 2010) to rotor speeds.
+
+    The update is one compiled call, :func:`tetherland.control.kernels.free_flight_into`
+    (plain reference: ``free_flight_reference``, the equations of
+    :class:`PositionController`, :class:`AttitudeController` and :class:`Mixer`).
 
     Parameters
     ----------
@@ -34,7 +40,14 @@ class FreeFlightController:
             min_thrust=4.0 * v.f_min,
         )
         self.mixer = Mixer(v)
+        self._par = kernels.pack_free_flight(self.position)
         self._t_last: float | None = None
+        # load the compiled law now (numba's cache, once per process): scratch arrays
+        z3 = np.zeros(3)
+        kernels.free_flight_into(
+            z3, z3, np.array([1.0, 0.0, 0.0, 0.0]), z3, np.zeros((3, 3)), 0.0, math.nan,
+            np.zeros(3), self._par, self.mixer.packed, np.empty(kernels.FF_OUT_WIDTH),
+        )  # fmt: skip
 
     def reset(self) -> None:
         """Clear the position integral (the controller is taking over)."""
@@ -46,20 +59,22 @@ class FreeFlightController:
         P = reference.p_W
         if P is None:
             raise ValueError("the free-flight controller needs reference.p_W")
-        ref = PositionReference(
-            p_W=P[0],
-            v_W=P[1] if P.shape[0] > 1 else _ZERO3,
-            a_W=P[2] if P.shape[0] > 2 else _ZERO3,
-            yaw=reference.yaw,
-        )
-        dt = None if self._t_last is None else t - self._t_last
+        dt = math.nan if self._t_last is None else t - self._t_last
         self._t_last = t
-        w = self.position.update(estimate.body, ref, dt)
-        e = estimate.body.p_W - ref.p_W
+        body = estimate.body
+        out = np.empty(kernels.FF_OUT_WIDTH)
+        kernels.free_flight_into(
+            body.p_W, body.v_W, body.q_WB, body.omega_B, P, float(reference.yaw), dt,
+            self.position.integral, self._par, self.mixer.packed, out,
+        )  # fmt: skip
+        if out[kernels.FF_SINGULAR]:
+            raise SingularityError("thrust axis is aligned with the desired heading: yaw undefined")
+        e_x, e_y, e_z = out[kernels.FF_E_X].tolist()
         diag = {
-            "e_x": float(e[0]),
-            "e_y": float(e[1]),
-            "e_z": float(e[2]),
-            "tilt_limited": float(w.limited),
+            "e_x": e_x,
+            "e_y": e_y,
+            "e_z": e_z,
+            "tilt_limited": float(out[kernels.FF_LIMITED]),
+            "saturation": float(out[kernels.OUT_SATURATION]),
         }
-        return self.mixer.command(w.thrust, w.torque_B, diag)
+        return command_from(out, diag)

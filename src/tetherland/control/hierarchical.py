@@ -31,20 +31,21 @@ import numpy as np
 
 from tetherland import GRAVITY
 from tetherland.config import Scenario
+from tetherland.control import kernels
 from tetherland.control.attitude import AttitudeController, AttitudeGains
-from tetherland.control.common import Mixer, attitude_from_thrust_axis, cable_torque, heading_of
-from tetherland.geometry import LandingGeometry, link_frame, theta_A_from_z_B
+from tetherland.control.mixer import Mixer, command_from
+from tetherland.errors import SingularityError
+from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, Reference, StateEstimate
-from tetherland.models.tethered import COS_DELTA_MIN
 
-U_Z_MIN_FRACTION = 0.02
-"""u_z below this fraction of m g counts as singular (the thrust must push across the link)."""
-COS_SUM_MIN = 0.02
-"""|cos(phi + theta_A,d)| below this is singular (thrust axis along the link)."""
+_ZERO3 = np.zeros(3)
 
 
 class HierarchicalController:
     """Gamma_HC^b: link-angle outer loop, SO(3) attitude inner loop (implements Controller).
+
+    The update is one compiled call, :func:`tetherland.control.kernels.hierarchical_into`
+    (plain reference with the equations of the module docstring: ``hierarchical_reference``).
 
     Parameters
     ----------
@@ -68,18 +69,25 @@ class HierarchicalController:
         self.k_d = 2.0 * zeta * wn
         self.k_i = gains.link_integral
         self.integral_max = gains.link_integral_max
-        self._integral = np.zeros(2)  # integral of the (phi, delta) errors [rad s]
-        self._t_last: float | None = None
         self.attitude = AttitudeController(v.inertia, AttitudeGains.from_config(gains))
         self.mixer = Mixer(v)
-        self._last_R_d: np.ndarray | None = None
-        self._last_F: float = self.mass * self.g
+        self._par = kernels.pack_hierarchical(self)
+        # integral of the (phi, delta) errors [rad s], last update time, last regular
+        # thrust and attitude (held through singularities)
+        self._state = kernels.hierarchical_state(self.mass, self.g)
+        # load the compiled law now (numba's cache, once per process), not at the first
+        # tethered tick of a mission: a call on scratch arrays
+        kernels.hierarchical_into(
+            0.0, np.array([0.5, 0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3),
+            np.zeros((5, 4)), np.zeros(3), np.zeros(3), True, 0.0, self._state.copy(),
+            self._par, self.mixer.packed, np.empty(kernels.HC_OUT_WIDTH),
+        )  # fmt: skip
 
     def reset(self) -> None:
         """Forget the last regular attitude and the link integral (on activation)."""
-        self._last_R_d = None
-        self._integral[:] = 0.0
-        self._t_last = None
+        last_thrust = self._state[3]
+        self._state[:] = kernels.hierarchical_state(self.mass, self.g)
+        self._state[3] = last_thrust
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         """Rotor commands tracking ``reference.output`` (rows y_d, y_d', y_d'', ...)."""
@@ -87,61 +95,29 @@ class HierarchicalController:
         Y = reference.output
         if link is None or Y is None:
             raise ValueError("the tethered controller needs estimate.link and reference.output")
-        phi, delta, dphi, ddelta = link.phi, link.delta, link.phi_dot, link.delta_dot
-        yd = Y[0]
-        yd1 = Y[1] if Y.shape[0] > 1 else np.zeros(4)
-        yd2 = Y[2] if Y.shape[0] > 2 else np.zeros(4)
-        m, l, g = self.mass, self.length, self.g
-        if self._t_last is not None and self.k_i > 0.0:
-            bound = self.integral_max / self.k_i
-            dt = t - self._t_last
-            self._integral[0] = min(max(self._integral[0] + (yd[0] - phi) * dt, -bound), bound)
-            self._integral[1] = min(max(self._integral[1] + (yd[1] - delta) * dt, -bound), bound)
-        self._t_last = t
-        i_phi, i_delta = self.k_i * self._integral
-        v_phi = yd2[0] + self.k_d * (yd1[0] - dphi) + self.k_p * (yd[0] - phi) + i_phi
-        v_delta = yd2[1] + self.k_d * (yd1[1] - ddelta) + self.k_p * (yd[1] - delta) + i_delta
-        cp, sp, cd, sd = math.cos(phi), math.sin(phi), math.cos(delta), math.sin(delta)
-        u_z = m * l * (cd * v_phi - 2.0 * sd * dphi * ddelta) + m * g * cp
-        u_y = m * g * sp * sd - m * l * (v_delta + 0.5 * math.sin(2.0 * delta) * dphi * dphi)
-        cos_sum = math.cos(phi + yd[2])
-        margin = min(abs(cd) / 0.1, u_z / (U_Z_MIN_FRACTION * m * g), abs(cos_sum) / COS_SUM_MIN)
-        R = estimate.body.R_WB
-        singular = (
-            abs(cd) < COS_DELTA_MIN or u_z < U_Z_MIN_FRACTION * m * g or abs(cos_sum) < COS_SUM_MIN
-        )
-        if not singular:
-            u_x = u_z * math.tan(phi + yd[2]) / cd
-            R_AL = link_frame(phi, delta)
-            F_A = R_AL @ np.array([u_x, u_y, u_z])
-            F_norm = float(np.linalg.norm(F_A))
-            singular = F_norm < 1e-6 * m * g
-        if singular:
-            R_d = self._last_R_d if self._last_R_d is not None else R
-            f_R = self._last_F
-        else:
-            R_d = self.R_WA @ attitude_from_thrust_axis(F_A / F_norm, yd[3])
-            f_R = float((self.R_WA @ F_A) @ R[:, 2])
-            self._last_R_d, self._last_F = R_d, f_R
         ff = reference.feedforward
-        if ff is not None:
-            tau = self.attitude.torque(R, estimate.body.omega_B, R_d, ff.omega_B, ff.omega_dot_B)
-        else:
-            tau = self.attitude.torque(R, estimate.body.omega_B, R_d)
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
-        if self.compensate_offset and tension > 0.0:
-            d_B = R.T @ (self.R_WA @ link_frame(phi, delta)[:, 0])
-            tau = tau - cable_torque(self.r_att_B, tension, d_B)
-        z_B_A = self.R_WA.T @ R[:, 2]
-        theta_A = theta_A_from_z_B(z_B_A, phi, delta)
-        psi = heading_of(self.R_WA.T @ R)
+        body = estimate.body
+        out = np.empty(kernels.HC_OUT_WIDTH)
+        kernels.hierarchical_into(
+            t, np.array((link.phi, link.delta, link.phi_dot, link.delta_dot)), body.q_WB,
+            body.omega_B, Y, _ZERO3 if ff is None else ff.omega_B,
+            _ZERO3 if ff is None else ff.omega_dot_B, ff is not None, float(tension),
+            self._state, self._par, self.mixer.packed, out,
+        )  # fmt: skip
+        if out[kernels.HC_THETA_UNDEFINED]:
+            raise SingularityError(
+                "thrust axis is perpendicular to the link plane: theta_A undefined"
+            )
+        e_phi, e_delta, e_theta, e_psi = out[kernels.HC_ERRORS].tolist()
         diag = {
-            "e_phi": yd[0] - phi,
-            "e_delta": yd[1] - delta,
-            "e_theta_A": yd[2] - theta_A,
-            "e_psi": math.remainder(yd[3] - psi, 2.0 * math.pi),
-            "singular": float(singular),
-            "singularity_margin": margin,
+            "e_phi": e_phi,
+            "e_delta": e_delta,
+            "e_theta_A": e_theta,
+            "e_psi": e_psi,
+            "singular": float(out[kernels.HC_SINGULAR]),
+            "singularity_margin": float(out[kernels.HC_MARGIN]),
             "ff_tension": ff.tension if ff is not None else math.nan,
+            "saturation": float(out[kernels.OUT_SATURATION]),
         }
-        return self.mixer.command(max(f_R, 0.0), tau, diag)
+        return command_from(out, diag)

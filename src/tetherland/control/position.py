@@ -129,6 +129,12 @@ class PositionController:
         self._integral[:] = 0.0
 
     @property
+    def integral(self) -> FloatArray:
+        """Integral of the position error [m s] (the live array: compiled controllers
+        update it in place)."""
+        return self._integral
+
+    @property
     def integral_force(self) -> FloatArray:
         """Current integral force -m k_i int(e) in F_W [N]."""
         return -self.mass * self.k_i * self._integral

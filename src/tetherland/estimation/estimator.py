@@ -2,12 +2,14 @@
 
 Implements :class:`tetherland.interfaces.Estimator` and ``CommandAware``. IMU samples are
 buffered by :meth:`UkfEstimator.predict` and integrated together (every sample, one
-unscented transform, :meth:`Ukf.predict_many`) when an estimate or a motion-capture
-update needs them, i.e. at the control rate. The cable tension is estimated from the
-rotors' actual thrust (commanded speeds through the motor lag) and the bias-corrected
-specific force, projected on the estimated link direction. With an elastic cable the
-link state is that of the stretched cable (direction and rates from the actual distance,
-not l) and :meth:`UkfEstimator.cable` reports the estimated stretch.
+unscented transform, one compiled call: :meth:`Ukf.predict_rows`) when an estimate or a
+motion-capture update needs them, i.e. at the control rate. The cable tension is
+estimated from the rotors' actual thrust (commanded speeds through the motor lag) and the
+bias-corrected specific force, projected on the estimated link direction; the link state
+and the tension of an estimate come from one compiled call as well
+(:func:`tetherland.estimation.kernels.estimate_into`). With an elastic cable the link
+state is that of the stretched cable (direction and rates from the actual distance, not
+l) and :meth:`UkfEstimator.cable` reports the estimated stretch.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
+from tetherland.estimation import kernels
 from tetherland.estimation.tension import (
     CableEstimate,
     MotorLagThrust,
@@ -27,10 +30,10 @@ from tetherland.estimation.tension import (
     tension_filter_time_constant,
 )
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
-from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, ImuSample, MocapSample, StateEstimate
 from tetherland.rotations import quat_to_rotmat
-from tetherland.state import LinkState, RigidBodyState, link_kernel
+from tetherland.state import LinkState, RigidBodyState
 
 _BUFFER = 16
 """IMU samples buffered at most between two integrations."""
@@ -80,8 +83,8 @@ class UkfEstimator:
             imu_rate_hz=scenario.sensors.imu.rate_hz,
         )
         geo = LandingGeometry.from_scenario(scenario)
-        self._p_A, self._R_WA = geo.p_A, geo.R_WA
-        self._r_att = np.asarray(v.cable_attachment, dtype=float)
+        self._p_A, self._r_att = geo.p_A, np.asarray(v.cable_attachment, dtype=float)
+        self._geo = kernels.pack_geometry(self._r_att, geo.p_A, geo.R_WA)
         self._length, self._stiffness = scenario.tether.length, scenario.tether.stiffness
         if tension_time_constant is None:
             tension_time_constant = tension_filter_time_constant(self._stiffness, v.mass)
@@ -94,17 +97,18 @@ class UkfEstimator:
         w0 = np.zeros(4) if rotor_speeds0 is None else np.asarray(rotor_speeds0, dtype=float)
         self.motors = MotorLagThrust(v.thrust_coefficient, v.motor_time_constant, w0)
         self._motor_t = t0
-        self._w_cmd = w0.copy()
-        self._buf_t = np.empty(_BUFFER)
-        self._buf_f = np.empty((_BUFFER, 3))
-        self._buf_w = np.empty((_BUFFER, 3))
+        self._w_cmd = [float(w) for w in w0]
+        self._buf = np.empty((_BUFFER, 7))  # rows [t, f_B (3), omega_B (3)]
         self._n = 0
-        self._f_mean = np.array([0.0, 0.0, 9.81])
         self.dropouts = 0
         """Invalid (dropped) motion-capture samples received."""
         self.last_nis = math.nan
         """Normalised innovation squared of the last fused pose (chi-square, 6 dof)."""
         self._cached: StateEstimate | None = None
+        # load the compiled outputs now (numba's cache, once per process)
+        kernels.estimate_into(
+            self.ukf.x_view, self.ukf.imu_view, 0.0, self.mass, self._geo, np.empty(kernels.WIDTH)
+        )
         self.last_tension: TensionEstimate | None = None
         """Raw and filtered tension and the taut rule, as of the last estimate."""
 
@@ -115,11 +119,11 @@ class UkfEstimator:
             return  # a sample at the estimate's own time spans no interval
         if self._n == _BUFFER:
             self._flush()
-        n = self._n
-        self._buf_t[n] = imu.t
-        self._buf_f[n] = imu.specific_force_B
-        self._buf_w[n] = imu.omega_B
-        self._n = n + 1
+        row = self._buf[self._n]
+        row[0] = imu.t
+        row[1:4] = imu.specific_force_B
+        row[4:7] = imu.omega_B
+        self._n += 1
         self._cached = None
 
     def update(self, mocap: MocapSample) -> None:
@@ -137,25 +141,22 @@ class UkfEstimator:
             return self._cached
         self._flush()
         ukf = self.ukf
-        x = ukf.x
         t = ukf.t
-        p_W, v_W, q_WB, b_g, b_a = x[0:3], x[3:6], x[6:10], x[10:13], x[13:16]
-        omega = ukf.omega_B
-        lk, d_B = link_kernel(
-            np.concatenate((p_W, q_WB, v_W, omega)), self._r_att, self._p_A, self._R_WA
+        out = np.empty(kernels.WIDTH)  # fresh: the record's arrays are views into it
+        kernels.estimate_into(
+            ukf.x_view, ukf.imu_view, self._thrust_at(t), self.mass, self._geo, out
         )
-        link = LinkState(float(lk[0]), float(lk[1]), float(lk[2]), float(lk[3]))
+        phi, delta, phi_dot, delta_dot = out[kernels.LINK].tolist()
         # tension: thrust (motor lag) and the specific force projected on the link
-        thrust = float(np.sum(self._thrust_at(t)))
-        tension = self.tension.update(t, thrust, self._f_mean - b_a, d_B if d_B.any() else None)
+        tension = self.tension.filter(t, float(out[kernels.TENSION]))
         self.last_tension = tension
         self._cached = StateEstimate(
             t=t,
-            body=RigidBodyState(p_W, v_W, q_WB, omega),
-            gyro_bias_B=b_g,
-            accel_bias_B=b_a,
+            body=RigidBodyState(out[0:3], out[3:6], out[6:10], out[10:13]),
+            gyro_bias_B=out[kernels.GYRO_BIAS],
+            accel_bias_B=out[kernels.ACCEL_BIAS],
             covariance=ukf.covariance,
-            link=link,
+            link=LinkState(phi, delta, phi_dot, delta_dot),
             tension=tension.filtered,
         )
         return self._cached
@@ -174,21 +175,20 @@ class UkfEstimator:
     def command_sent(self, t: float, command: Command) -> None:
         """The rotors are commanded ``command.rotor_speeds`` from time ``t`` on."""
         self._thrust_at(t)
-        self._w_cmd = np.asarray(command.rotor_speeds, dtype=float).copy()
+        self._w_cmd = np.asarray(command.rotor_speeds, dtype=float).tolist()
 
     # ------------------------------------------------------------------ helpers
-    def _thrust_at(self, t: float) -> FloatArray:
+    def _thrust_at(self, t: float) -> float:
+        """Total actual thrust at ``t`` (the motor lag advanced to ``t``) [N]."""
         dt = t - self._motor_t
         if dt > 0.0:
-            f = self.motors.step(self._w_cmd, dt)
             self._motor_t = t
-            return f
-        return self.motors.c_f * self.motors.w * self.motors.w
+            return self.motors.advance(self._w_cmd, dt)
+        return self.motors.total_thrust
 
     def _flush(self) -> None:
         n = self._n
         if n == 0:
             return
-        self.ukf.predict_many(self._buf_t[:n], self._buf_f[:n], self._buf_w[:n])
-        self._f_mean = self._buf_f[:n].mean(axis=0) if n > 1 else self._buf_f[0].copy()
+        self.ukf.predict_rows(self._buf, n)
         self._n = 0

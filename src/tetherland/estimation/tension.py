@@ -159,6 +159,7 @@ class TensionEstimator:
         """Forget the filter state and the dwell timer."""
         self._t: float | None = None
         self._filtered = 0.0
+        self._dt, self._a = math.nan, 0.0
         self.rule.reset()
 
     def update(
@@ -169,13 +170,19 @@ class TensionEstimator:
         d_B: ArrayLike | None = None,
     ) -> TensionEstimate:
         """Add one sample at time ``t`` [s]; see :func:`tension_from_forces` for the inputs."""
-        raw = tension_from_forces(thrust, specific_force_B, self.mass, d_B)
+        return self.filter(t, tension_from_forces(thrust, specific_force_B, self.mass, d_B))
+
+    def filter(self, t: float, raw: float) -> TensionEstimate:
+        """Add one instantaneous estimate ``raw`` [N] at time ``t`` [s] (first-order
+        low-pass, exact for a sample held over the interval) and apply the taut rule."""
         if self._t is None or self.time_constant == 0.0:
             self._filtered = raw
         else:
-            dt = max(t - self._t, 0.0)
-            a = 1.0 - math.exp(-dt / self.time_constant)
-            self._filtered += a * (raw - self._filtered)
+            dt = t - self._t
+            if dt != self._dt:  # the (usually constant) interval: its factor once
+                self._dt = dt
+                self._a = 1.0 - math.exp(-max(dt, 0.0) / self.time_constant)
+            self._filtered += self._a * (raw - self._filtered)
         self._t = t
         return TensionEstimate(raw, self._filtered, self.rule.update(t, self._filtered))
 
@@ -191,22 +198,45 @@ class MotorLagThrust:
     w' = (w_cmd - w)/tau_m, f_i = c_f w_i^2; the same model the plant uses. Unlike
     :class:`tetherland.models.RotorModel` (the controllers' model, which limits commands
     to [w_min, w_max]) a zero command here means motors off, as on the real ESCs.
+    Four rotors, kept as plain floats (it runs twice per control tick).
     """
 
     def __init__(self, thrust_coefficient: float, time_constant: float, w0: ArrayLike):
         self.c_f = thrust_coefficient
         self.tau = time_constant
-        self.w: FloatArray = np.asarray(w0, dtype=float).copy()
+        self._w = [float(v) for v in np.asarray(w0, dtype=float).reshape(4)]
         self._dt = -1.0
         self._decay = 0.0
 
+    @property
+    def w(self) -> FloatArray:
+        """Current rotor speeds [rad/s] (copy)."""
+        return np.array(self._w)
+
+    @property
+    def total_thrust(self) -> float:
+        """f_R = sum c_f w_i^2 at the current speeds [N]."""
+        w0, w1, w2, w3 = self._w
+        return self.c_f * (w0 * w0 + w1 * w1 + w2 * w2 + w3 * w3)
+
     def step(self, w_cmd: ArrayLike, dt: float) -> FloatArray:
         """Advance by ``dt`` [s] with the commands held; return rotor thrusts [N]."""
-        w_cmd = np.asarray(w_cmd, dtype=float)
+        self.advance([float(v) for v in np.asarray(w_cmd, dtype=float).reshape(4)], dt)
+        return self.c_f * np.square(self._w)
+
+    def advance(self, w_cmd: list[float], dt: float) -> float:
+        """:meth:`step` on four floats; returns the total thrust [N] (the hot path).
+
+        w(t + dt) = w_cmd + (w - w_cmd) exp(-dt/tau_m) (exact for a held command).
+        """
         if self.tau <= 0.0:
-            self.w = w_cmd.copy()
+            self._w = list(w_cmd)
         else:
             if dt != self._dt:  # the decay for the (usually constant) step, computed once
                 self._dt, self._decay = dt, math.exp(-dt / self.tau)
-            self.w = w_cmd + (self.w - w_cmd) * self._decay
-        return self.c_f * self.w * self.w
+            a = self._decay
+            w = self._w
+            c0, c1, c2, c3 = w_cmd
+            self._w = [c0 + (w[0] - c0) * a, c1 + (w[1] - c1) * a, c2 + (w[2] - c2) * a,
+                       c3 + (w[3] - c3) * a]  # fmt: skip
+        return self.total_thrust

@@ -25,7 +25,6 @@ instead of re-propagating every IMU sample since the measurement.
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -148,11 +147,12 @@ class Ukf:
         wm[0] = lam / (n + lam)
         wc[0] = lam / (n + lam) + (1.0 - alpha * alpha + beta)
         self._wm, self._wc = wm, wc
-        self._R_diag = np.array([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
-        self._noise = np.array(
+        R_diag = np.array([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
+        process = np.array(
             [noise.accel_noise, noise.gyro_noise, noise.gyro_bias_walk, noise.accel_bias_walk,
              _NOISE_FLOOR]
         )  # fmt: skip
+        self._par = kernels.pack_params(self._gamma, process, R_diag)
         q0 = np.asarray(x0.q_WB, dtype=float)
         self._x = np.concatenate((x0.p_W, x0.v_W, q0 / np.linalg.norm(q0), x0.b_g, x0.b_a)).astype(
             float
@@ -160,33 +160,63 @@ class Ukf:
         self._P = np.array(P0, dtype=float)
         if self._P.shape != (n, n):
             raise ValueError(f"P0 must be {n}x{n}, got {self._P.shape}")
-        self._t = float(t0)
-        # mean-only history for delayed measurements: (t, p_W, q_WB)
-        self._hist: deque[tuple[float, FloatArray, FloatArray]] = deque(
-            maxlen=max(2, int(history * imu_rate_hz) + 2)
-        )
-        self._hist.append((self._t, self._x[0:3].copy(), self._x[6:10].copy()))
+        # [t, f_B and omega_B of the last IMU sample, mean f_B of the last prediction]
+        self._imu = np.concatenate(([float(t0)], -_G_W, np.zeros(3), -_G_W))
+        # mean-only history for delayed measurements: ring of rows [t, p_W, q_WB]
+        self._hist = np.zeros((max(2, int(history * imu_rate_hz) + 2), kernels.HIST_WIDTH))
+        self._ring = np.zeros(2, dtype=np.int64)  # [head, count]
+        self._hist[0, 0] = t0
+        self._hist[0, 1:4], self._hist[0, 4:8] = self._x[0:3], self._x[6:10]
+        self._ring[1] = 1
         self.rejected_late = 0
         """Motion-capture samples older than the history (not fused)."""
-        self._last_omega = np.zeros(3)
-        self._last_f = -_G_W.copy()
+        self._load_kernels()
+
+    def _load_kernels(self) -> None:
+        """Load the compiled prediction and update now (numba's cache, once per process)
+        rather than inside the first control ticks: calls on scratch copies."""
+        x, P, clock = self._x.copy(), self._P.copy(), self._imu.copy()
+        hist, ring = self._hist.copy(), self._ring.copy()
+        row = np.zeros((1, 7))
+        row[0, 0], row[0, 3] = clock[0] + 1e-3, 9.81
+        kernels.predict_into(x, P, clock, row, 1, self._wm, self._wc, self._par, hist, ring)
+        kernels.update_pose_into(
+            x, P, float(clock[0]), x[0:3].copy(), x[6:10].copy(), self._wm, self._wc, self._par,
+            hist, ring,
+        )  # fmt: skip
 
     # ---------------------------------------------------------------- accessors
     @property
     def t(self) -> float:
         """Time of the current estimate [s]."""
-        return self._t
+        return float(self._imu[0])
 
     @property
     def covariance(self) -> FloatArray:
-        """Error covariance (15x15) in the order [p, v, theta_B, b_g, b_a]."""
-        return self._P
+        """Error covariance (15x15) in the order [p, v, theta_B, b_g, b_a] (a copy)."""
+        return self._P.copy()
 
     @property
     def x(self) -> FloatArray:
-        """The state vector [p_W, v_W, q_WB, b_g, b_a] (16,); replaced, never mutated, by
-        each step, so a reference to it stays valid."""
+        """The state vector [p_W, v_W, q_WB, b_g, b_a] (16,) (a copy)."""
+        return self._x.copy()
+
+    @property
+    def x_view(self) -> FloatArray:
+        """The live state vector (updated in place by every step: read, never keep or write)."""
         return self._x
+
+    @property
+    def imu_view(self) -> FloatArray:
+        """The live IMU record [t, f_B (3) and omega_B (3) of the last sample, mean f_B over
+        the samples of the last prediction (3)] (measured, not bias-corrected) [s, m/s^2,
+        rad/s]; updated in place by every prediction: read, never keep or write."""
+        return self._imu
+
+    @property
+    def mean_specific_force_B(self) -> FloatArray:
+        """Mean measured specific force over the samples of the last prediction [m/s^2]."""
+        return self._imu[7:10].copy()
 
     @property
     def state(self) -> NavState:
@@ -198,12 +228,12 @@ class Ukf:
     @property
     def omega_B(self) -> FloatArray:
         """Bias-corrected angular rate of the last IMU sample [rad/s]."""
-        return self._last_omega - self._x[10:13]
+        return self._imu[4:7] - self._x[10:13]
 
     @property
     def specific_force_B(self) -> FloatArray:
         """Bias-corrected specific force of the last IMU sample [m/s^2]."""
-        return self._last_f - self._x[13:16]
+        return self._imu[1:4] - self._x[13:16]
 
     # ---------------------------------------------------------------- public steps
     def predict(self, t: float, f_B: ArrayLike, omega_B: ArrayLike) -> None:
@@ -211,11 +241,13 @@ class Ukf:
 
         All 31 sigma points are propagated through the sample (unscented transform).
         """
-        self.predict_many(
-            np.array([t], dtype=float),
-            np.asarray(f_B, dtype=float)[None, :],
-            np.asarray(omega_B, dtype=float)[None, :],
-        )
+        if not t > self.t:
+            raise ValueError(f"IMU times must increase beyond t = {self.t}: got {t}")
+        row = np.empty((1, 7))
+        row[0, 0] = t
+        row[0, 1:4] = f_B
+        row[0, 4:7] = omega_B
+        self.predict_rows(row, 1)
 
     def predict_many(self, ts: ArrayLike, f_B: ArrayLike, omega_B: ArrayLike) -> None:
         """Integrate several IMU samples in one unscented transform.
@@ -224,21 +256,22 @@ class Ukf:
         times ``ts``), then mean and covariance are formed once; the process noise of each
         sample is added. Identical to :meth:`predict` for one sample.
         """
-        ts = np.ascontiguousarray(ts, dtype=float)
-        fs = np.ascontiguousarray(f_B, dtype=float)
-        ws = np.ascontiguousarray(omega_B, dtype=float)
-        if ts[0] <= self._t or (ts.shape[0] > 1 and not np.all(ts[1:] > ts[:-1])):
-            raise ValueError(f"IMU times must increase beyond t = {self._t}: got {ts}")
-        x, P, hist_p, hist_q = kernels.predict(
-            self._x, self._P, self._t, ts, fs, ws, self._wm, self._wc, self._gamma, self._noise
-        )
-        hist = self._hist
-        for j in range(ts.shape[0] - 1):
-            hist.append((float(ts[j]), hist_p[j], hist_q[j]))
-        self._x, self._P = x, P
-        self._t = float(ts[-1])
-        self._last_f, self._last_omega = fs[-1].copy(), ws[-1].copy()
-        hist.append((self._t, x[0:3].copy(), x[6:10].copy()))
+        ts = np.asarray(ts, dtype=float).reshape(-1)
+        if ts[0] <= self.t or (ts.shape[0] > 1 and not np.all(ts[1:] > ts[:-1])):
+            raise ValueError(f"IMU times must increase beyond t = {self.t}: got {ts}")
+        imu = np.column_stack((ts, np.asarray(f_B, dtype=float), np.asarray(omega_B, float)))
+        self.predict_rows(imu, ts.shape[0])
+
+    def predict_rows(self, imu: FloatArray, n: int) -> None:
+        """:meth:`predict_many` on packed rows ``imu[:n]`` = [t, f_B (3), omega_B (3)].
+
+        The hot path of :class:`~tetherland.estimation.UkfEstimator`: the caller
+        guarantees C-contiguous float rows with times increasing beyond :attr:`t`.
+        """
+        kernels.predict_into(
+            self._x, self._P, self._imu, imu, n, self._wm, self._wc, self._par, self._hist,
+            self._ring,
+        )  # fmt: skip
 
     def update_pose(self, t_meas: float, p_W: ArrayLike, q_WB: ArrayLike) -> float:
         """Fuse a motion-capture pose measured at ``t_meas`` (possibly in the past).
@@ -251,19 +284,14 @@ class Ukf:
             The normalised innovation squared (chi-square with 6 dof when consistent);
             NaN if the measurement was older than the history and was not fused.
         """
-        hist = self._hist
-        if t_meas < hist[0][0] - 1e-9:
+        nis = kernels.update_pose_into(
+            self._x, self._P, float(t_meas),
+            np.ascontiguousarray(p_W, dtype=float), np.ascontiguousarray(q_WB, dtype=float),
+            self._wm, self._wc, self._par, self._hist, self._ring,
+        )  # fmt: skip
+        if nis == kernels.REJECTED:
             self.rejected_late += 1
             return math.nan
-        k = len(hist) - 1
-        while k > 0 and hist[k][0] > t_meas + 1e-9:
-            k -= 1
-        _, p_then, q_then = hist[k]
-        self._x, self._P, nis = kernels.update_pose(
-            self._x, self._P, p_then, q_then,
-            np.asarray(p_W, dtype=float), np.asarray(q_WB, dtype=float),
-            self._wm, self._wc, self._gamma, self._R_diag,
-        )  # fmt: skip
         return nis
 
     def error(self, truth: NavState) -> FloatArray:

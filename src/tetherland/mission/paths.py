@@ -66,6 +66,11 @@ class Path:
         self.speed = speed
         self.accel = accel
         self.segments: list[Segment] = []
+        # per segment, for sample(): p1 - p0, and the held rows of a pause (read-only)
+        self._delta: list[FloatArray] = []
+        self._rest: list[FloatArray | None] = []
+        self._cursor = 0
+        self._start_rows = _rest_rows(self.start)
 
     @property
     def end(self) -> FloatArray:
@@ -80,21 +85,50 @@ class Path:
         p = np.asarray(p, dtype=float)
         d = float(np.linalg.norm(p - self.end))
         T = segment_duration(d, speed or self.speed, self.accel)
-        self.segments.append(Segment(self.t_end, T, self.end.copy(), p.copy()))
+        self._append(Segment(self.t_end, T, self.end.copy(), p.copy()))
         if pause > 0.0:
-            self.segments.append(Segment(self.t_end, pause, p.copy(), p.copy()))
+            self._append(Segment(self.t_end, pause, p.copy(), p.copy()))
         return self
 
+    def _append(self, seg: Segment) -> None:
+        self.segments.append(seg)
+        delta = seg.p1 - seg.p0
+        self._delta.append(delta)
+        self._rest.append(_rest_rows(seg.p1) if not delta.any() else None)
+
     def sample(self, t: float) -> FloatArray:
-        """Rows (p, v, a) at time ``t`` [m, m/s, m/s^2]; held at the ends."""
-        if not self.segments or t <= self.t0:
-            return np.vstack((self.start, np.zeros((2, 3))))
-        seg = self.segments[-1]
-        for s in self.segments:
-            if t < s.t_end:
-                seg = s
-                break
+        """Rows (p, v, a) at time ``t`` [m, m/s, m/s^2]; held at the ends.
+
+        Called every control tick with increasing ``t``: the segment search resumes where
+        the last call found its segment; a pause returns its (read-only) held rows.
+        """
+        segs = self.segments
+        if not segs or t <= self.t0:
+            return self._start_rows
+        i = self._cursor if t >= segs[self._cursor].t0 else 0
+        last = len(segs) - 1
+        while i < last and t >= segs[i].t_end:
+            i += 1
+        self._cursor = i
+        rest = self._rest[i]
+        if rest is not None:
+            return rest
+        seg = segs[i]
+        if t >= seg.t_end:  # past the end of the path: held at its end
+            return _rest_rows(seg.p1)
         T = seg.duration
         s0, s1, s2 = smoothstep9_scalar((t - seg.t0) / T, 2)
-        delta = seg.p1 - seg.p0
-        return np.vstack((seg.p0 + s0 * delta, (s1 / T) * delta, (s2 / (T * T)) * delta))
+        delta = self._delta[i]
+        rows = np.empty((3, 3))
+        rows[0] = seg.p0 + s0 * delta
+        rows[1] = (s1 / T) * delta
+        rows[2] = (s2 / (T * T)) * delta
+        return rows
+
+
+def _rest_rows(p: FloatArray) -> FloatArray:
+    """Rows (p, 0, 0), read-only: shared by every tick that holds ``p``."""
+    rows = np.zeros((3, 3))
+    rows[0] = p
+    rows.setflags(write=False)
+    return rows

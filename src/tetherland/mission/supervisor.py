@@ -233,7 +233,7 @@ class MissionSupervisor:
 
     def _check_faults(self, t: float, est: StateEstimate, ref: Reference) -> None:
         body = est.body
-        if not math.isfinite(float(body.p_W.sum() + body.q_WB.sum())):
+        if not math.isfinite(sum(body.p_W.tolist()) + sum(body.q_WB.tolist())):
             self.abort(t, est, "fault: the state estimate is not finite")
             return
         active = self.phase == Phase.TETHERED_LANDING or (

@@ -27,11 +27,24 @@ _S_LISTS = [list(c[::-1]) for c in _S_DERIVATIVES]  # highest power first, for H
 
 
 def smoothstep9_scalar(tau: float, order: int = 4) -> list[float]:
-    """:func:`smoothstep9` for one scalar ``tau`` (plain floats, for the control loop)."""
+    """:func:`smoothstep9` for one scalar ``tau`` (plain floats, for the control loop).
+
+    The first four are the closed forms of s = 126 u^5 - 420 u^6 + 540 u^7 - 315 u^8 +
+    70 u^9 with v = 1 - u, w = 1 - 2u: ds = 630 u^4 v^4, d2s = 2520 u^3 v^3 w,
+    d3s = 2520 u^2 v^2 (3 w^2 - 2 u v); higher derivatives by Horner's rule.
+    """
     if tau <= 0.0 or tau >= 1.0:
         return [0.0 if tau <= 0.0 else 1.0] + [0.0] * order
-    out = []
-    for k in range(order + 1):
+    u = tau
+    v = 1.0 - u
+    w = 1.0 - 2.0 * u
+    uv = u * v
+    u2v2 = uv * uv
+    s = u**5 * (126.0 + u * (-420.0 + u * (540.0 + u * (-315.0 + 70.0 * u))))
+    out = [s, 630.0 * u2v2 * u2v2, 2520.0 * u2v2 * uv * w, 2520.0 * u2v2 * (3.0 * w * w - 2.0 * uv)]
+    if order < 4:
+        return out[: order + 1]
+    for k in range(4, order + 1):
         acc = 0.0
         for c in _S_LISTS[k]:
             acc = acc * tau + c

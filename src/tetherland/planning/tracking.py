@@ -2,7 +2,8 @@
 
 Sampling a :class:`~tetherland.planning.trajectory.Trajectory` and its flatness map costs
 about 1 ms per call, too much at 500 Hz; :class:`TrajectoryTrack` evaluates everything once,
-vectorised, on the control grid, so that :meth:`TrajectoryTrack.reference` is an index lookup.
+vectorised, on the control grid, so that :meth:`TrajectoryTrack.reference` is an index lookup
+(the feed-forward records of the grid points are built once, on first use).
 """
 
 from __future__ import annotations
@@ -63,13 +64,18 @@ class TrajectoryTrack:
             t0=self.t0,
             dt=dt,
             outputs=outputs,
-            omega_B=nominal["omega_B"],
-            omega_dot_B=nominal["omega_dot_B"],
+            # C-contiguous rows: the compiled controllers take them as they are
+            omega_B=np.ascontiguousarray(nominal["omega_B"], dtype=float),
+            omega_dot_B=np.ascontiguousarray(nominal["omega_dot_B"], dtype=float),
             f_R=np.column_stack((nominal["f_R"], nominal["f_R_dot"], nominal["f_R_ddot"])),
             tension=nominal["tension"],
             rotor_thrusts=s.thrusts,
             rotor_rates=s.thrust_rates,
         )
+        self._t_end = self.t0 + trajectory.duration
+        self._last = n - 1
+        self._ff: list[Feedforward | None] = [None] * n
+        self._held: dict[int, tuple[FloatArray, Feedforward]] = {}
 
     @property
     def duration(self) -> float:
@@ -83,25 +89,39 @@ class TrajectoryTrack:
     def index(self, t: float) -> int:
         """Grid index of time ``t`` (clamped to the grid)."""
         k = round((t - self.t0) / self.samples.dt)
-        return min(max(k, 0), self.samples.outputs.shape[0] - 1)
+        return min(max(k, 0), self._last)
 
     def reference(self, t: float, mode: ControlMode = ControlMode.TETHERED) -> Reference:
         """The reference at mission time ``t`` (end values held after the end)."""
-        s = self.samples
-        k = self.index(t)
-        after = t > self.t_end
-        out = s.outputs[k]
-        if after:
-            out = out.copy()
-            out[1:] = 0.0
-        ff = Feedforward(
-            omega_B=s.omega_B[k] * (not after),
-            omega_dot_B=s.omega_dot_B[k] * (not after),
-            f_R=float(s.f_R[k, 0]),
-            f_R_dot=0.0 if after else float(s.f_R[k, 1]),
-            f_R_ddot=0.0 if after else float(s.f_R[k, 2]),
-            tension=float(s.tension[k]),
-        )
+        k = round((t - self.t0) / self.samples.dt)
+        k = min(max(k, 0), self._last)
+        if t > self._t_end:
+            out, ff = self._held.get(k) or self._hold(k)
+        else:
+            out = self.samples.outputs[k]
+            ff = self._ff[k] or self._feedforward(k)
         return Reference(
             t=t, mode=mode, phase=self.phase, output=out, thrust_ff=ff.f_R, feedforward=ff
         )
+
+    def _feedforward(self, k: int) -> Feedforward:
+        s = self.samples
+        f_R, f_R_dot, f_R_ddot = s.f_R[k].tolist()
+        ff = Feedforward(
+            omega_B=s.omega_B[k], omega_dot_B=s.omega_dot_B[k], f_R=f_R, f_R_dot=f_R_dot,
+            f_R_ddot=f_R_ddot, tension=float(s.tension[k]),
+        )  # fmt: skip
+        self._ff[k] = ff
+        return ff
+
+    def _hold(self, k: int) -> tuple[FloatArray, Feedforward]:
+        """Output and feed-forward held after the end: the values at k, no derivatives."""
+        s = self.samples
+        out = s.outputs[k].copy()
+        out[1:] = 0.0
+        ff = Feedforward(
+            omega_B=np.zeros(3), omega_dot_B=np.zeros(3), f_R=float(s.f_R[k, 0]),
+            tension=float(s.tension[k]),
+        )  # fmt: skip
+        self._held[k] = (out, ff)
+        return out, ff

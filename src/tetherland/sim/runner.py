@@ -53,8 +53,6 @@ _NAN3 = np.full(3, np.nan)
 _NAN3.setflags(write=False)
 _NAN4 = np.full(4, np.nan)
 _NAN4.setflags(write=False)
-_NAN7 = np.full(7, np.nan)
-_NAN7.setflags(write=False)
 
 Observer = Callable[[float, Plant], None]
 """Called at every control tick after the command, with (t_k, plant); e.g. a video recorder."""
@@ -317,9 +315,11 @@ class Runner:
         imu_truth = sd[0:6]
         sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["frame_touch"].stop]
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
-        rotor_buf, bias_buf, scalars = np.zeros(8), np.zeros(6), np.zeros(9)
-        imu_y = np.full(6, np.nan)
-        mocap_pq = _NAN7.copy()
+        rotor_buf, scalars = np.zeros(8), np.zeros(9)
+        # the measurement columns, contiguous in the row: last IMU sample, its true biases,
+        # last delivered mocap pose
+        meas = np.full(19, np.nan)
+        imu_y, bias_buf, mocap_pq = meas[0:6], meas[6:12], meas[12:19]
         mocap_t, mocap_valid = math.nan, math.nan
         queue: deque[tuple[int, MocapSample]] = deque()
         j_mocap, next_mocap = 0, 0
@@ -349,25 +349,32 @@ class Runner:
         for observer in observers:
             if isinstance(observer, BoundObserver):
                 observer.bind(self, writer)
-        row_buffers = (snap, sd[0:3], sd_rest, rotor_buf, imu_y, bias_buf, mocap_pq)
+        hook = plant.hook
+        # the row's parts, in schema order: fixed buffers refilled in place every tick and
+        # slots for the estimate, reference and command (see _write_row)
+        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, meas,
+                                   *([_NAN3] * 11)]  # fmt: skip
+        diag_buf = np.empty(len(diag_keys))
+        if diag_keys:
+            parts.append(diag_buf)
+        nans = [math.nan] * len(diag_keys)
         wall0 = time.perf_counter()
         try:
             for k in range(n_ticks):
-                t_k = k * dt
                 control_tick = k % n_ctrl == 0
                 if control_tick or k == next_mocap:
                     snap[0:7] = qpos
                     snap[7:13] = qvel
-                    self._t_snap = t_k
+                    self._t_snap = k * dt
                     if control_tick:
                         rotor_state_into(rotor_buf)
                 step()
                 if k % imu_every == 0:
-                    sample = imu_sample(t_k, imu_truth)
+                    sample = imu_sample(k * dt, imu_truth)
                     predict(sample)
                 if k == next_mocap:
                     t_del = k + lat
-                    queue.append((t_del, mocap_measure(t_k, snap[0:3], snap[3:7], t_del * dt)))
+                    queue.append((t_del, mocap_measure(k * dt, snap[0:3], snap[3:7], t_del * dt)))
                     j_mocap += 1
                     next_mocap = mocap_tick(j_mocap)
                 if queue and queue[0][0] <= k:
@@ -379,6 +386,7 @@ class Runner:
                     mocap_pq[3:7] = m.q_WB
                 if not control_tick:
                     continue
+                t_k = k * dt
                 est = estimate()
                 ref = get_reference(t_k, est)
                 cmd = (yield ControlTick(t_k, est, ref)) if external else control(t_k, est, ref)
@@ -388,10 +396,11 @@ class Runner:
                 imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
                 imu_y[3:6] = sample.omega_B
                 bias_into(bias_buf)
+                if diag_keys:
+                    diag_buf[:] = list(map(cmd.diagnostics.get, diag_keys, nans))
                 write_row(
-                    writer, scalars, t_k, est, ref, cmd, plant, mocap_t, mocap_valid,
-                    row_buffers, diag_keys,
-                )  # fmt: skip
+                    writer, parts, t_k, est, ref, cmd, hook.engaged, mocap_t, mocap_valid
+                )
                 for observer in observers:
                     observer(t_k, plant)
                 if ref.terminate:
@@ -413,39 +422,30 @@ class Runner:
     @staticmethod
     def _write_row(
         writer: LogWriter,
-        scalars: FloatArray,
+        parts: list[FloatArray],
         t_k: float,
         est: StateEstimate,
         ref: Reference,
         cmd: Command,
-        plant: Plant,
+        engaged: bool,
         mocap_t: float,
         mocap_valid: float,
-        buffers: tuple[FloatArray, ...],
-        diag_keys: tuple[str, ...],
     ) -> None:
-        snap, sf_true, sd_rest, rotor_buf, imu_y, bias_buf, mocap_pq = buffers
-        scalars[:] = [
+        """One log row: the scalars, then the estimate, reference and command into their
+        slots of ``parts`` (the fixed buffers before them are already filled)."""
+        parts[0][:] = (
             t_k,
             ref.phase,
-            int(ref.mode),
-            int(plant.hook.engaged),
+            ref.mode,
+            engaged,
             mocap_t,
             mocap_valid,
             math.nan if est.tension is None else est.tension,
             ref.yaw,
             math.nan if cmd.thrust is None else cmd.thrust,
-        ]
+        )
         b = est.body
-        parts = [
-            scalars,
-            snap,
-            sf_true,
-            sd_rest,
-            rotor_buf,
-            imu_y,
-            bias_buf,
-            mocap_pq,
+        parts[6:17] = (
             b.p_W,
             b.v_W,
             b.q_WB,
@@ -457,10 +457,7 @@ class Runner:
             _NAN4 if ref.output is None else ref.output[0],
             cmd.rotor_speeds,
             _NAN3 if cmd.torque_B is None else cmd.torque_B,
-        ]
-        if diag_keys:
-            d = cmd.diagnostics
-            parts.append(np.array([d.get(key, math.nan) for key in diag_keys]))
+        )
         writer.write(parts)
 
     def _metadata(

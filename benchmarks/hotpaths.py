@@ -1,0 +1,132 @@
+"""Hot-path workloads for instruction counts (valgrind callgrind): load-independent speed.
+
+Wall-clock timings on the shared 2-core machine vary by 30 % and more; instruction counts
+do not. Each workload runs its hot path ``n`` times after a warm-up, inside a call of
+``math.fsum`` (a C function nothing else here uses), so that callgrind counts only the
+hot path with ``--toggle-collect=math_fsum``:
+
+    valgrind --tool=callgrind --toggle-collect=math_fsum --callgrind-out-file=/dev/null \\
+        .venv/bin/python benchmarks/hotpaths.py WORKLOAD N
+
+Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
+``estimator`` (one control tick: two IMU samples, the estimate, a mocap update every 4th
+tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
+prints the number of ticks). ``benchmarks/bench_callgrind.sh`` runs them all and prints
+instructions per call.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import sys
+
+import numpy as np
+
+from tetherland.config import load_scenario
+
+
+@functools.lru_cache(maxsize=1)
+def _landing():
+    """A slope50 landing plan, its reference track and an estimate on it at t = 1 s."""
+    from tetherland.geometry import LandingGeometry
+    from tetherland.planning import Planner
+    from tetherland.planning.tracking import TrajectoryTrack
+    from tetherland.rotations import rotmat_to_quat
+    from tetherland.sim.analytic import estimate_of
+
+    sc = load_scenario("slope50")
+    traj = Planner().plan(sc, "landing").require()
+    track = TrajectoryTrack(traj, 0.0, 500.0)
+    nom, out = traj.nominal(1.0), traj.output(1.0)
+    x = np.concatenate(([out.phi[0], 0.0, out.phi[1], 0.0], rotmat_to_quat(nom.R_WB), nom.omega_B))
+    est = estimate_of(x, 1.0, LandingGeometry.from_scenario(sc), sc.tether.length)
+    return sc, track, est
+
+
+def _controllers(name: str):
+    from tetherland.control import DflController, FreeFlightController, HierarchicalController
+    from tetherland.interfaces import Reference
+
+    sc, track, est = _landing()
+    if name == "free_flight":
+        ctrl = FreeFlightController(sc)
+        ref = Reference(t=1.0, p_W=np.array([est.body.p_W, np.zeros(3), np.zeros(3)]))
+    else:
+        ctrl = HierarchicalController(sc) if name == "hierarchical" else DflController(sc)
+        ref = track.reference(1.0)
+    clock = [1.0]
+
+    def call() -> None:
+        clock[0] += 2e-3
+        ctrl.update(clock[0], est, ref)
+
+    return call
+
+
+def _estimator():
+    from tetherland.estimation import UkfEstimator
+    from tetherland.interfaces import ImuSample, MocapSample
+    from tetherland.state import RigidBodyState
+
+    sc = load_scenario("slope50")
+    level = RigidBodyState.at_rest(np.array([0.0, 0.0, 1.0]))
+    est = UkfEstimator(sc, level, 0.0)
+    rng = np.random.default_rng(0)
+    f = np.array([0.0, 0.0, 9.81]) + rng.normal(0, 0.05, (4096, 3))
+    w = rng.normal(0, 0.005, (4096, 3))
+    k = [0]
+
+    def call() -> None:
+        for _ in range(2):
+            k[0] += 1
+            i = k[0] % 4096
+            est.predict(ImuSample(k[0] * 1e-3, f[i], w[i]))
+        est.estimate()
+        if k[0] % 8 == 0:
+            est.update(MocapSample(k[0] * 1e-3 - 0.005, k[0] * 1e-3, level.p_W, level.q_WB))
+
+    return call
+
+
+def _counted(fn) -> None:
+    """Run ``fn()`` inside math.fsum: the region callgrind collects."""
+    math.fsum(map(lambda _: fn() or 0.0, range(1)))
+
+
+def main() -> None:
+    name, n = sys.argv[1], int(sys.argv[2])
+    if name == "mission":
+        from tetherland.config import with_overrides
+        from tetherland.methods import Planners
+        from tetherland.runs import run_mission
+        from tetherland.sim.runner import Runner
+
+        planners = Planners()
+        sc = load_scenario("slope50")
+        run_mission(with_overrides(sc, ["mission.max_duration=2"]), planners=planners)  # warm-up
+        run = Runner.run
+        logs = []
+
+        def counted_run(self, *args, **kwargs):
+            _counted(lambda: logs.append(run(self, *args, **kwargs)))
+            return logs[-1]
+
+        Runner.run = counted_run
+        for seed in range(n):
+            run_mission(sc, seed=seed, planners=planners)
+        print(f"ticks={sum(len(log) for log in logs)}")
+        return
+    call = _estimator() if name == "estimator" else _controllers(name)
+    for _ in range(50):
+        call()
+
+    def calls() -> None:
+        for _ in range(n):
+            call()
+
+    _counted(calls)
+
+
+if __name__ == "__main__":
+    main()

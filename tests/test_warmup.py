@@ -1,0 +1,56 @@
+"""The warm-up compiles exactly the kernel specialisations the closed loop uses."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tetherland import state, warmup
+from tetherland.config import load_scenario, with_overrides
+from tetherland.control import DflController, HierarchicalController, dfl_kernels, kernels
+from tetherland.estimation import UkfEstimator, ukf_kernels
+from tetherland.estimation import kernels as estimation_kernels
+from tetherland.geometry import LandingGeometry
+from tetherland.interfaces import ImuSample
+from tetherland.methods import Planners
+from tetherland.planning import Planner
+from tetherland.planning.tracking import TrajectoryTrack
+from tetherland.rotations import rotmat_to_quat
+from tetherland.runs import run_mission
+from tetherland.sim.analytic import estimate_of
+
+KERNELS = (
+    kernels.free_flight_into,
+    kernels.hierarchical_into,
+    dfl_kernels.dfl_into,
+    ukf_kernels.predict_into,
+    ukf_kernels.update_pose_into,
+    estimation_kernels.estimate_into,
+    state.link_kernel,
+)
+
+
+def _signatures() -> dict[str, set]:
+    return {k.__name__: set(k.signatures) for k in KERNELS}
+
+
+def test_the_loop_needs_no_specialisation_beyond_the_warm_up():
+    warmup.warm_up()
+    warmed = _signatures()
+    assert all(warmed.values())  # every kernel compiled (or loaded from the cache)
+    sc = load_scenario("slope50")
+    planners = Planners()
+    # free flight, the estimator and mocap in the mission loop ...
+    run_mission(with_overrides(sc, ["mission.max_duration=0.5"]), planners=planners)
+    # ... and the tethered controllers on a planned track's references, from the estimator
+    traj = Planner().plan(sc, "landing").require()
+    track = TrajectoryTrack(traj, 0.0, sc.controller.rate_hz)
+    nom, out = traj.nominal(1.0), traj.output(1.0)
+    x = np.concatenate(([out.phi[0], 0.0, out.phi[1], 0.0], rotmat_to_quat(nom.R_WB), nom.omega_B))
+    body = estimate_of(x, 1.0, LandingGeometry.from_scenario(sc), sc.tether.length).body
+    estimator = UkfEstimator(sc, body, 1.0)
+    estimator.predict(ImuSample(1.001, np.array([0.0, 0.0, 9.81]), np.zeros(3)))
+    estimate = estimator.estimate()
+    for ctrl in (HierarchicalController(sc), DflController(sc)):
+        ctrl.update(1.0, estimate, track.reference(1.0))
+        ctrl.update(1.002, estimate, track.reference(traj.duration + 0.5))  # held end
+    assert _signatures() == warmed
