@@ -190,6 +190,7 @@ class MissionSupervisor:
         rows = self._path.sample(t)
         if self._release_pull is not None:
             t0, duration, a_W = self._release_pull
+            rows = rows.copy()  # the path's rows are shared and read-only
             rows[2] += (1.0 - smoothstep9_scalar((t - t0) / duration, 0)[0]) * a_W
         return Reference(
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
