@@ -74,3 +74,113 @@ def test_plant_landed_attachment_point_with_a_sideways_offset(extra: list[str]) 
     D = np.linalg.norm(plant.attachment_point() - plant.layout.geometry.p_A)
     assert D == pytest.approx(sc.tether.length + sl.stretch, abs=3e-4)
     np.testing.assert_allclose(plant.attachment_point(), sl.geometry.p_att_landed, atol=3e-3)
+
+
+# -- the exact 3D and planar models with an offset ---------------------------------------
+
+from tetherland.geometry import link_direction, link_jacobian  # noqa: E402
+from tetherland.models.integrators import rk4  # noqa: E402
+from tetherland.models.planar import CASADI, NUMPY, PlanarParams, planar_offset_accelerations  # noqa: E402
+from tetherland.models.tethered import (  # noqa: E402
+    link_dynamics,
+    offset_body_dynamics,
+    tethered_body_rhs,
+)
+from tetherland.rotations import quat_to_rotmat, rotmat_to_quat, rotvec_to_quat  # noqa: E402
+
+M, L, J3 = 1.0, 1.0, np.array([0.015, 0.017, 0.025])
+R_WA = np.eye(3)
+
+
+def _energy(x: np.ndarray, r: np.ndarray) -> float:
+    """1/2 m |v_R|^2 + 1/2 w.J w + m g z_R with p_R = l d - R r (anchor at the origin)."""
+    R = quat_to_rotmat(x[4:8])
+    w = x[8:11]
+    p_att = L * link_direction(x[0], x[1])
+    v_att = link_jacobian(x[0], x[1], L) @ x[2:4]
+    p_R = p_att - R @ r
+    v_R = v_att - R @ np.cross(w, r)
+    return 0.5 * M * v_R @ v_R + 0.5 * w @ (J3 * w) + M * 9.81 * p_R[2]
+
+
+def test_offset_body_conserves_energy_without_inputs() -> None:
+    """Unpowered, the cable constraint does no work: energy is conserved (the coupling
+    terms omega x (omega x r) and d'' are right), to the RK4 error."""
+    rng = np.random.default_rng(3)
+    r = np.array([0.03, -0.02, -0.05])
+    q = rotvec_to_quat(rng.normal(0, 0.4, 3))
+    x = np.concatenate(([-0.9, 0.2, 0.8, -0.5], q, rng.normal(0, 2.0, 3)))
+    E0 = _energy(x, r)
+
+    def run(r_model: np.ndarray | None) -> np.ndarray:
+        y = x.copy()
+
+        def f(z: np.ndarray, _u: object) -> np.ndarray:
+            return tethered_body_rhs(z, 0.0, np.zeros(3), M, L, J3, R_WA, r_att_B=r_model)
+
+        for _ in range(1000):
+            y = rk4(f, y, None, 1e-3)
+            y[4:8] /= np.linalg.norm(y[4:8])
+        return y
+
+    assert abs(_energy(run(r), r) - E0) < 1e-7 * (abs(E0) + 1.0)
+    # the chapter's model (no coupling terms) does not conserve the offset body's energy
+    assert abs(_energy(run(None), r) - E0) > 1e-4
+
+
+def test_offset_body_reduces_to_the_chapter_model_at_zero_offset() -> None:
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        q = rotvec_to_quat(rng.normal(0, 0.5, 3))
+        x = np.concatenate((rng.uniform(-1, 1, 2), rng.normal(0, 1, 2), q, rng.normal(0, 1, 3)))
+        f_R, tau = rng.uniform(5, 12), rng.normal(0, 0.1, 3)
+        acc = offset_body_dynamics(x, f_R, tau, M, L, J3, R_WA, np.zeros(3))
+        z_B = quat_to_rotmat(q)[:, 2]
+        from tetherland.models.tethered import thrust_in_link_frame
+
+        ref = link_dynamics(*x[:4], thrust_in_link_frame(f_R * z_B, x[0], x[1]), M, L)
+        assert acc.phi_ddot == pytest.approx(ref.phi_ddot, abs=1e-12)
+        assert acc.delta_ddot == pytest.approx(ref.delta_ddot, abs=1e-12)
+        assert acc.tension == pytest.approx(ref.tension, abs=1e-12)
+        w = x[8:11]
+        np.testing.assert_allclose(acc.omega_dot_B, (tau - np.cross(w, J3 * w)) / J3, atol=1e-12)
+
+
+@pytest.mark.parametrize("heading", [0.0, math.pi / 2])
+def test_planar_offset_model_is_the_3d_model_in_the_fall_line_plane(heading: float) -> None:
+    """delta = 0, no roll, rotation about y_A only: the closed-form planar accelerations
+    (4.14)-(4.16) equal the 3D 6 x 6 solution, and the rotor torque about the other axes
+    the 3D body needs to stay planar is the cable torque's (zero for an in-plane offset)."""
+    rng = np.random.default_rng(7)
+    J = np.array([0.015, 0.015, 0.025])
+    r_B = np.array([0.03, 0.0, -0.03]) if heading == 0.0 else np.array([0.0, -0.03, -0.03])
+    c_psi, s_psi = math.cos(heading), math.sin(heading)
+    r0_A = np.array([[c_psi, -s_psi, 0], [s_psi, c_psi, 0], [0, 0, 1]]) @ r_B
+    assert abs(r0_A[1]) < 1e-15  # in the plane
+    params = PlanarParams.from_matrices(M, L, J, np.eye(4), heading=heading)
+    for _ in range(5):
+        phi, th, dphi, dth = rng.uniform(-1.2, -0.2), rng.uniform(0, 1), *rng.normal(0, 1, 2)
+        F, tau_y = rng.uniform(4, 12), rng.normal(0, 0.05)
+        pl = planar_offset_accelerations(phi, th, dphi, dth, F, tau_y, (r0_A[0], r0_A[2]),
+                                         params, NUMPY)  # fmt: skip
+        c_t, s_t = math.cos(th), math.sin(th)
+        Ry = np.array([[c_t, 0, s_t], [0, 1, 0], [-s_t, 0, c_t]])
+        Rz = np.array([[c_psi, -s_psi, 0], [s_psi, c_psi, 0], [0, 0, 1]])
+        R_AB = Ry @ Rz
+        e_B = R_AB.T @ np.array([0.0, 1.0, 0.0])
+        w_B = dth * e_B
+        x = np.concatenate(([phi, 0.0, dphi, 0.0], rotmat_to_quat(R_AB), w_B))
+        acc = offset_body_dynamics(x, F, tau_y * e_B, M, L, J, R_WA, r_B)
+        assert acc.phi_ddot == pytest.approx(pl["phi_ddot"], abs=1e-10)
+        assert acc.tension == pytest.approx(pl["tension"], abs=1e-10)
+        np.testing.assert_allclose(acc.omega_dot_B, pl["theta_ddot"] * e_B, atol=1e-10)
+        assert acc.delta_ddot == pytest.approx(0.0, abs=1e-10)
+    # symbolic backend: the same numbers
+    import casadi as ca
+
+    sym = ca.SX.sym("s", 6)
+    out = planar_offset_accelerations(*[sym[i] for i in range(6)], (r0_A[0], r0_A[2]), params,
+                                      CASADI)  # fmt: skip
+    fn = ca.Function("f", [sym], [out["phi_ddot"], out["tension"]])
+    vals = [float(v) for v in fn([phi, th, dphi, dth, F, tau_y])]
+    assert vals == pytest.approx([pl["phi_ddot"], pl["tension"]], abs=1e-12)

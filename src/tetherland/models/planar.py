@@ -230,6 +230,49 @@ def planar_terms(
     return out
 
 
+def planar_offset_accelerations(
+    phi: Any,
+    theta: Any,
+    dphi: Any,
+    dtheta: Any,
+    F: Any,
+    tau: Any,
+    r0: tuple[Any, Any],
+    c: Any,
+    ops: SimpleNamespace,
+) -> dict[str, Any]:
+    """phi'', theta_A'' and f_L of the planar model with the cable at an offset, exactly
+    (docs/theory.md (4.14)-(4.16)), for any backend.
+
+    ``r0`` = (r_x, r_z): the attachment offset in the plane at theta_A = 0, i.e. the x_A
+    and z_A components of R_z(psi*) r_att; at tilt theta_A it is r = R_y(theta_A) r0. With
+    w = y_A x r, a = t.w, b = d.w (t = dd/dphi):
+
+      (J_y + m b^2) theta_A'' = tau_y - b F_0,   F_0 = f_R sin(s) - m g sin(phi)
+                                                       + m l phi'^2 + m theta_A'^2 a
+      f_L = F_0 + m b theta_A''
+      l phi'' = -g cos(phi) + f_R cos(s)/m + a theta_A'' - b theta_A'^2
+
+    (s = phi + theta_A; tau_y the rotor torque about y_A). With r0 = 0 this is (6.18).
+    """
+    ct, st = ops.cos(theta), ops.sin(theta)
+    rx = ct * r0[0] + st * r0[1]
+    rz = -st * r0[0] + ct * r0[1]
+    cp, sp = ops.cos(phi), ops.sin(phi)
+    a = -sp * rz - cp * rx
+    b = cp * rz - sp * rx
+    m, l, g = c.mass, c.length, c.gravity
+    s = phi + theta
+    F0 = F * ops.sin(s) - m * g * sp + m * l * dphi**2 + m * dtheta**2 * a
+    ddtheta = (tau - b * F0) / (c.inertia + m * b * b)
+    return {
+        "phi_ddot": (-g * cp + F * ops.cos(s) / m + a * ddtheta - b * dtheta**2) / l,
+        "theta_ddot": ddtheta,
+        "tension": F0 + m * b * ddtheta,
+        "cable_torque": -b * (F0 + m * b * ddtheta),
+    }
+
+
 def planar_flat_inputs(
     phi_d: ArrayLike, theta_d: ArrayLike, c: Any, ops: SimpleNamespace = NUMPY
 ) -> dict[str, Any]:
