@@ -301,19 +301,26 @@ def precheck(spec: ManeuverSpec) -> list[str]:
             reasons.append(f"{names[which]}: {err}")
             continue
         per_rotor = spec.hover_rotor_thrusts(which)
+        torque = spec.hover_torque(which)
+        why = (
+            f" (with the cable-offset torque {torque:+.3f} N m the rotors hold: too steep for "
+            "this attachment)"
+            if abs(torque) > 1e-12 or p.offset_across != 0.0
+            else ""
+        )
         if f_R <= 0 or f_L < -1e-9:
             reasons.append(f"{names[which]} does not exist (f_R = {f_R:.3g} N, f_L = {f_L:.3g} N)")
         elif per_rotor.max() > spec.f_hi + 1e-9:
             reasons.append(
                 f"rotor f_max too low for this slope: the {names[which]} needs f_R = {f_R:.2f} N, "
                 f"{per_rotor.max():.2f} N per rotor > vehicle.f_max - control_margin = "
-                f"{spec.f_max:g} - {margin:g} N"
+                f"{spec.f_max:g} - {margin:g} N{why}"
             )
         elif per_rotor.min() < spec.f_lo - 1e-9:
             reasons.append(
                 f"rotor f_min too high for this slope: the {names[which]} needs f_R = {f_R:.2f} N, "
                 f"{per_rotor.min():.2f} N per rotor < vehicle.f_min + control_margin = "
-                f"{spec.f_min:g} + {margin:g} N"
+                f"{spec.f_min:g} + {margin:g} N{why}"
             )
     # Tension bound: f_L <= f_R + m g + m l phi'^2 with f_R <= 4 f_hi. On the middle part of
     # the maneuver, where the bound is f_L_min, phi' cannot change sign (at phi' = 0 the
