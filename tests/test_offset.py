@@ -184,3 +184,79 @@ def test_planar_offset_model_is_the_3d_model_in_the_fall_line_plane(heading: flo
     fn = ca.Function("f", [sym], [out["phi_ddot"], out["tension"]])
     vals = [float(v) for v in fn([phi, th, dphi, dth, F, tau_y])]
     assert vals == pytest.approx([pl["phi_ddot"], pl["tension"]], abs=1e-12)
+
+
+# -- OCP plans re-simulated on the exact 3D model -----------------------------------------
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("name", "extra"),
+    [("slope50", []), ("steep70", []), ("slope50", [SIDEWAYS])],
+)
+def test_ocp_plan_resimulated_on_the_3d_offset_model(name: str, extra: list[str]) -> None:
+    """The planned net wrench (f_R, tau_y e_B) drives the exact 3D tethered body with the
+    offset (the rotors also cancelling the cable moment at the 3D model's own tension,
+    (4.22)): it meets the final conditions, and the physical rotor thrusts
+    Gamma^-1 [f_R, tau_B + r x (f_L R^T d)] stay within the planned bounds."""
+    from tetherland.models.quadrotor import RotorLayout
+    from tetherland.planning import Planner
+    from tetherland.planning.maneuver import ManeuverSpec
+
+    sc = load_scenario(name, extra)
+    result = Planner().plan(sc)
+    traj = result.require()
+    spec = ManeuverSpec.from_scenario(sc)
+    p = spec.params
+    r = np.asarray(sc.vehicle.cable_attachment, dtype=float)
+    J = np.asarray(sc.vehicle.inertia, dtype=float)
+    Gamma_inv = np.linalg.inv(RotorLayout.from_config(sc.vehicle).allocation)
+    dt = 2e-3
+    n = int(round(traj.duration / dt))
+    s = traj.sample(np.linspace(0.0, traj.duration, 2 * n + 1))
+    f_R = s.f_R
+    tau = s.thrusts @ p.torque_row
+    e_B = p.e_B
+    x = np.concatenate(([s.phi[0, 0], 0.0, s.phi[0, 1], 0.0],
+                        rotmat_to_quat(_R_AB(s.theta_A[0, 0])), s.theta_A[0, 1] * e_B))  # fmt: skip
+
+    def rhs(y: np.ndarray, k: int) -> np.ndarray:
+        acc = offset_body_dynamics(y, f_R[k], tau[k] * e_B, p.mass, p.length, J, R_WA, r,
+                                   p.gravity, cancel_cable_torque=True)  # fmt: skip
+        w = y[8:11]
+        from tetherland.rotations import quat_multiply
+
+        q_dot = 0.5 * quat_multiply(y[4:8], np.concatenate(([0.0], w)))
+        return np.concatenate(([y[2], y[3], acc.phi_ddot, acc.delta_ddot], q_dot, acc.omega_dot_B))
+
+    worst_lo, worst_hi = np.inf, -np.inf
+    for i in range(n):
+        k = 2 * i
+        k1 = rhs(x, k)
+        k2 = rhs(x + 0.5 * dt * k1, k + 1)
+        k3 = rhs(x + 0.5 * dt * k2, k + 1)
+        k4 = rhs(x + dt * k3, k + 2)
+        x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        x[4:8] /= np.linalg.norm(x[4:8])
+        acc = offset_body_dynamics(x, f_R[k + 2], tau[k + 2] * e_B, p.mass, p.length, J, R_WA,
+                                   r, p.gravity, cancel_cable_torque=True)  # fmt: skip
+        R = quat_to_rotmat(x[4:8])
+        d = link_direction(x[0], x[1])
+        tau_rot = tau[k + 2] * e_B + acc.tension * np.cross(r, R.T @ d)
+        f = Gamma_inv @ np.concatenate(([f_R[k + 2]], tau_rot))
+        worst_lo, worst_hi = min(worst_lo, f.min()), max(worst_hi, f.max())
+    R = quat_to_rotmat(x[4:8])
+    theta = math.atan2(R[0, 2], R[2, 2])  # tilt of z_B towards x_A
+    omega_A = R @ x[8:11]
+    assert x[0] == pytest.approx(spec.phi_final, abs=1e-4)
+    assert theta == pytest.approx(spec.theta_final, abs=1e-4)
+    assert abs(x[2]) < 1e-4 and abs(omega_A[1]) < 1e-4
+    assert abs(x[1]) < 1e-9 and np.linalg.norm(omega_A[[0, 2]]) < 1e-9  # stays planar
+    assert worst_lo >= spec.f_lo - 1e-4 and worst_hi <= spec.f_hi + 1e-4
+    # the offset torque matters: the rotor thrusts differ from the planner's net thrusts
+    assert np.max(np.abs(s.thrusts.min() - worst_lo)) > 1e-3
+
+
+def _R_AB(theta: float) -> np.ndarray:
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])

@@ -207,6 +207,7 @@ def offset_body_dynamics(
     R_WA: ArrayLike,
     r_att_B: ArrayLike,
     g: float = GRAVITY,
+    cancel_cable_torque: bool = False,
 ) -> OffsetBodyAccel:
     """Exact taut dynamics with the cable attached at ``r_att_B`` (F_B) [m].
 
@@ -228,6 +229,10 @@ def offset_body_dynamics(
         Collective thrust [N] and rotor torque in F_B [N m].
     R_WA : (3, 3) array
         Anchor frame.
+    cancel_cable_torque : bool
+        The rotors add -r x (-f_L R^T d), the cable's moment at the actual tension, on top
+        of ``tau_B`` (the controllers' and the planner's torque law, (4.22)): then
+        J alpha = -omega x J omega + tau_B.
 
     Raises
     ------
@@ -253,7 +258,7 @@ def offset_body_dynamics(
     M[:3, 2:5] = mass * R @ r_x
     M[:3, 5] = d
     M[3:, 2:5] = J
-    M[3:, 5] = np.cross(r, R.T @ d)
+    M[3:, 5] = 0.0 if cancel_cable_torque else np.cross(r, R.T @ d)
     rhs = np.empty(6)
     rhs[:3] = (
         np.array([0.0, 0.0, -mass * g])
