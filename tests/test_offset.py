@@ -212,7 +212,7 @@ def test_ocp_plan_resimulated_on_the_3d_offset_model(name: str, extra: list[str]
     J = np.asarray(sc.vehicle.inertia, dtype=float)
     Gamma_inv = np.linalg.inv(RotorLayout.from_config(sc.vehicle).allocation)
     dt = 2e-3
-    n = int(round(traj.duration / dt))
+    n = round(traj.duration / dt)
     s = traj.sample(np.linspace(0.0, traj.duration, 2 * n + 1))
     f_R = s.f_R
     tau = s.thrusts @ p.torque_row
