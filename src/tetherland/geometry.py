@@ -357,6 +357,10 @@ class LandingGeometry:
     """Landed attachment offset parallel to the surface, R_WB r_att less its z_S part, in
     F_W [m] (:func:`attachment_in_plane`; zero for an offset along z_B): the attachment
     point is p~_L + h_att z_S + r_par (docs/theory.md section 3.4)."""
+    stretch: float = 0.0
+    """Elongation s of an elastic cable at the landed hover's tension [m]: the landed link
+    is l + s long, and c, d~, phi*, p_L (or the anchor placed for p*_L) are those of
+    l + s (:func:`stretched_landing`; 0 for an inextensible cable). ``length`` stays l."""
 
     @property
     def gamma(self) -> float:
@@ -385,8 +389,7 @@ class LandingGeometry:
     def from_scenario(cls, scenario: Scenario) -> LandingGeometry:
         """Build the landing geometry of a (validated) scenario."""
         surface = surface_from_config(scenario)
-        return landing_geometry(
-            surface,
+        kwargs = dict(
             length=scenario.tether.length,
             h_R=effective_h_R(scenario),
             h_att=attachment_height(scenario),
@@ -399,6 +402,12 @@ class LandingGeometry:
                 math.radians(scenario.planner.heading_deg),
             ),
         )
+        rigid = landing_geometry(surface, **kwargs)  # type: ignore[arg-type]
+        EA = scenario.tether.effective_axial_stiffness
+        if EA is None:
+            return rigid
+        s = stretched_landing(rigid, scenario.vehicle.mass, EA).stretch
+        return landing_geometry(surface, stretch=s, **kwargs)  # type: ignore[arg-type]
 
 
 def landing_geometry(
@@ -411,6 +420,7 @@ def landing_geometry(
     anchor: ArrayLike | None = None,
     landing_point: ArrayLike | None = None,
     r_par_W: ArrayLike | None = None,
+    stretch: float = 0.0,
 ) -> LandingGeometry:
     """Landing geometry from an explicit anchor or a desired landing point (6.8)-(6.13).
 
@@ -420,16 +430,17 @@ def landing_geometry(
     h_R because its cable is attached at the centre of mass.
     """
     h_att = h_R if h_att is None else h_att
-    c = hover_cosine(h_att, h_A, length)
+    radius = length + stretch  # the landed link: l, or l + s for a stretched elastic cable
+    c = hover_cosine(h_att, h_A, radius)
     R_WS = surface.R_WS
     r_par = np.zeros(3) if r_par_W is None else np.asarray(r_par_W, dtype=float)
     if anchor is not None:
         p_A = np.asarray(anchor, dtype=float)
-        p_L = inclined_landing_point(p_A, R_WS, c, length, h_att, r_par)
+        p_L = inclined_landing_point(p_A, R_WS, c, radius, h_att, r_par)
     else:
         p_L = np.asarray(surface.origin if landing_point is None else landing_point, dtype=float)
         p_L = surface.project(p_L)
-        p_A = anchor_for_landing_point(p_L, R_WS, c, length, h_att, r_par)
+        p_A = anchor_for_landing_point(p_L, R_WS, c, radius, h_att, r_par)
     R_WA = anchor_frame(R_WS)
     d_tilde = inclined_hover_direction(R_WS, c)
     # In F_A, x_S = [cos(beta), 0, -sin(beta)] and z_S = [sin(beta), 0, cos(beta)], so
@@ -454,6 +465,7 @@ def landing_geometry(
         delta_star=delta_star,
         theta_A_star=theta_A_star,
         r_par_W=r_par,
+        stretch=stretch,
     )
 
 
@@ -548,7 +560,9 @@ class StretchedLanding:
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> StretchedLanding:
         """The stretched touchdown of a scenario's tether (stiffness, vehicle mass) at its
-        rigid landing geometry (:meth:`LandingGeometry.from_scenario`)."""
+        landing geometry (:meth:`LandingGeometry.from_scenario`, which already places the
+        anchor, or the touchdown, for the stretched cable: ``shift_W`` is then zero)."""
+
         return stretched_landing(
             LandingGeometry.from_scenario(scenario),
             scenario.vehicle.mass,
@@ -564,6 +578,8 @@ def stretched_landing(
 
     Solves s = f_L(c') l/EA with c' = (h_att - h_A)/(l + s) by fixed-point iteration
     (a contraction: ds'/ds = O(c^2 f_L/EA)). Inextensible (None): s = 0 and ``geo``.
+    ``geo`` may already be stretched (:meth:`LandingGeometry.from_scenario` of an elastic
+    tether): its anchor is kept, and its landing point is then the stretched touchdown.
     """
     h = geo.h_att - geo.h_A
     l = geo.length
