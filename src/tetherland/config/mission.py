@@ -5,6 +5,7 @@ from __future__ import annotations
 from pydantic import Field
 
 from tetherland.config.base import Section
+from tetherland.config.faults import FaultDetectionConfig
 
 
 class MissionConfig(Section):
@@ -103,3 +104,5 @@ class MissionConfig(Section):
     """Simulated time with the motors off on the pad before the run ends [s]."""
     max_duration: float = Field(180.0, gt=0, le=3600)
     """The run ends (failed) if the mission has not finished by then [s]."""
+    detection: FaultDetectionConfig = FaultDetectionConfig()
+    """Limits of the fault monitor (rotor, anchor belief, motion capture, hook jam)."""

@@ -12,8 +12,13 @@ transition with its reason). It sees only the estimate, never the plant's truth:
   out along the release leg; a safe hover from tethered flight starts where the position
   error reproduces the pull (p + f_L d / (m k_x)), as in stretching;
 - an operator abort (``mission.abort_time``) or a fault (slack cable or large tracking error
-  in a tethered phase, a non-finite estimate) moves to a safe state from any phase: hover
-  in free flight, or stay put when the motors are already off on the surface.
+  in a tethered phase, a non-finite estimate, or one of the measured-signal rules of
+  :class:`~tetherland.mission.faults.FaultMonitor`: rotor, anchor belief, motion capture,
+  hook jam) moves to a safe state from any phase: hover in free flight (away from the
+  surface after a slack cable; inside the cable's reach when the hook jams), land on the
+  start pad (a weak rotor before hooking or after unhooking), or stay put when the motors
+  are already off on the surface. :attr:`MissionSupervisor.safe_state` names the one
+  reached.
 
 The plan (trajectories, waypoints, clearance) is made before by
 :func:`~tetherland.mission.plan.plan_mission`; the phases and their allowed successors are
@@ -33,7 +38,9 @@ from tetherland.control.common import heading_of
 from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
 from tetherland.geometry import theta_A_from_z_B
-from tetherland.interfaces import ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.config import FaultKind
+from tetherland.interfaces import Command, ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan
@@ -63,6 +70,10 @@ TRANSITIONS: Mapping[Phase, frozenset[Phase]] = MappingProxyType({
 })  # fmt: skip
 """Every phase and the phases it may move to. An abort moves to SAFE_HOVER (hover in
 free flight), or to ABORTED directly when the motors are off on the surface."""
+
+
+_UNHOOKED = frozenset({_P.TAKEOFF, _P.APPROACH, _P.RETRY, _P.RETURN})
+"""Free-flight phases without the cable: a weak rotor lands on the start pad from them."""
 
 
 class TransitionError(TetherlandError):
@@ -139,6 +150,12 @@ class MissionSupervisor:
         self.times: dict[str, float] = {}
         self.hook_attempts = 0
         self.abort_reason: str | None = None
+        self.safe_state: str | None = None
+        """The safe state reached after an abort: "hover", "landed" or "motors_off"."""
+        self.fault: FaultDetection | None = None
+        """The fault the monitor detected, if any."""
+        self.monitor = FaultMonitor(scenario, self.geo)
+        self._safe_land = False
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
@@ -218,24 +235,75 @@ class MissionSupervisor:
         return float(np.linalg.norm(est.body.p_W - p)) <= tol
 
     # ------------------------------------------------------------------ abort and faults
-    def abort(self, t: float, est: StateEstimate, reason: str) -> None:
-        """Go to the safe state from the current phase and log ``reason``."""
+    def abort(
+        self, t: float, est: StateEstimate, reason: str, *, hover_at: np.ndarray | None = None,
+        land: bool = False, away: bool = False,
+    ) -> None:  # fmt: skip
+        """Go to the safe state from the current phase and log ``reason``.
+
+        Hover where the vehicle is (at the pull point in a tethered phase, ``away`` from
+        the surface by ``mission.detection.away_distance``), or at ``hover_at``; or, with
+        ``land``, fly back to the start pad and land (free flight).
+        """
         if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
             return
         self.abort_reason = reason
         self._event(t, "abort", reason)
         if self.phase == Phase.MOTORS_OFF:
             self._enter(Phase.ABORTED, t, f"abort while landed, motors stay off: {reason}")
+            self.safe_state = "motors_off"
             self._terminate_at = t
             return
         start = self._pull_point(est) if self.phase.tethered else est.body.p_W
-        self._path = self._new_path(t, start).to(start, pause=self.cfg.safe_hover_time)
+        if away:
+            start = start + self.cfg.detection.away_distance * self.geo.surface.z_S
+        self._path = self._new_path(t, est.body.p_W if away else start)
+        if land:
+            wp = self.wp
+            self._path = (
+                self._path.to(np.array([*start[:2], max(start[2], wp.z_safe)]))
+                .to(np.array([*wp.start[:2], wp.z_safe]))
+                .to(wp.start + self.cfg.takeoff_height * Z_W)
+                .to(wp.start - self.cfg.pad_press_depth * Z_W, speed=self.cfg.hook_speed,
+                    pause=self.cfg.settle_time)
+            )  # fmt: skip
+            self._safe_land = True
+        else:
+            target = start if hover_at is None else np.asarray(hover_at, dtype=float)
+            self._path = self._path.to(target, pause=self.cfg.safe_hover_time)
         self._enter(Phase.SAFE_HOVER, t, f"abort: {reason}")
+
+    def command_sent(self, t: float, command: Command) -> None:
+        """The runner tells each command sent (``CommandAware``): for the fault monitor."""
+        self.monitor.command_sent(t, command)
+
+    def _on_fault(self, t: float, est: StateEstimate, found: FaultDetection) -> None:
+        """A measured-signal fault: log it and move to the safe state of its kind."""
+        self.fault = found
+        self._event(t, "fault", found.reason)
+        if found.kind == FaultKind.JAM:  # still hooked: hover inside the cable's reach
+            self.abort(t, est, found.reason, hover_at=self.wp.hook_start)
+        elif found.kind == FaultKind.ROTOR and self.phase in _UNHOOKED:
+            self.abort(t, est, found.reason, land=True)
+        elif found.kind == FaultKind.SNAP:  # free, moving: stop away from the surface
+            self.abort(t, est, found.reason, away=True)
+        else:
+            self.abort(t, est, found.reason)
 
     def _check_faults(self, t: float, est: StateEstimate, ref: Reference) -> None:
         body = est.body
         if not math.isfinite(sum(body.p_W.tolist()) + sum(body.q_WB.tolist())):
             self.abort(t, est, "fault: the state estimate is not finite")
+            return
+        if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
+            return
+        det = self.cfg.detection
+        airborne = t >= self.cfg.settle_time + det.airborne_delay and not (
+            self.phase == Phase.TETHERED_TAKEOFF and t < self._phase_start + det.airborne_delay
+        )
+        found = self.monitor.check(t, est, self.phase, airborne)
+        if found is not None:
+            self._on_fault(t, est, found)
             return
         active = self.phase == Phase.TETHERED_LANDING or (
             self.phase == Phase.TETHERED_TAKEOFF and self._track is not None
@@ -246,7 +314,8 @@ class MissionSupervisor:
             return
         if self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
             self.abort(
-                t, est, f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)"
+                t, est, f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)",
+                away=True,
             )
             return
         if ref.output is None:
@@ -512,7 +581,13 @@ class MissionSupervisor:
 
     def _safe_hover(self, t: float, est: StateEstimate) -> Reference:
         if t >= self._path.t_end:
+            if self._safe_land:
+                self._enter(Phase.ABORTED, t, "safe landing on the start pad: motors off")
+                self.safe_state = "landed"
+                self._terminate_at = t + self.cfg.done_hold_time
+                return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
             self._enter(Phase.ABORTED, t, "safe hover held: run ended")
+            self.safe_state = "hover"
             self._final_mode = ControlMode.FREE_FLIGHT
             self._terminate_at = t
         return self._free(t)

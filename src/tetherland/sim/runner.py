@@ -43,6 +43,7 @@ from tetherland.interfaces import (
 )
 from tetherland.provenance import provenance
 from tetherland.sim.baselines import ConstantReference, TruthEstimator
+from tetherland.sim.faults import FaultInjector, mocap_outage
 from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
 from tetherland.sim.mjcf import SENSOR_SLICES
 from tetherland.sim.plant import Plant, link_state_of
@@ -207,6 +208,8 @@ class Runner:
         self.seed = int(seed)
         self.diagnostic_keys = tuple(diagnostic_keys)
         self.observers = tuple(observers)
+        if scenario.faults.active:  # the plant-side faults of [faults] (sim/faults.py)
+            self.observers += (FaultInjector(scenario.faults),)
         self._snap = np.zeros(13)  # [qpos (7), qvel (6)] at the control tick
         self._t_snap = 0.0
         geo = self.plant.layout.geometry
@@ -299,12 +302,14 @@ class Runner:
         rng = np.random.default_rng(self.seed) if rng is None else rng
         rng_imu, rng_mocap = rng.spawn(2)
         imu = Imu(sc.sensors.imu, rng_imu, sc.sensors.noise_scale)
-        mocap = Mocap(sc.sensors.mocap, rng_mocap, sc.sensors.noise_scale)
+        mocap = Mocap(sc.sensors.mocap, rng_mocap, sc.sensors.noise_scale,
+                      mocap_outage(sc.faults))  # fmt: skip
         reference = self.reference
         if reference is None:
             reference = ConstantReference(p_W=plant.qpos[0:3].copy())
         estimator, controller = self.estimator, self.controller
         command_aware = isinstance(estimator, CommandAware)
+        reference_aware = isinstance(reference, CommandAware)  # e.g. a fault monitor
 
         n_ctrl = sched.control_every
         n_ticks = round(duration * sched.steps_per_second) // n_ctrl * n_ctrl
@@ -393,6 +398,8 @@ class Runner:
                 command(cmd.rotor_speeds)
                 if command_aware:
                     estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
+                if reference_aware:
+                    reference.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
                 imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
                 imu_y[3:6] = sample.omega_B
                 bias_into(bias_buf)
