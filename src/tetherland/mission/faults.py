@@ -119,9 +119,9 @@ class FaultMonitor:
         d /= max(float(np.linalg.norm(d)), 1e-9)
         return np.cross(self._r_att, R_WB.T @ (-tension * d))
 
-    def check(self, t: float, est: StateEstimate, phase: Phase, airborne: bool) -> (
-        FaultDetection | None
-    ):
+    def check(
+        self, t: float, est: StateEstimate, phase: Phase, airborne: bool
+    ) -> FaultDetection | None:
         """Run every rule at time ``t`` in ``phase``; the first fault found, or None.
 
         ``airborne`` says the vehicle has been off the pad long enough for the torque
@@ -147,9 +147,9 @@ class FaultMonitor:
             found = self._jam_rule(t, est, phase)
         return found
 
-    def _rotor_rule(self, t: float, est: StateEstimate, phase: Phase, airborne: bool) -> (
-        FaultDetection | None
-    ):
+    def _rotor_rule(
+        self, t: float, est: StateEstimate, phase: Phase, airborne: bool
+    ) -> FaultDetection | None:
         dt = 0.0 if self._t_last is None else t - self._t_last
         self._t_last = t
         if not (airborne and phase in ROTOR_PHASES):
@@ -168,9 +168,9 @@ class FaultMonitor:
             )  # fmt: skip
         return None
 
-    def _snap_rule(self, t: float, est: StateEstimate, phase: Phase, airborne: bool) -> (
-        FaultDetection | None
-    ):
+    def _snap_rule(
+        self, t: float, est: StateEstimate, phase: Phase, airborne: bool
+    ) -> FaultDetection | None:
         if not (airborne and phase in SNAP_PHASES):
             self._snap.reset()
             return None
@@ -214,4 +214,11 @@ class FaultMonitor:
         return None
 
 
-__all__ = ["ANCHOR_PHASES", "JAM_PHASES", "SNAP_PHASES", "ROTOR_PHASES", "FaultDetection", "FaultMonitor"]
+__all__ = [
+    "ANCHOR_PHASES",
+    "JAM_PHASES",
+    "ROTOR_PHASES",
+    "SNAP_PHASES",
+    "FaultDetection",
+    "FaultMonitor",
+]

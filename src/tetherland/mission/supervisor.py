@@ -33,12 +33,11 @@ from types import MappingProxyType
 
 import numpy as np
 
-from tetherland.config import Scenario
+from tetherland.config import FaultKind, Scenario
 from tetherland.control.common import heading_of
 from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
 from tetherland.geometry import theta_A_from_z_B
-from tetherland.config import FaultKind
 from tetherland.interfaces import Command, ControlMode, EventRecord, Reference, StateEstimate
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.paths import Path
@@ -314,7 +313,9 @@ class MissionSupervisor:
             return
         if self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
             self.abort(
-                t, est, f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)",
+                t,
+                est,
+                f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)",
                 away=True,
             )
             return
