@@ -14,7 +14,8 @@ limit held for a dwell time:
   point is l + f_L/k (the stretch of an elastic cable; l for an ideal one); a believed
   anchor off along the cable shows as a length error;
 * motion capture: the estimator's position standard deviation grows while no pose
-  arrives (largest axis of the covariance);
+  arrives (largest axis of the covariance; from ``airborne_delay`` on, once the filter has
+  converged from its initial covariance);
 * hook jam: an estimated tension after the unhooking pass (the cable still pulls);
 * cable snap: the estimated tension lost in tethered flight for a short dwell (and the
   supervisor's missed-hook rule: no tension after stretching).
@@ -92,7 +93,6 @@ class FaultMonitor:
         self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
         self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
         self._snap = ThresholdDwell(-cfg.snap_tension, cfg.snap_dwell)
-        self._converged = False
         self.torque_residual = 0.0
         """Last low-passed roll/pitch torque residual [N m]."""
         self.length_error = math.nan
@@ -131,8 +131,7 @@ class FaultMonitor:
         if est.covariance is not None:
             std = math.sqrt(max(float(est.covariance[i, i]) for i in range(3)))
             self.position_std = std
-            self._converged = self._converged or std <= cfg.position_std
-            if self._converged and std > cfg.position_std:
+            if t >= cfg.airborne_delay and std > cfg.position_std:
                 return FaultDetection(
                     FaultKind.MOCAP, t,
                     f"fault: motion capture lost (estimated position std {100 * std:.1f} cm "
