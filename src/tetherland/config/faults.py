@@ -102,7 +102,7 @@ class FaultDetectionConfig(Section):
     estimated cable torque, in (0, 10] [N m]."""
     rotor_filter_time: float = Field(0.3, gt=0, le=10)
     """Time constant of that low-pass, in (0, 10] [s]."""
-    rotor_dwell: float = Field(0.3, ge=0, le=10)
+    rotor_dwell: float = Field(0.15, ge=0, le=10)
     """How long the torque must stay beyond ``rotor_torque``, in [0, 10] [s]."""
     airborne_delay: float = Field(1.5, ge=0, le=60)
     """The torque check starts this long after the takeoff from the pad (and this long into

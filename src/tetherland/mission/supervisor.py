@@ -73,6 +73,9 @@ free flight), or to ABORTED directly when the motors are off on the surface."""
 
 _UNHOOKED = frozenset({_P.TAKEOFF, _P.APPROACH, _P.RETRY, _P.RETURN})
 """Free-flight phases without the cable: a weak rotor lands on the start pad from them."""
+_NEAR_MECHANISM = frozenset({_P.HOOKING, _P.RELEASE, _P.UNHOOK})
+"""Free-flight phases close to the anchoring mechanism: a fault's safe hover moves away
+from the surface."""
 
 
 class TransitionError(TetherlandError):
@@ -284,8 +287,8 @@ class MissionSupervisor:
             self.abort(t, est, found.reason, hover_at=self.wp.hook_start)
         elif found.kind == FaultKind.ROTOR and self.phase in _UNHOOKED:
             self.abort(t, est, found.reason, land=True)
-        elif found.kind == FaultKind.SNAP:  # free, moving: stop away from the surface
-            self.abort(t, est, found.reason, away=True)
+        elif found.kind == FaultKind.SNAP or self.phase in _NEAR_MECHANISM:
+            self.abort(t, est, found.reason, away=True)  # stop away from the surface
         else:
             self.abort(t, est, found.reason)
 
