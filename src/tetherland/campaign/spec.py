@@ -128,8 +128,8 @@ class CampaignSpec:
                     int(np.random.SeedSequence([self.seed, 15, j, i]).generate_state(1)[0]),
                     None, None, kind, time_slice(self.fault_window, i, self.runs),
                 )
+                for i in range(self.runs)  # interleaved: a partial campaign has every kind
                 for j, kind in enumerate(self.faults)
-                for i in range(self.runs)
             ]
         sweep_values: tuple[float | None, ...] = self.sweep.values if self.sweep else (None,)
         key = self.sweep.key if self.sweep else None
