@@ -325,3 +325,22 @@ def test_cable_torque_is_r_att_cross_the_pull(slope50):
         FaultMonitor(slope50, geo).cable_torque_B(est), np.cross(r_att, R.T @ (-5.0 * d)),
         atol=1e-12,
     )
+
+
+def test_scalar_cable_torque_agrees_with_the_reference(slope50):
+    """The control-rate scalar form against the numpy reference, random poses."""
+    mon = FaultMonitor(slope50, LandingGeometry.from_scenario(slope50))
+    rng = np.random.default_rng(4)
+    for _ in range(50):
+        q = rng.standard_normal(4)
+        q /= np.linalg.norm(q)
+        est = StateEstimate(
+            t=0.0, body=RigidBodyState(rng.uniform(-1, 1, 3), np.zeros(3), q, np.zeros(3)),
+            tension=float(rng.uniform(0, 10)),
+        )  # fmt: skip
+        np.testing.assert_allclose(mon.cable_torque_xy(est), mon.cable_torque_B(est)[:2],
+                                   atol=1e-12)  # fmt: skip
+        R = quat_to_rotmat(q)
+        D = np.linalg.norm(est.body.p_W + R @ np.asarray(slope50.vehicle.cable_attachment)
+                           - mon._p_A)  # fmt: skip
+        assert mon._geometry(est)[3] == pytest.approx(D, abs=1e-12)

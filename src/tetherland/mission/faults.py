@@ -86,8 +86,10 @@ class FaultMonitor:
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
         self._length = scenario.tether.length
         self._stiffness = scenario.tether.stiffness
-        self._torque_cmd = np.zeros(2)
-        self._torque_lp = np.zeros(2)
+        self._rx, self._ry, self._rz = (float(x) for x in self._r_att)
+        self._ax, self._ay, self._az = (float(x) for x in self._p_A)
+        self._torque_cmd = (0.0, 0.0)
+        self._lp_x = self._lp_y = 0.0
         self._t_last: float | None = None
         self._rotor = ThresholdDwell(cfg.rotor_torque, cfg.rotor_dwell)
         self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
@@ -104,10 +106,7 @@ class FaultMonitor:
     def command_sent(self, t: float, command: Command) -> None:
         """Keep the commanded roll/pitch torque (zero with the motors off)."""
         tau = command.torque_B
-        if tau is None:
-            self._torque_cmd[:] = 0.0
-        else:
-            self._torque_cmd[:] = (float(tau[0]), float(tau[1]))
+        self._torque_cmd = (0.0, 0.0) if tau is None else (float(tau[0]), float(tau[1]))
 
     # ------------------------------------------------------------------ rules
     def cable_torque_B(self, est: StateEstimate) -> np.ndarray:
@@ -119,6 +118,36 @@ class FaultMonitor:
         d /= max(float(np.linalg.norm(d)), 1e-9)
         return np.cross(self._r_att, R_WB.T @ (-tension * d))
 
+    def _geometry(self, est: StateEstimate) -> tuple[float, float, float, float]:
+        """Scalar form (the control-rate path) of the attachment geometry: the unit link
+        direction d in F_B and the distance D = |p_att - p_A| [m]; :meth:`cable_torque_B`
+        is its plain reference (a test checks both agree)."""
+        w, x, y, z = est.body.q_WB.tolist()
+        px, py, pz = est.body.p_W.tolist()
+        rx, ry, rz = self._rx, self._ry, self._rz
+        # R_WB from the unit quaternion (w, x, y, z)
+        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
+        r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+        r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+        dx = px + r00 * rx + r01 * ry + r02 * rz - self._ax
+        dy = py + r10 * rx + r11 * ry + r12 * rz - self._ay
+        dz = pz + r20 * rx + r21 * ry + r22 * rz - self._az
+        D = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inv = 1.0 / max(D, 1e-9)
+        # d in F_B = R_WB^T d_W
+        bx = (r00 * dx + r10 * dy + r20 * dz) * inv
+        by = (r01 * dx + r11 * dy + r21 * dz) * inv
+        bz = (r02 * dx + r12 * dy + r22 * dz) * inv
+        return bx, by, bz, D
+
+    def cable_torque_xy(self, est: StateEstimate) -> tuple[float, float]:
+        """Roll and pitch of :meth:`cable_torque_B` in scalar form [N m]."""
+        tension = max(est.tension or 0.0, 0.0)
+        bx, by, bz, _ = self._geometry(est)
+        fx, fy, fz = -tension * bx, -tension * by, -tension * bz
+        rx, ry, rz = self._rx, self._ry, self._rz
+        return ry * fz - rz * fy, rz * fx - rx * fz
+
     def check(
         self, t: float, est: StateEstimate, phase: Phase, airborne: bool
     ) -> FaultDetection | None:
@@ -128,8 +157,9 @@ class FaultMonitor:
         rule (``airborne_delay``).
         """
         cfg = self.cfg
-        if est.covariance is not None:
-            std = math.sqrt(max(float(est.covariance[i, i]) for i in range(3)))
+        cov = est.covariance
+        if cov is not None:
+            std = math.sqrt(max(cov[0, 0], cov[1, 1], cov[2, 2]))
             self.position_std = std
             if t >= cfg.airborne_delay and std > cfg.position_std:
                 return FaultDetection(
@@ -152,13 +182,14 @@ class FaultMonitor:
         dt = 0.0 if self._t_last is None else t - self._t_last
         self._t_last = t
         if not (airborne and phase in ROTOR_PHASES):
-            self._torque_lp[:] = 0.0
+            self._lp_x = self._lp_y = 0.0
             self._rotor.reset()
             return None
-        residual = self._torque_cmd + self.cable_torque_B(est)[0:2]
+        cx, cy = self.cable_torque_xy(est)
         a = 1.0 - math.exp(-dt / self.cfg.rotor_filter_time)
-        self._torque_lp += a * (residual - self._torque_lp)
-        self.torque_residual = r = float(np.hypot(*self._torque_lp))
+        self._lp_x += a * (self._torque_cmd[0] + cx - self._lp_x)
+        self._lp_y += a * (self._torque_cmd[1] + cy - self._lp_y)
+        self.torque_residual = r = math.hypot(self._lp_x, self._lp_y)
         if self._rotor.update(t, r):
             return FaultDetection(
                 FaultKind.ROTOR, t,
@@ -188,9 +219,8 @@ class FaultMonitor:
             self._anchor.reset()
             self.length_error = math.nan
             return None
-        p_att = est.body.p_W + quat_to_rotmat(est.body.q_WB) @ self._r_att
         stretch = 0.0 if self._stiffness is None else tension / self._stiffness
-        err = float(np.linalg.norm(p_att - self._p_A)) - self._length - stretch
+        err = self._geometry(est)[3] - self._length - stretch
         self.length_error = err
         if self._anchor.update(t, abs(err)):
             return FaultDetection(
