@@ -261,7 +261,8 @@ class Estimator(Protocol):
 
 @runtime_checkable
 class CommandAware(Protocol):
-    """Optional estimator capability: told each command sent (e.g. for tension estimation)."""
+    """Optional estimator or reference-source capability: told each command sent (e.g. for
+    tension estimation, or the supervisor's fault monitor)."""
 
     def command_sent(self, t: float, command: Command) -> None:
         """``command`` is applied from time ``t`` on."""

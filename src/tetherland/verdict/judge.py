@@ -398,6 +398,7 @@ def not_flown(record: RunRecord, reason: str) -> Verdict:
         "status": None,
         "aborted": False,
         "abort_reason": None,
+        "safe_stop": {"reached": False},
         "crashed": False,
         "landing": {"reached": False},
         "takeoff": {"required": record.expects.takeoff},
