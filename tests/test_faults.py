@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tetherland import GRAVITY
-from tetherland.campaign import CampaignSpec
+from tetherland.campaign import CampaignSpec, apply_perturbation, sample_perturbation
 from tetherland.campaign.faults import (
     ANCHOR_ERROR,
     FAULT_KINDS,
@@ -267,12 +267,15 @@ def test_fault_campaign_draws_each_kind_across_the_window(slope50):
     runs = spec.expand()
     assert len(runs) == 20 * len(FAULT_KINDS) and len({r.run_id for r in runs}) == len(runs)
     assert {r.method for r in runs} == {"tethered"}
-    geo = LandingGeometry.from_scenario(slope50)
     for kind in FAULT_KINDS:
         mine = [r for r in runs if r.fault == kind]
         times = []
         for r in mine:
-            f = sample_fault(kind, r.fault_slice, slope50, np.random.default_rng([r.seed, 15]))
+            # as a campaign job draws it: on the perturbed belief of the run's seed
+            _, belief = apply_perturbation(
+                slope50, sample_perturbation(slope50, np.random.default_rng(r.seed))
+            )
+            f = sample_fault(kind, r.fault_slice, belief, np.random.default_rng([r.seed, 15]))
             assert [k.value for k in f.kinds()] == [kind]
             t = fault_time(f)
             if kind in ("anchor", "jam"):
@@ -283,7 +286,8 @@ def test_fault_campaign_draws_each_kind_across_the_window(slope50):
             if kind == "anchor":
                 e = np.asarray(f.anchor_belief_error)
                 assert ANCHOR_ERROR[0] <= np.linalg.norm(e) <= ANCHOR_ERROR[1]
-                assert geo.surface.z_S @ e >= 0.0
+                assert LandingGeometry.from_scenario(belief).surface.z_S @ e >= 0.0
+                faulty_belief(belief, f)  # accepted: the believed anchor is not below
         if times:  # stratified: one time in each of the 20 slices of the window
             slices = np.floor((np.array(times) - 1.0) / (71.0 / 20)).astype(int)
             assert sorted(slices.tolist()) == list(range(20))

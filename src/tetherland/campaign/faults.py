@@ -9,7 +9,8 @@ n equal slices), so every phase of the nominal mission gets faults:
 * snap: the cable breaks at the fault time;
 * mocap: an outage from the fault time, 0.5-3 s long;
 * anchor: the believed anchor off by 5-15 cm in a uniformly drawn direction (its normal
-  component kept above the surface); present from the start, so the phase is "all";
+  component kept above the believed surface); present from the start, so the phase is
+  "all";
 * jam: the hook does not release (it matters only at unhooking; phase "all").
 
 Each run is classified by the phase the plant was in at the fault time (from the run's
@@ -72,9 +73,13 @@ def time_slice(window: tuple[float, float], index: int, runs: int) -> tuple[floa
 
 
 def sample_fault(
-    kind: str, t_range: tuple[float, float], truth: Scenario, rng: np.random.Generator
+    kind: str, t_range: tuple[float, float], belief: Scenario, rng: np.random.Generator
 ) -> FaultsConfig:
-    """The ``[faults]`` of one run of fault ``kind``, its time uniform in ``t_range`` [s]."""
+    """The ``[faults]`` of one run of fault ``kind``, its time uniform in ``t_range`` [s].
+
+    ``belief`` is the scenario the anchor error is added to: its surface normal bounds the
+    error's normal component (the believed anchor stays on or above the believed surface).
+    """
     t = float(rng.uniform(*t_range))
     if kind == FaultKind.ROTOR.value:
         eff = [1.0, 1.0, 1.0, 1.0]
@@ -87,7 +92,7 @@ def sample_fault(
             mocap_outage_start=t, mocap_outage_duration=float(rng.uniform(*OUTAGE_DURATION))
         )
     if kind == FaultKind.ANCHOR.value:
-        z_S = LandingGeometry.from_scenario(truth).surface.z_S
+        z_S = LandingGeometry.from_scenario(belief).surface.z_S
         u = rng.standard_normal(3)
         u /= np.linalg.norm(u)
         if u @ z_S < 0.0:  # keep the believed anchor on or above the surface

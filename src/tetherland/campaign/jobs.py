@@ -134,7 +134,7 @@ def execute(job: Job) -> dict[str, Any]:
         if run.fault is not None:  # its own stream: the perturbation stays that of the seed
             assert run.fault_slice is not None
             rng = np.random.default_rng([run.seed, 15])
-            faults = sample_fault(run.fault, run.fault_slice, plant, rng)
+            faults = sample_fault(run.fault, run.fault_slice, belief, rng)
             plant = plant.model_copy(update={"faults": faults})
             record["fault"] = {"kind": run.fault, "t": fault_time(faults),
                                **faults.model_dump(mode="json")}  # fmt: skip
