@@ -127,9 +127,8 @@ def test_compiled_attitude_feedforward_matches_the_reference(seed):
     F = rng.normal(0, 10, 3) + np.array([0.0, 0.0, rng.uniform(-5, 20)])
     dF, ddF = rng.normal(0, 10 ** rng.uniform(-3, 2), (2, 3))
     yaw = rng.uniform(-math.pi, math.pi)
-    for got, want in zip(
-        attitude_feedforward_fast(F, dF, ddF, yaw), attitude_feedforward(F, dF, ddF, yaw)
-    ):
+    fast = attitude_feedforward_fast(F, dF, ddF, yaw)
+    for got, want in zip(fast, attitude_feedforward(F, dF, ddF, yaw), strict=True):
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
 
 
