@@ -30,8 +30,11 @@ def plant():
 
 def test_gust_sum_matches_each_gusts_raised_cosine(plant):
     rng = np.random.default_rng(3)
-    gusts = [Gust(float(rng.uniform(0, 20)), float(rng.uniform(0.2, 3)),
-                  (float(rng.normal(0, 0.3)), float(rng.normal(0, 0.3)))) for _ in range(12)]  # fmt: skip
+    gusts = [
+        Gust(float(t0), float(d), (float(fx), float(fy)))
+        for t0, d, fx, fy in zip(rng.uniform(0, 20, 12), rng.uniform(0.2, 3, 12),
+                                 rng.normal(0, 0.3, 12), rng.normal(0, 0.3, 12), strict=True)
+    ]  # fmt: skip
     fast = WindGusts(plant, gusts, 0.002)
     general = WindGusts(plant, [_Opaque(g) for g in gusts], 0.002)
     for t in np.concatenate((rng.uniform(-1, 25, 400), [g.t_start for g in gusts])):
