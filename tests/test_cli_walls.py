@@ -53,7 +53,7 @@ def test_invalid_input_exits_2_with_one_line(capsys, tmp_path, command, override
     ],
 )
 def test_unreachable_slope_exits_1_with_the_binding_reason(capsys, tmp_path, command, needle):
-    code, out, err, out_dir = _run(capsys, tmp_path, command, "surface.slope_deg=100")
+    code, _, err, out_dir = _run(capsys, tmp_path, command, "surface.slope_deg=100")
     lines = err.strip().splitlines()
     assert code == 1 and len(lines) == 1 and needle in lines[0]
     assert lines[0].startswith("error: ") and "Traceback" not in err
@@ -62,11 +62,11 @@ def test_unreachable_slope_exits_1_with_the_binding_reason(capsys, tmp_path, com
         assert not any(out_dir.iterdir())
 
 
-def test_unreachable_slope_for_design_names_the_binding_limit(capsys, tmp_path):
+def test_unreachable_slope_for_design_names_the_binding_limit(capsys):
     """`design` may shorten the cable (the rotor floor then holds up to about 103 deg): on
-    100 deg the hooking clearance binds instead, and no map is asked for, none written."""
+    100 deg the hooking clearance binds instead."""
     code = main(["design", "wall90", "--slope-deg", "100"])
-    out, err = capsys.readouterr()
+    _, err = capsys.readouterr()
     lines = err.strip().splitlines()
     assert code == 1 and len(lines) == 1 and lines[0].startswith("error: no design lands on 100")
     assert "hooking pass comes too close to the surface" in lines[0]
