@@ -63,7 +63,7 @@ class MissionConfig(Section):
     contact_force_time_constant: float = Field(0.05, ge=0, le=5)
     """Low-pass time constant of the estimated surface force [s]."""
     contact_impact_force: float = Field(1.5, gt=0, le=1000)
-    """... or one unfiltered sample of it exceeded this within the dwell (impact) [N]."""
+    """... or one unfiltered sample of it exceeded this within twice the dwell (impact) [N]."""
     contact_dwell: float = Field(0.3, ge=0, le=5)
     """Contact is confirmed when every contact signal has held for this long (longer than
     a gust stalls the link) [s]."""

@@ -16,7 +16,7 @@ contact with the surface is believed only when every signal agrees for
    specific force and the rotors' thrust): the external force on the vehicle without its
    component along the cable, projected on the believed surface normal, low-passed, is
    above ``contact_force``, or an impact above ``contact_impact_force`` was seen within
-   the dwell.
+   twice the dwell.
 
 A gust pushes the vehicle away from the surface only while it lasts and gives no
 clearance; an anchor belief error shifts the link angles but not the surface force. A
@@ -155,18 +155,25 @@ class ContactGeometry:
         return float(heights.min()) + self.sag
 
     def normal_force(self, p_W: FloatArray, R_WB: FloatArray, external_B: FloatArray) -> float:
-        """The external force without its component along the cable, on z_S [N].
+        """The surface's push N of an external force f = -f_L d + N z_S (+ wind) [N].
 
-        The cable pulls along d (anchor to attachment point); what is left of the external
-        force m (f_B - b_a) - f_R e3 across the cable is the surface's push and the wind.
+        The cable pulls along -d (d from the anchor to the attachment point), the surface
+        pushes along z_S; N = (f.z_S - (f.d)(d.z_S)) / (1 - (d.z_S)^2) whatever the tension
+        (f.z_S where d is along z_S). ``external_B`` is m (f_B - b_a) - f_R e3 in F_B.
         """
         f_W = R_WB @ external_B
+        z = self.z_S
         d = p_W + R_WB @ self.r_att_B - self.p_A
         n = float(np.linalg.norm(d))
+        fz = float(f_W @ z)
         if n < 1e-9:
-            return float(f_W @ self.z_S)
+            return fz
         d /= n
-        return float(f_W @ self.z_S - (f_W @ d) * (d @ self.z_S))
+        dz = float(d @ z)
+        across = 1.0 - dz * dz
+        if across < 1e-6:
+            return fz
+        return (fz - float(f_W @ d) * dz) / across
 
 
 class ContactRule:
@@ -224,7 +231,7 @@ class ContactRule:
             force = self._filtered_force(t, raw)
             if raw > cfg.contact_impact_force:
                 self._impact_at = t
-            pressed = force > cfg.contact_force or t - self._impact_at <= cfg.contact_dwell
+            pressed = force > cfg.contact_force or t - self._impact_at <= 2.0 * cfg.contact_dwell
         return ContactEvidence(clearance, lag, link.phi_dot, force, near, stalled, pressed)
 
     def update(self, t: float, est: StateEstimate, phi_d: float) -> ContactDecision:
