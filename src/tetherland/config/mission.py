@@ -46,6 +46,12 @@ class MissionConfig(Section):
     """Guarded touchdown: after the planned landing, the link elevation reference keeps
     descending at this rate until contact is detected (surface closer or farther than
     believed) [deg/s]."""
+    touchdown_approach_speed: float = Field(0.03, ge=0, le=5)
+    """Slow approach: within reach of the believed surface the planned landing's clock is
+    slowed so that the link reference approaches the surface no faster than this plus
+    ``touchdown_approach_gain`` times the estimated lander clearance (0: no slowing) [m/s]."""
+    touchdown_approach_gain: float = Field(2.0, ge=0, le=100)
+    """... the allowed approach speed grows by this per metre of clearance [1/s]."""
     touchdown_search_deg: float = Field(6.0, gt=0, le=45)
     """Guarded touchdown: how far beyond the planned phi* the search goes [deg]."""
     contact_error_deg: float = Field(0.8, gt=0, le=45)

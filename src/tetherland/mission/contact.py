@@ -36,7 +36,7 @@ import numpy as np
 from tetherland.config import Scenario
 from tetherland.config.mission import MissionConfig
 from tetherland.geometry import FloatArray, LandingGeometry, effective_h_R
-from tetherland.interfaces import ControlMode, Reference, StateEstimate
+from tetherland.interfaces import ControlMode, Feedforward, Reference, StateEstimate
 from tetherland.rotations import quat_to_rotmat
 
 
@@ -287,3 +287,74 @@ def contact_hold(
         t=t, mode=ControlMode.TETHERED, phase=phase, output=out,
         thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
     )  # fmt: skip
+
+
+class SlowApproach:
+    """The plan's clock slowed near the surface: the last centimetres at a capped speed.
+
+    The link reference approaches the surface at l |phi_d'| (the attachment point moves
+    across the cable, nearly along z_S near phi*). Within reach of the believed surface
+    the plan's clock tau advances at alpha = min(1, v_cap / (l |phi_d'(tau)|)) with
+    v_cap = ``touchdown_approach_speed`` + ``touchdown_approach_gain`` * clearance: the
+    closer the estimated landers, the slower the reference, and every output (tilt too)
+    still follows the planned path. The k-th derivative rows scale by alpha^k, as do the
+    feed-forward's rates (d alpha/dt is neglected: alpha changes slowly).
+
+    Parameters
+    ----------
+    cfg : MissionConfig
+    geometry : ContactGeometry
+    length : float
+        Believed cable length l [m].
+    """
+
+    def __init__(self, cfg: MissionConfig, geometry: ContactGeometry, length: float) -> None:
+        self.cfg = cfg
+        self.geometry = geometry
+        self.length = length
+        self.start(0.0)
+
+    def start(self, t0: float) -> None:
+        """The plan starts at mission time ``t0`` (clock tau = t)."""
+        self.tau = t0
+        self._t = t0
+        self.alpha = 1.0
+
+    def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
+        """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
+        tau [rad/s]. Returns the new tau [s]."""
+        dt = t - self._t
+        self._t = t
+        cfg = self.cfg
+        alpha = 1.0
+        if cfg.touchdown_approach_speed > 0.0:
+            speed = self.length * abs(rate_at)
+            clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
+            cap = cfg.touchdown_approach_speed + cfg.touchdown_approach_gain * max(clearance, 0.0)
+            if speed > cap:
+                alpha = cap / speed
+        self.alpha = alpha
+        self.tau += alpha * max(dt, 0.0)
+        return self.tau
+
+    def scale(self, ref: Reference, t: float) -> Reference:
+        """``ref`` (sampled at tau) for mission time ``t`` with its rates scaled by alpha."""
+        a = self.alpha
+        if a == 1.0 or ref.output is None:
+            if ref.t == t:
+                return ref
+            return Reference(
+                t=t, mode=ref.mode, phase=ref.phase, output=ref.output,
+                thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+            )  # fmt: skip
+        out = ref.output * np.array([1.0, a, a * a, a**3, a**4])[: ref.output.shape[0], None]
+        ff = ref.feedforward
+        if ff is not None:
+            ff = Feedforward(
+                omega_B=a * ff.omega_B, omega_dot_B=a * a * ff.omega_dot_B, f_R=ff.f_R,
+                f_R_dot=a * ff.f_R_dot, f_R_ddot=a * a * ff.f_R_ddot, tension=ff.tension,
+            )  # fmt: skip
+        return Reference(
+            t=t, mode=ref.mode, phase=ref.phase, output=out, thrust_ff=ref.thrust_ff,
+            feedforward=ff,
+        )  # fmt: skip

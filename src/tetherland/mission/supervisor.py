@@ -37,6 +37,7 @@ from tetherland.interfaces import ControlMode, EventRecord, Reference, StateEsti
 from tetherland.mission.contact import (
     ContactDecision,
     ContactRule,
+    SlowApproach,
     contact_hold,
     early_contact_armed,
     guarded_descent,
@@ -150,6 +151,8 @@ class MissionSupervisor:
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
         self._contact_rule = ContactRule(scenario)
+        self._slow = SlowApproach(cfg, self._contact_rule.geometry, scenario.tether.length)
+        self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)
         self._path = self._new_path(0.0, wp.start).to(
@@ -331,6 +334,8 @@ class MissionSupervisor:
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
+            self._slow.start(t)
+            self._landing_rate = 0.0
             self._enter(
                 Phase.TETHERED_LANDING, t,
                 f"estimated tension {est.tension:.2f} N above {cfg.tension_threshold} N "
@@ -365,14 +370,17 @@ class MissionSupervisor:
     def _tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         track = self._track.track
-        ref = self._track.reference(t, self.phase)
-        if early_contact_armed(self.cfg, t, track.t0, track.duration):
+        tau = self._slow.advance(t, est, self._landing_rate)  # the slowed plan clock
+        planned = self._track.reference(tau, self.phase)
+        self._landing_rate = abs(float(planned.output[1, 0]))
+        ref = self._slow.scale(planned, t)
+        if early_contact_armed(self.cfg, tau, track.t0, track.duration):
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             if decision.confirmed:
                 return self._contact(t, est, ref, decision, "before the planned end")
         else:
             self._contact_rule.idle()
-        if t >= track.t_end:
+        if tau >= track.t_end:
             self.times["t_L_plan"] = t
             self._search_start = t
             self._hold = None
