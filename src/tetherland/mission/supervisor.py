@@ -6,6 +6,10 @@ transition with its reason). It sees only the estimate, never the plant's truth:
 
 - a hook is taken as caught when the estimated tension passes the threshold for the dwell
   time while stretching; without tension the hook counts as missed and is retried;
+- touchdown is confirmed by the multi-signal rule of :mod:`tetherland.mission.contact`
+  (clearance, link stall, surface force), near the end of the planned landing (whose clock
+  slows near the surface, :class:`~tetherland.mission.contact.SlowApproach`) and in the
+  guarded descent past it;
 - switches are bumpless (6.6.3): a tethered reference starts at the current output and
   blends onto the plan; the release after the takeoff starts at the current position with
   the cable pull as a force feed-forward (the reference acceleration f_L d/m) that fades
