@@ -12,11 +12,12 @@ from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
 from tetherland.campaign.spec import CampaignSpec, Sweep
 from tetherland.config import load_scenario, with_overrides
 from tetherland.geometry import LandingGeometry
-from tetherland.interfaces import ControlMode, Reference, StateEstimate
+from tetherland.interfaces import ControlMode, Feedforward, Reference, StateEstimate
 from tetherland.mission import Phase
 from tetherland.mission.contact import (
     ContactGeometry,
     ContactRule,
+    SlowApproach,
     contact_hold,
     guarded_descent,
 )
@@ -165,6 +166,38 @@ def test_guarded_descent_and_hold(scenario):
     hold = contact_hold(cfg, 2.0, est, g, 7)
     assert hold.output[0, 0] == pytest.approx(-1.02 - math.radians(cfg.contact_press_deg))
     assert np.all(hold.output[1:] == 0.0) and hold.output[0, 1:].tolist() == out[0, 1:].tolist()
+
+
+def test_the_slow_approach_caps_the_reference_speed_near_the_surface(scenario, geo):
+    """alpha = (v0 + k c) / (l |phi_d'|) within reach, 1 far away; the clock advances by
+    alpha dt and the k-th derivative rows (and the feed-forward rates) scale by alpha^k."""
+    cfg = scenario.mission
+    rule = ContactRule(scenario)
+    slow = SlowApproach(cfg, rule.geometry, scenario.tether.length)
+    l, v0, gain = scenario.tether.length, cfg.touchdown_approach_speed, cfg.touchdown_approach_gain
+    rate = math.radians(5.0)  # 0.1 m/s of reference speed at l = 1.2 m
+    c = 0.01
+    slow.start(10.0)
+    est = estimate(geo, scenario, 10.0, phi=geo.phi_star, phi_dot=0.0, height=c)
+    tau = slow.advance(10.1, est, rate)
+    alpha = (v0 + gain * c) / (l * rate)
+    assert 0.0 < alpha < 1.0
+    assert slow.alpha == pytest.approx(alpha) and tau == pytest.approx(10.0 + 0.1 * alpha)
+    far = estimate(geo, scenario, 10.1, phi=geo.phi_star, phi_dot=0.0, height=0.5)
+    assert slow.advance(10.2, far, rate) == pytest.approx(tau + 0.1) and slow.alpha == 1.0
+    slow.advance(10.3, est, rate)
+    out = np.arange(20.0).reshape(5, 4)
+    ff = Feedforward(omega_B=np.ones(3), omega_dot_B=np.ones(3), f_R=9.0, f_R_dot=1.0,
+                     f_R_ddot=1.0, tension=2.0)  # fmt: skip
+    ref = Reference(t=1.0, mode=ControlMode.TETHERED, output=out, thrust_ff=9.0, feedforward=ff)
+    scaled = slow.scale(ref, 10.3)
+    assert scaled.t == 10.3
+    for k in range(5):
+        assert scaled.output[k] == pytest.approx(alpha**k * out[k])
+    f = scaled.feedforward
+    assert f.omega_B == pytest.approx(alpha * ff.omega_B)
+    assert f.omega_dot_B == pytest.approx(alpha**2 * ff.omega_dot_B)
+    assert (f.f_R, f.tension) == (9.0, 2.0) and f.f_R_ddot == pytest.approx(alpha**2)
 
 
 # ---------------------------------------------------------------------- campaign regressions

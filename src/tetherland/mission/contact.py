@@ -312,6 +312,11 @@ class SlowApproach:
         self.cfg = cfg
         self.geometry = geometry
         self.length = length
+        g = geometry
+        self._z = g.z_S.tolist()
+        self._o = g.surface_point.tolist()
+        # the lowest tip lies at most this far below the centre of mass, whatever the tilt
+        self._reach = float(np.linalg.norm(g.tips_B, axis=1).max()) - g.sag
         self.start(0.0)
 
     def start(self, t0: float) -> None:
@@ -327,12 +332,17 @@ class SlowApproach:
         self._t = t
         cfg = self.cfg
         alpha = 1.0
-        if cfg.touchdown_approach_speed > 0.0:
-            speed = self.length * abs(rate_at)
-            clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
-            cap = cfg.touchdown_approach_speed + cfg.touchdown_approach_gain * max(clearance, 0.0)
-            if speed > cap:
-                alpha = cap / speed
+        v0, gain = cfg.touchdown_approach_speed, cfg.touchdown_approach_gain
+        speed = self.length * abs(rate_at)
+        if v0 > 0.0 and speed > v0:
+            px, py, pz = est.body.p_W.tolist()
+            (zx, zy, zz), (ox, oy, oz) = self._z, self._o
+            low = (px - ox) * zx + (py - oy) * zy + (pz - oz) * zz - self._reach
+            if gain == 0.0 or low < (speed - v0) / gain:  # within reach: the exact clearance
+                clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
+                cap = v0 + gain * max(clearance, 0.0)
+                if speed > cap:
+                    alpha = cap / speed
         self.alpha = alpha
         self.tau += alpha * max(dt, 0.0)
         return self.tau
