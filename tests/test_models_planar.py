@@ -25,7 +25,8 @@ from tetherland.models.quadrotor import RotorLayout
 from tetherland.models.tethered import link_dynamics, tethered_rhs, thrust_in_link_frame
 
 SCENARIO = load_scenario("slope50")
-PARAMS = PlanarParams.from_scenario(SCENARIO)
+PARAMS = PlanarParams.from_scenario(load_scenario("slope50", ["vehicle.cable_attachment=[0,0,0]"]))
+"""The chapter's model (cable at the centre of mass): the closed forms of (6.18)."""
 MODEL = ExtendedPlanarModel(PARAMS)
 M, L = PARAMS.mass, PARAMS.length
 

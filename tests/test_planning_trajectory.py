@@ -136,17 +136,24 @@ def test_derivatives_are_consistent_with_finite_differences(ocp, spline, rng):
 
 
 def test_nominal_values_from_flatness_agree_with_the_plan(ocp, spline):
-    for result in (ocp, spline):
+    """The flatness map is the chapter's model (cable at the centre of mass): it agrees
+    with a plan at the centre of mass to 1e-8, and with the slope50 plans (exact offset)
+    to within the coupling force m |alpha x r + omega x (omega x r)| (under 0.06 N)."""
+    at_com = Planner().plan(load_scenario("slope50", ["vehicle.cable_attachment=[0,0,0]"]))
+    for result, tol in ((at_com, 1e-8), (ocp, 0.06), (spline, 0.06)):
         traj = result.trajectory
         t = np.linspace(0.0, traj.duration, 9)
         s = traj.sample(t)
         nominal = traj.nominal_many(t)
-        np.testing.assert_allclose(nominal["rotor_thrusts"], s.thrusts, atol=1e-8)
-        np.testing.assert_allclose(nominal["tension"], s.tension, atol=1e-8)
-        np.testing.assert_allclose(nominal["f_R_dot"], s.thrust_rates.sum(axis=1), atol=1e-6)
+        np.testing.assert_allclose(nominal["rotor_thrusts"], s.thrusts, atol=tol)
+        np.testing.assert_allclose(nominal["tension"], s.tension, atol=tol)
+        if tol > 1e-8:
+            assert np.max(np.abs(nominal["tension"] - s.tension)) > 1e-5  # the offset counts
+        rate_tol = 1e-6 if tol == 1e-8 else 0.1
+        np.testing.assert_allclose(nominal["f_R_dot"], s.thrust_rates.sum(axis=1), atol=rate_tol)
         np.testing.assert_allclose(nominal["roll"], 0.0, atol=1e-12)
         one = traj.nominal(1.3)
-        assert one.f_R == pytest.approx(traj.sample([1.3]).f_R[0], rel=1e-10)
+        assert one.f_R == pytest.approx(traj.sample([1.3]).f_R[0], rel=1e-10, abs=tol)
         # the link end lies on the cable sphere around the anchor
         assert np.linalg.norm(one.p_W - traj.meta.p_A) == pytest.approx(traj.meta.length)
 

@@ -9,7 +9,7 @@ All lengths in metres, angles in radians.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -199,21 +199,50 @@ def inclined_hover_direction(R_WS: FloatArray, c: float) -> FloatArray:
 
 
 def inclined_landing_point(
-    p_A: ArrayLike, R_WS: FloatArray, c: float, length: float, h_R: float
+    p_A: ArrayLike,
+    R_WS: FloatArray,
+    c: float,
+    length: float,
+    h_R: float,
+    r_par_W: ArrayLike | None = None,
 ) -> FloatArray:
-    """p~_L = p_A + l d~ - h_R z_S (after (6.12)) [m]."""
-    return (
-        np.asarray(p_A, dtype=float) + length * inclined_hover_direction(R_WS, c) - h_R * R_WS[:, 2]
-    )
+    """p~_L = p_A + l d~ - h_R z_S - r_par (after (6.12), docs/theory.md (3.7)) [m].
+
+    ``r_par_W`` is the part of the landed attachment offset R_WB r_att parallel to the
+    surface (default 0, the chapter's cable at the centre of mass); ``h_R`` is then the
+    attachment height h_att.
+    """
+    p = np.asarray(p_A, dtype=float) + length * inclined_hover_direction(R_WS, c) - h_R * R_WS[:, 2]
+    return p if r_par_W is None else p - np.asarray(r_par_W, dtype=float)
 
 
 def anchor_for_landing_point(
-    p_L: ArrayLike, R_WS: FloatArray, c: float, length: float, h_R: float
+    p_L: ArrayLike,
+    R_WS: FloatArray,
+    c: float,
+    length: float,
+    h_R: float,
+    r_par_W: ArrayLike | None = None,
 ) -> FloatArray:
-    """p~_A = p*_L + h_R z_S - l d~ (6.13): anchor placement for a desired landing point [m]."""
-    return (
-        np.asarray(p_L, dtype=float) + h_R * R_WS[:, 2] - length * inclined_hover_direction(R_WS, c)
-    )
+    """p~_A = p*_L + h_R z_S + r_par - l d~ (6.13), (3.8): anchor placement for a desired
+    landing point [m] (``r_par_W`` as in :func:`inclined_landing_point`)."""
+    p = np.asarray(p_L, dtype=float) + h_R * R_WS[:, 2] - length * inclined_hover_direction(R_WS, c)
+    return p if r_par_W is None else p + np.asarray(r_par_W, dtype=float)
+
+
+def landed_rotation(R_WS: FloatArray, heading: float = 0.0) -> FloatArray:
+    """R_WB of the landed vehicle: z_B = z_S (condition (2)) and x_B at ``heading`` psi*
+    from x_S about z_S, R_WB = R_WS R_z(psi*) [-]."""
+    c, s = math.cos(heading), math.sin(heading)
+    return R_WS @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def attachment_in_plane(R_WS: FloatArray, r_att_B: ArrayLike, heading: float = 0.0) -> FloatArray:
+    """r_par = R_WB r_att - (z_S . R_WB r_att) z_S: the landed attachment offset parallel to
+    the surface, in F_W [m] (zero for an offset along z_B only)."""
+    r_W = landed_rotation(R_WS, heading) @ np.asarray(r_att_B, dtype=float)
+    z_S = R_WS[:, 2]
+    return r_W - float(z_S @ r_W) * z_S
 
 
 @dataclass(frozen=True)
@@ -324,6 +353,10 @@ class LandingGeometry:
     phi_star: float
     delta_star: float
     theta_A_star: float
+    r_par_W: FloatArray = field(default_factory=lambda: np.zeros(3))
+    """Landed attachment offset parallel to the surface, R_WB r_att less its z_S part, in
+    F_W [m] (:func:`attachment_in_plane`; zero for an offset along z_B): the attachment
+    point is p~_L + h_att z_S + r_par (docs/theory.md section 3.4)."""
 
     @property
     def gamma(self) -> float:
@@ -337,8 +370,8 @@ class LandingGeometry:
 
     @property
     def p_att_landed(self) -> FloatArray:
-        """Cable attachment point when landed, p~_L + h_att z_S = p_A + l d~ [m]."""
-        return self.p_L + self.h_att * self.surface.z_S
+        """Cable attachment point when landed, p~_L + h_att z_S + r_par = p_A + l d~ [m]."""
+        return self.p_L + self.h_att * self.surface.z_S + self.r_par_W
 
     def to_anchor(self, v_W: ArrayLike) -> FloatArray:
         """Express a world vector in F_A."""
@@ -360,6 +393,11 @@ class LandingGeometry:
             h_A=scenario.anchor.h_A,
             anchor=scenario.anchor.position,
             landing_point=scenario.anchor.landing_point,
+            r_par_W=attachment_in_plane(
+                surface.R_WS,
+                scenario.vehicle.cable_attachment,
+                math.radians(scenario.planner.heading_deg),
+            ),
         )
 
 
@@ -372,6 +410,7 @@ def landing_geometry(
     h_att: float | None = None,
     anchor: ArrayLike | None = None,
     landing_point: ArrayLike | None = None,
+    r_par_W: ArrayLike | None = None,
 ) -> LandingGeometry:
     """Landing geometry from an explicit anchor or a desired landing point (6.8)-(6.13).
 
@@ -383,13 +422,14 @@ def landing_geometry(
     h_att = h_R if h_att is None else h_att
     c = hover_cosine(h_att, h_A, length)
     R_WS = surface.R_WS
+    r_par = np.zeros(3) if r_par_W is None else np.asarray(r_par_W, dtype=float)
     if anchor is not None:
         p_A = np.asarray(anchor, dtype=float)
-        p_L = inclined_landing_point(p_A, R_WS, c, length, h_att)
+        p_L = inclined_landing_point(p_A, R_WS, c, length, h_att, r_par)
     else:
         p_L = np.asarray(surface.origin if landing_point is None else landing_point, dtype=float)
         p_L = surface.project(p_L)
-        p_A = anchor_for_landing_point(p_L, R_WS, c, length, h_att)
+        p_A = anchor_for_landing_point(p_L, R_WS, c, length, h_att, r_par)
     R_WA = anchor_frame(R_WS)
     d_tilde = inclined_hover_direction(R_WS, c)
     # In F_A, x_S = [cos(beta), 0, -sin(beta)] and z_S = [sin(beta), 0, cos(beta)], so
@@ -413,6 +453,7 @@ def landing_geometry(
         phi_star=phi_star,
         delta_star=delta_star,
         theta_A_star=theta_A_star,
+        r_par_W=r_par,
     )
 
 
@@ -445,8 +486,8 @@ def effective_h_R(scenario: Scenario) -> float:
 def attachment_height(scenario: Scenario) -> float:
     """Height of the cable attachment point above P_S when landed with z_B = z_S [m].
 
-    h_att = effective h_R + r_att,z. Only the offset along z_B moves the landing
-    geometry; an offset across z_B acts through the cable torque of section 6.6.5.
+    h_att = effective h_R + r_att,z. The offset across z_B does not change this height;
+    it shifts the landing point by -r_par (:func:`attachment_in_plane`).
     """
     return effective_h_R(scenario) + scenario.vehicle.cable_attachment[2]
 
@@ -537,7 +578,15 @@ def stretched_landing(
             break
     f_L = landed_hover_tension(beta, h / (l + s), mass, g)
     stretched = landing_geometry(
-        geo.surface, length=l + s, h_R=geo.h_R, h_A=geo.h_A, h_att=geo.h_att, anchor=geo.p_A
+        geo.surface,
+        length=l + s,
+        h_R=geo.h_R,
+        h_A=geo.h_A,
+        h_att=geo.h_att,
+        anchor=geo.p_A,
+        r_par_W=geo.r_par_W,
     )
-    anchor = anchor_for_landing_point(geo.p_L, geo.surface.R_WS, stretched.c, l + s, geo.h_att)
+    anchor = anchor_for_landing_point(
+        geo.p_L, geo.surface.R_WS, stretched.c, l + s, geo.h_att, geo.r_par_W
+    )
     return StretchedLanding(f_L, s, stretched, stretched.p_L - geo.p_L, anchor)

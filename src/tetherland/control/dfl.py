@@ -20,6 +20,21 @@ f_R', so the command leads the motor lag along it. The Lie derivatives are deriv
 symbolically with CasADi (:mod:`tetherland.control.dfl_model`, the vehicle parameters
 symbolic too) and generated into a numba kernel, :mod:`tetherland.control.dfl_terms`.
 
+What it neglects of the cable attachment offset r_att (docs/theory.md section 4.6): the
+model's link ends at the centre of mass. With an offset the link ends at the attachment
+point, whose acceleration adds R_AB(alpha x r + omega x (omega x r)) to the centre of
+mass's (4.10); since alpha = J^-1 tau_B, phi'' and delta'' would then depend on the
+torque input directly, all four rows of L_G L_f y at order 2 would carry only the three
+torque columns, and the decoupling matrix of the relative degrees {4, 4, 2, 2} would be
+singular: no static state feedback on this extension linearises the offset model
+exactly. The controller keeps the chapter's model and cancels the offset's cable moment
+r x (-f_L R_BA d) with the estimated tension (``offset_compensation``, section 7.7); the
+neglected coupling force m |alpha x r + omega x (omega x r)| peaks at 0.06 N on
+``slope50`` (under 1 % of m g, section 6.7), which the feedback (and ``dfl_integral``)
+absorbs. The planner counts it exactly (section 6.7), and it is the elastic cable's
+stretch the DFL also neglects: the link length is l, not l + f_L/k (about 1 cm for
+nylon at l = 1 m, a 1 % error in the l of phi'').
+
 The extension states f_R, f_R' live in the controller and are integrated at the control
 rate; :meth:`DflController.reset` starts them at a given thrust (bumpless switching).
 Singular where A is (nearly) singular, i.e. its Hadamard ratio is below

@@ -22,6 +22,7 @@ Designs are ranked by that rotor margin, then by hooking clearance.
 from __future__ import annotations
 
 import enum
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -41,7 +42,13 @@ from tetherland.config import Scenario, with_overrides
 from tetherland.design.margins import plan_rotor_margin, rotor_margin
 from tetherland.design.space import DesignPoint, DesignSpace
 from tetherland.errors import ConfigError
-from tetherland.geometry import LandingGeometry, Surface, effective_h_R, landing_geometry
+from tetherland.geometry import (
+    LandingGeometry,
+    Surface,
+    attachment_in_plane,
+    effective_h_R,
+    landing_geometry,
+)
 from tetherland.mission.hooking import hooking_pass_for, pass_clearance
 from tetherland.planning import Maneuver, Planner, PlanResult
 
@@ -385,6 +392,9 @@ def _best_hooking(
         h_att=h_R + cand.attachment[2],
         h_A=cand.h_A,
         landing_point=base.anchor.landing_point,
+        r_par_W=attachment_in_plane(
+            surface.R_WS, cand.attachment, math.radians(base.planner.heading_deg)
+        ),
     )
     capture, cfg = base.tether.capture_radius, base.mission
     drops = [d for d in space.hook_drops if d + capture < cand.length]

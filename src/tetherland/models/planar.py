@@ -53,6 +53,8 @@ NZ = 8
 """Size of the wrench-form extended state."""
 NV = 2
 """Size of the wrench-form input [f_R'', tau_y'']."""
+NC = 10
+"""Size of :attr:`PlanarParams.coefficients`."""
 
 PHI, THETA, PHI_DOT, THETA_DOT = 0, 1, 2, 3
 THRUSTS = slice(4, 8)
@@ -82,6 +84,13 @@ class PlanarParams:
         psi*, the constant rotation about z_B [rad].
     gravity : float
         g [m/s^2].
+    offset : (2,) tuple
+        (r_x, r_z): the cable attachment offset in the plane at theta_A = 0, the x_A and
+        z_A components of R_z(psi*) r_att [m] (docs/theory.md section 4.6; (0, 0): the
+        chapter's cable at the centre of mass).
+    offset_across : float
+        y_A component of R_z(psi*) r_att [m]: it adds no planar dynamics, only rotor
+        torques about x_A and z_A (:func:`planar_across_torque`).
     """
 
     mass: float
@@ -91,6 +100,8 @@ class PlanarParams:
     allocation: FloatArray
     heading: float = 0.0
     gravity: float = GRAVITY
+    offset: tuple[float, float] = (0.0, 0.0)
+    offset_across: float = 0.0
 
     @classmethod
     def from_matrices(
@@ -101,6 +112,7 @@ class PlanarParams:
         allocation: ArrayLike,
         heading: float = 0.0,
         gravity: float = GRAVITY,
+        r_att_B: ArrayLike | None = None,
     ) -> PlanarParams:
         """Planar constants for a vehicle flying with heading ``psi*`` = ``heading``.
 
@@ -110,6 +122,8 @@ class PlanarParams:
             J in F_B [kg m^2].
         allocation : (4, 4) array
             Gamma (6.19).
+        r_att_B : (3,) array, optional
+            Cable attachment offset in F_B [m] (default: at the centre of mass).
 
         Raises
         ------
@@ -130,6 +144,9 @@ class PlanarParams:
                 "use a multiple of 90 deg"
             )
         Gamma = np.asarray(allocation, dtype=float)
+        r = np.zeros(3) if r_att_B is None else np.asarray(r_att_B, dtype=float)
+        c_h, s_h = math.cos(heading), math.sin(heading)
+        r0 = np.array([c_h * r[0] - s_h * r[1], s_h * r[0] + c_h * r[1], r[2]])  # R_z(psi) r
         return cls(
             mass=mass,
             length=length,
@@ -138,6 +155,8 @@ class PlanarParams:
             allocation=Gamma,
             heading=heading,
             gravity=gravity,
+            offset=(float(r0[0]), float(r0[2])),
+            offset_across=float(r0[1]),
         )
 
     @classmethod
@@ -149,13 +168,20 @@ class PlanarParams:
             v.inertia,
             RotorLayout.from_config(v).allocation,
             heading,
+            r_att_B=v.cable_attachment,
         )
 
     @property
+    def has_offset(self) -> bool:
+        """Whether the cable is attached away from the centre of mass in the plane."""
+        return self.offset != (0.0, 0.0)
+
+    @property
     def coefficients(self) -> FloatArray:
-        """[m, l, J_y, g, torque_row (4)]: the constants the dynamics depend on (8,)."""
+        """[m, l, J_y, g, torque_row (4), r_x, r_z]: the constants the dynamics depend on
+        (NC = 10,)."""
         return np.concatenate(
-            ([self.mass, self.length, self.inertia, self.gravity], self.torque_row)
+            ([self.mass, self.length, self.inertia, self.gravity], self.torque_row, self.offset)
         )
 
     @property
@@ -199,7 +225,14 @@ def planar_terms(
     Arguments are numbers, arrays or CasADi symbols: the output elevation and tilt with
     their rates, the planar wrench w = [F = f_R, tau = tau_y] with w' and w'' (``ddF`` and
     ``ddtau`` may be None, then the snaps are omitted), and ``c`` an object with
-    ``mass``, ``length``, ``inertia``, ``gravity``.
+    ``mass``, ``length``, ``inertia``, ``gravity`` and ``offset`` (r_x, r_z).
+
+    ``tau`` is the planner's net torque about y_A, J_y theta_A'' (docs/theory.md
+    (4.20)): the rotor torque is tau + b f_L (:func:`rotor_torque`), the cable's own
+    moment cancelled as the controllers do. The accelerations and the tension are then
+    exact with the attachment offset ``c.offset``; the closed-form jerks and snaps are
+    those of the chapter's model, exact for a zero offset only (with an offset
+    :meth:`ExtendedPlanarModel.derivatives` differentiates the exact model instead).
     """
     a1 = -c.gravity / c.length
     a2 = 1.0 / (c.mass * c.length)
@@ -207,14 +240,18 @@ def planar_terms(
     ds = dphi + dtheta
     cs, ss = ops.cos(s), ops.sin(s)
     cp, sp = ops.cos(phi), ops.sin(phi)
-    ddphi = a1 * cp + a2 * cs * F  # (6.18)
     ddtheta = tau / c.inertia
+    a, b = offset_arms(phi, theta, c.offset, ops)
+    ddphi = a1 * cp + a2 * cs * F + (a * ddtheta - b * dtheta**2) / c.length  # (6.18), (4.20)
     out = {
         "phi_ddot": ddphi,
         "theta_ddot": ddtheta,
         "phi_dddot": -a1 * sp * dphi - a2 * ss * ds * F + a2 * cs * dF,
         "theta_dddot": dtau / c.inertia,
-        "tension": F * ss - c.mass * c.gravity * sp + c.mass * c.length * dphi**2,
+        "tension": F * ss
+        - c.mass * c.gravity * sp
+        + c.mass * c.length * dphi**2
+        + c.mass * (a * dtheta**2 + b * ddtheta),  # (4.21)
     }
     if ddF is not None:
         dds = ddphi + ddtheta
@@ -230,6 +267,65 @@ def planar_terms(
     return out
 
 
+def offset_arms(phi: Any, theta: Any, r0: tuple[Any, Any], ops: SimpleNamespace) -> tuple[Any, Any]:
+    """(a, b) = (t.w, d.w), w = y_A x r, r = R_y(theta_A) r0 in the plane (docs/theory.md
+    (4.14)): the lever arms of the offset along and across the link [m]."""
+    ct, st = ops.cos(theta), ops.sin(theta)
+    rx = ct * r0[0] + st * r0[1]
+    rz = -st * r0[0] + ct * r0[1]
+    cp, sp = ops.cos(phi), ops.sin(phi)
+    return -sp * rz - cp * rx, cp * rz - sp * rx
+
+
+def rotor_torque(phi: Any, theta: Any, tau: Any, tension: Any, c: Any, ops: SimpleNamespace) -> Any:
+    """Rotor torque about y_A for the net torque ``tau`` = J_y theta_A'' and the tension
+    f_L: tau + b f_L, which cancels the cable's moment -b f_L (docs/theory.md (4.22)) [N m]."""
+    return tau + offset_arms(phi, theta, c.offset, ops)[1] * tension
+
+
+def planar_offset_accelerations(
+    phi: Any,
+    theta: Any,
+    dphi: Any,
+    dtheta: Any,
+    F: Any,
+    tau: Any,
+    r0: tuple[Any, Any],
+    c: Any,
+    ops: SimpleNamespace,
+) -> dict[str, Any]:
+    """phi'', theta_A'' and f_L of the planar model with the cable at an offset, exactly
+    (docs/theory.md (4.14)-(4.16)), for any backend.
+
+    ``r0`` = (r_x, r_z): the attachment offset in the plane at theta_A = 0, i.e. the x_A
+    and z_A components of R_z(psi*) r_att; at tilt theta_A it is r = R_y(theta_A) r0. With
+    w = y_A x r, a = t.w, b = d.w (t = dd/dphi):
+
+      (J_y + m b^2) theta_A'' = tau_y - b F_0,   F_0 = f_R sin(s) - m g sin(phi)
+                                                       + m l phi'^2 + m theta_A'^2 a
+      f_L = F_0 + m b theta_A''
+      l phi'' = -g cos(phi) + f_R cos(s)/m + a theta_A'' - b theta_A'^2
+
+    (s = phi + theta_A; tau_y the rotor torque about y_A). With r0 = 0 this is (6.18).
+    """
+    ct, st = ops.cos(theta), ops.sin(theta)
+    rx = ct * r0[0] + st * r0[1]
+    rz = -st * r0[0] + ct * r0[1]
+    cp, sp = ops.cos(phi), ops.sin(phi)
+    a = -sp * rz - cp * rx
+    b = cp * rz - sp * rx
+    m, l, g = c.mass, c.length, c.gravity
+    s = phi + theta
+    F0 = F * ops.sin(s) - m * g * sp + m * l * dphi**2 + m * dtheta**2 * a
+    ddtheta = (tau - b * F0) / (c.inertia + m * b * b)
+    return {
+        "phi_ddot": (-g * cp + F * ops.cos(s) / m + a * ddtheta - b * dtheta**2) / l,
+        "theta_ddot": ddtheta,
+        "tension": F0 + m * b * ddtheta,
+        "cable_torque": -b * (F0 + m * b * ddtheta),
+    }
+
+
 def planar_flat_inputs(
     phi_d: ArrayLike, theta_d: ArrayLike, c: Any, ops: SimpleNamespace = NUMPY
 ) -> dict[str, Any]:
@@ -238,8 +334,21 @@ def planar_flat_inputs(
     ``phi_d`` = [phi, phi', phi'', phi''', phi''''] and ``theta_d`` = [theta_A, ...,
     theta_A''''] (first axis the derivative order; trailing axes broadcast). Inverts
     (6.18): f_R = m l (phi'' + (g/l) cos phi) / cos(phi + theta_A), tau_y = J_y theta_A''.
-    Singular where cos(phi + theta_A) = 0 (thrust axis along the link).
+    Singular where cos(phi + theta_A) = 0 (thrust axis along the link). With a numeric
+    attachment offset (``c.has_offset``) the exact offset model is inverted instead
+    (docs/theory.md (4.19)).
     """
+    if ops is NUMPY and getattr(c, "has_offset", False):
+        P = np.asarray(phi_d, dtype=float)
+        T = np.asarray(theta_d, dtype=float)
+        shape = P.shape[1:]
+        vals = _offset_flat_function()(P.reshape(5, -1), T.reshape(5, -1), c.coefficients)
+        names = ("f_R", "f_R_dot", "f_R_ddot", "tau", "tau_dot", "tau_ddot")
+        out: dict[str, Any] = {}
+        for name, v in zip(names, vals, strict=True):
+            a = np.asarray(v).reshape(shape)
+            out[name] = float(a) if a.ndim == 0 else a
+        return out
     p0, p1, p2, p3, p4 = (phi_d[i] for i in range(5))
     t0, t1, t2, t3, t4 = (theta_d[i] for i in range(5))
     k = c.gravity / c.length
@@ -263,6 +372,85 @@ def planar_flat_inputs(
         "tau_dot": J * t3,
         "tau_ddot": J * t4,
     }
+
+
+def hover_torque(phi: float, theta: float, tension: float, c: Any) -> float:
+    """Rotor torque about y_A holding inclined hovering at (phi, theta_A) with the tension
+    f_L and the offset ``c.offset``: tau_y = b f_L, b = d.(y_A x r) (docs/theory.md (4.17))
+    [N m]; 0 without an offset."""
+    return offset_arms(phi, theta, c.offset, NUMPY)[1] * tension
+
+
+def planar_across_torque(
+    phi: Any, theta: Any, tension: Any, r_y: float, ops: SimpleNamespace
+) -> Any:
+    """Rotor torque [tau_x, tau_z] about x_A and z_A (F_A) cancelling the cable torque of
+    an offset component r_y across the plane: -(r x (-f_L d)) . (x_A, z_A) =
+    (f_L r_y sin(phi), -f_L r_y cos(phi)) (docs/theory.md (4.18)) [N m]."""
+    return (tension * r_y * ops.sin(phi), -tension * r_y * ops.cos(phi))
+
+
+@functools.lru_cache(maxsize=8)
+def _offset_derivatives_function() -> ca.Function:
+    """(x[12], u[4], c[NC]) -> phi''..phi, theta_A..theta_A, f_L of the exact
+    offset model, by differentiating its right-hand side along itself (AD)."""
+    x, u, cs = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("c", NC)
+    c = SimpleNamespace(
+        mass=cs[0], length=cs[1], inertia=cs[2], gravity=cs[3],
+        torque_row=[cs[4 + i] for i in range(4)], offset=(cs[8], cs[9]),
+    )  # fmt: skip
+    t = rotor_form_terms(x, None, c, CASADI)
+    xdot = rotor_form_rhs(x, u, c, CASADI)
+
+    def D(e: ca.SX) -> ca.SX:
+        return ca.jtimes(e, x, xdot)
+
+    p3, t3 = D(t["phi_ddot"]), D(t["theta_ddot"])
+    outs = [t["phi_ddot"], p3, D(p3), t["theta_ddot"], t3, D(t3), t["tension"]]
+    return ca.Function("offset_derivatives", [x, u, cs], outs)
+
+
+_DERIVATIVE_NAMES = (
+    "phi_ddot", "phi_dddot", "phi_ddddot", "theta_ddot", "theta_dddot", "theta_ddddot", "tension",
+)  # fmt: skip
+
+
+def offset_derivatives(x: FloatArray, u: FloatArray | None, c: PlanarParams) -> dict[str, Any]:
+    """:meth:`ExtendedPlanarModel.derivatives` of the exact offset model (AD of
+    :func:`planar_offset_accelerations`); ``x`` (12,) or (12, n)."""
+    x = np.asarray(x, dtype=float)
+    n = 1 if x.ndim == 1 else x.shape[1]
+    uu = np.zeros((NU, n)) if u is None else np.asarray(u, dtype=float).reshape(NU, n)
+    vals = _offset_derivatives_function()(x.reshape(NX, n), uu, c.coefficients)
+    out = {}
+    for name, v in zip(_DERIVATIVE_NAMES, vals, strict=True):
+        a = np.asarray(v).reshape(-1)
+        out[name] = float(a[0]) if x.ndim == 1 else a
+    if u is None:
+        del out["phi_ddddot"], out["theta_ddddot"]
+    return out
+
+
+@functools.lru_cache(maxsize=1)
+def _offset_flat_function() -> ca.Function:
+    """(phi_d[5], theta_d[5], c[NC]) -> f_R, f_R', f_R'', tau_y, tau_y', tau_y'' inverting
+    the offset model (4.20) along the output's time derivatives (AD); tau_y is the net
+    torque J_y theta_A''."""
+    P, T, cs = ca.SX.sym("phi", 5), ca.SX.sym("theta", 5), ca.SX.sym("c", NC)
+    m, l, J, g = cs[0], cs[1], cs[2], cs[3]
+    phi, theta, dtheta, ddphi, ddtheta = P[0], T[0], T[1], P[2], T[2]
+    a, b = offset_arms(phi, theta, (cs[8], cs[9]), CASADI)
+    cp = ca.cos(phi)
+    F = m * (l * ddphi + g * cp - a * ddtheta + b * dtheta**2) / ca.cos(phi + theta)
+    tau = J * ddtheta  # the net torque (4.20)
+    z = ca.vertcat(P[:4], T[:4])
+    zdot = ca.vertcat(P[1:], T[1:])
+
+    def D(e: ca.SX) -> ca.SX:
+        return ca.jtimes(e, z, zdot)
+
+    F1, tau1 = D(F), D(tau)
+    return ca.Function("offset_flat", [P, T, cs], [F, F1, D(F1), tau, tau1, D(tau1)])
 
 
 def _dot4(row: Any, f: Any) -> Any:
@@ -332,6 +520,8 @@ class ExtendedPlanarModel:
         and with ``u``: ``phi_ddddot``, ``theta_ddddot`` [rad/s^k, N].
         """
         x = np.asarray(x, dtype=float)
+        if self.params.has_offset:
+            return offset_derivatives(x, u, self.params)
         return rotor_form_terms(
             x, None if u is None else np.asarray(u, dtype=float), self.params, NUMPY
         )
@@ -345,13 +535,26 @@ class ExtendedPlanarModel:
         )
 
     def hover_state(self, phi: float, theta: float) -> FloatArray:
-        """Rotor-form state of inclined hovering at (phi, theta_A): zero rates, f = G [f_R, 0]."""
+        """Rotor-form state of inclined hovering at (phi, theta_A): zero rates, f = G [f_R, 0]
+        (zero net torque; the rotors add the offset's b f_L, :meth:`rotor_thrusts`)."""
         p = self.params
         den = math.cos(phi + theta)
         f_R = p.mass * p.gravity * math.cos(phi) / den
         return np.concatenate(
             ([phi, theta, 0.0, 0.0], self.params.G @ np.array([f_R, 0.0]), np.zeros(4))
         )
+
+    def rotor_thrusts(self, x: ArrayLike, tension: ArrayLike | None = None) -> FloatArray:
+        """The physical rotor thrusts of a rotor-form state: the state's f = G [f_R, tau_y]
+        (net torque) plus G [0, b f_L], the offset's cable moment cancelled (4.22) [N]
+        (``tension`` f_L if known, else from the state)."""
+        x = np.asarray(x, dtype=float)
+        if not self.params.has_offset:
+            return x[THRUSTS].copy()
+        f_L = self.derivatives(x)["tension"] if tension is None else np.asarray(tension)
+        b = offset_arms(x[0], x[1], self.params.offset, NUMPY)[1]
+        G1 = self.params.G[:, 1]
+        return x[THRUSTS] + (G1[:, None] * (b * f_L) if x.ndim > 1 else G1 * (b * f_L))
 
     def to_wrench_form(self, x: ArrayLike) -> FloatArray:
         """Rotor-form state (12) -> wrench-form state (8) (drops roll/yaw torque components)."""
@@ -406,10 +609,11 @@ class ExtendedPlanarModel:
 def parametric_rk4_step() -> ca.Function:
     """``step(x[12], u[4], h, c[8]) -> x(t + h)``: one RK4 step of (6.20) with the input
     held, for the model constants c = :attr:`PlanarParams.coefficients`."""
-    x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", 8)
+    x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", NC)
     coeffs = SimpleNamespace(
-        mass=c[0], length=c[1], inertia=c[2], gravity=c[3], torque_row=[c[4 + i] for i in range(4)]
-    )
+        mass=c[0], length=c[1], inertia=c[2], gravity=c[3], torque_row=[c[4 + i] for i in range(4)],
+        offset=(c[8], c[9]),
+    )  # fmt: skip
 
     def f(z: ca.SX, v: ca.SX) -> ca.SX:
         return rotor_form_rhs(z, v, coeffs, CASADI)

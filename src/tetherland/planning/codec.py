@@ -23,7 +23,7 @@ from __future__ import annotations
 import io
 import json
 from collections.abc import Iterable
-from dataclasses import dataclass, fields
+from dataclasses import MISSING, dataclass, fields
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -165,11 +165,13 @@ def meta_to_json(record: Any) -> dict[str, Any]:
 
 def meta_from_json(cls: type[T], d: dict[str, Any]) -> T:
     """The dataclass ``cls`` from :func:`meta_to_json` output (fields typed ``FloatArray``
-    become float arrays). Raises KeyError for a missing field."""
+    become float arrays). Raises KeyError for a missing field without a default (a field
+    with one, added later, keeps its default when an older file lacks it)."""
     return cls(
         **{
             f.name: np.asarray(d[f.name], dtype=float) if f.type == "FloatArray" else d[f.name]
             for f in fields(cls)  # type: ignore[arg-type]
+            if f.name in d or (f.default is MISSING and f.default_factory is MISSING)
         }
     )
 

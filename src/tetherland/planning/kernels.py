@@ -23,13 +23,25 @@ from tetherland.models.planar import ExtendedPlanarModel
 
 @njit(cache=True)
 def _rotor_rhs(x: np.ndarray, u: np.ndarray, c: np.ndarray, out: np.ndarray) -> None:
-    """(6.18), (6.20) in rotor form, c = [m, l, J_y, g, torque_row (4)]."""
+    """(6.18), (6.20) in rotor form with the attachment offset (docs/theory.md (4.20)),
+    c = [m, l, J_y, g, torque_row (4), r_x, r_z]; tau = torque_row . f is the net torque."""
     f_R = x[4] + x[5] + x[6] + x[7]
     tau = c[4] * x[4] + c[5] * x[5] + c[6] * x[6] + c[7] * x[7]
+    ct, st = math.cos(x[1]), math.sin(x[1])
+    rx = ct * c[8] + st * c[9]
+    rz = -st * c[8] + ct * c[9]
+    cp, sp = math.cos(x[0]), math.sin(x[0])
+    a = -sp * rz - cp * rx
+    b = cp * rz - sp * rx
+    ddtheta = tau / c[2]
     out[0] = x[2]
     out[1] = x[3]
-    out[2] = -c[3] / c[1] * math.cos(x[0]) + math.cos(x[0] + x[1]) * f_R / (c[0] * c[1])
-    out[3] = tau / c[2]
+    out[2] = (
+        -c[3] / c[1] * cp
+        + math.cos(x[0] + x[1]) * f_R / (c[0] * c[1])
+        + (a * ddtheta - b * x[3] * x[3]) / c[1]
+    )
+    out[3] = ddtheta
     for i in range(4):
         out[4 + i] = x[8 + i]
         out[8 + i] = u[i]

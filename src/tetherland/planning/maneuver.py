@@ -38,8 +38,12 @@ from tetherland.errors import SingularityError
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.models.planar import (
     CASADI,
+    NUMPY,
     ExtendedPlanarModel,
     PlanarParams,
+    hover_torque,
+    offset_arms,
+    planar_across_torque,
     rotor_form_rhs,
     rotor_form_terms,
     wrench_form_rhs,
@@ -219,6 +223,43 @@ class ManeuverSpec:
         )
         return inclined_hover(phi, theta, self.params.mass, self.params.gravity)
 
+    def hover_torque(self, which: Literal["start", "final"]) -> float:
+        """Rotor torque tau_y about y_A of the start or final hover: it holds the cable
+        torque of the attachment offset, b f_L (docs/theory.md (4.17)) [N m]."""
+        phi, theta = (
+            (self.phi_start, self.theta_start)
+            if which == "start"
+            else (self.phi_final, self.theta_final)
+        )
+        return hover_torque(phi, theta, self.hover(which)[1], self.params)
+
+    def hover_rotor_thrusts(self, which: Literal["start", "final"]) -> FloatArray:
+        """Rotor thrusts of the start or final hover with the whole offset torque: the
+        planar G [f_R, tau_y] plus the torque about x_A and z_A of an offset across the
+        plane (docs/theory.md (4.18)) [N]."""
+        p = self.params
+        phi, theta = (
+            (self.phi_start, self.theta_start)
+            if which == "start"
+            else (self.phi_final, self.theta_final)
+        )
+        f_R, f_L = self.hover(which)
+        f = p.G @ np.array([f_R, self.hover_torque(which)])  # net torque 0, rotors b f_L
+        if p.offset_across != 0.0:
+            t_x, t_z = planar_across_torque(phi, theta, f_L, p.offset_across, NUMPY)
+            c_t, s_t, c_p, s_p = (
+                math.cos(theta),
+                math.sin(theta),
+                math.cos(p.heading),
+                math.sin(p.heading),
+            )
+            R_AB = np.array([[c_t, 0, s_t], [0, 1, 0], [-s_t, 0, c_t]]) @ np.array(
+                [[c_p, -s_p, 0], [s_p, c_p, 0], [0, 0, 1]]
+            )
+            tau_B = R_AB.T @ np.array([t_x, 0.0, t_z])
+            f = f + np.linalg.inv(p.allocation)[:, 1:4] @ tau_B
+        return f
+
     def tension_floor(self, t: FloatArray | float) -> FloatArray:
         """Lower bound on f_L at time ``t`` [N]: f_L_min, ramped near a boundary whose
         hover tension is lower (linearly over ``tension_ramp`` of the duration)."""
@@ -259,20 +300,27 @@ def precheck(spec: ManeuverSpec) -> list[str]:
         except SingularityError as err:
             reasons.append(f"{names[which]}: {err}")
             continue
-        per_rotor = p.G @ np.array([f_R, 0.0])
+        per_rotor = spec.hover_rotor_thrusts(which)
+        torque = spec.hover_torque(which)
+        why = (
+            f" (with the cable-offset torque {torque:+.3f} N m the rotors hold: too steep for "
+            "this attachment)"
+            if abs(torque) > 1e-12 or p.offset_across != 0.0
+            else ""
+        )
         if f_R <= 0 or f_L < -1e-9:
             reasons.append(f"{names[which]} does not exist (f_R = {f_R:.3g} N, f_L = {f_L:.3g} N)")
         elif per_rotor.max() > spec.f_hi + 1e-9:
             reasons.append(
                 f"rotor f_max too low for this slope: the {names[which]} needs f_R = {f_R:.2f} N, "
                 f"{per_rotor.max():.2f} N per rotor > vehicle.f_max - control_margin = "
-                f"{spec.f_max:g} - {margin:g} N"
+                f"{spec.f_max:g} - {margin:g} N{why}"
             )
         elif per_rotor.min() < spec.f_lo - 1e-9:
             reasons.append(
                 f"rotor f_min too high for this slope: the {names[which]} needs f_R = {f_R:.2f} N, "
                 f"{per_rotor.min():.2f} N per rotor < vehicle.f_min + control_margin = "
-                f"{spec.f_min:g} + {margin:g} N"
+                f"{spec.f_min:g} + {margin:g} N{why}"
             )
     # Tension bound: f_L <= f_R + m g + m l phi'^2 with f_R <= 4 f_hi. On the middle part of
     # the maneuver, where the bound is f_L_min, phi' cannot change sign (at phi' = 0 the
@@ -294,8 +342,9 @@ def precheck(spec: ManeuverSpec) -> list[str]:
 _PARAM_NAMES = (
     "mass", "length", "inertia", "gravity", "torque_row", "G", "phi_f", "theta_f", "phi_s",
     "theta_s", "width", "f_R_f", "f_L_min", "a0", "aT", "ramp", *_WEIGHT_NAMES,
+    "offset",
 )  # fmt: skip
-_PARAM_SIZES = {"torque_row": 4, "G": 8}
+_PARAM_SIZES = {"torque_row": 4, "G": 8, "offset": 2}
 _PARAM_OFFSETS = {
     name: int(sum(_PARAM_SIZES.get(n, 1) for n in _PARAM_NAMES[:i]))
     for i, name in enumerate(_PARAM_NAMES)
@@ -315,6 +364,7 @@ def _param_values(spec: ManeuverSpec) -> dict[str, float | FloatArray]:
         "a0": max(0.0, spec.min_tension - spec.start_tension),
         "aT": max(0.0, spec.min_tension - f_L_final),
         "ramp": spec.tension_ramp,
+        "offset": np.asarray(p.offset, dtype=float),
     }  # fmt: skip
     values.update({name: getattr(spec.weights, name) for name in _WEIGHT_NAMES})
     return values
@@ -325,14 +375,8 @@ def _numbers(spec: ManeuverSpec, form: StateForm) -> dict[str, object]:
     nx = 8 if form == "wrench" else 12
     x_lb, x_ub = np.full(nx, -np.inf), np.full(nx, np.inf)
     x_lb[0], x_ub[0] = spec.phi_surface, spec.phi_max
-    path_lb, path_ub = [0.0] + [spec.f_lo] * 4, [np.inf] + [spec.f_hi] * 4
-    if form == "wrench":
-        path_lb += [spec.f_lo] * 4
-        path_ub += [spec.f_hi] * 4
-        x0 = spec.model.to_wrench_form(spec.x_start)
-    else:
-        x_lb[4:8], x_ub[4:8] = spec.f_lo, spec.f_hi
-        x0 = spec.x_start
+    path_lb, path_ub = [0.0] + [spec.f_lo] * 8, [np.inf] + [spec.f_hi] * 8
+    x0 = spec.model.to_wrench_form(spec.x_start) if form == "wrench" else spec.x_start
     values = _param_values(spec)
     p_value = [np.atleast_1d(np.asarray(values[n], dtype=float)) for n in _PARAM_NAMES]
     return {
@@ -456,9 +500,11 @@ def _statement(form: StateForm) -> dict[str, object]:
     # Rotor thrusts are quadratic in t on each interval (f'' held): f_k, f_k + f_k' h/2 and
     # f_{k+1} are their Bernstein coefficients, whose hull contains the whole arc. Bounding
     # them bounds the thrusts between the nodes too, not only at the nodes.
-    path = [terms["tension"] - floor, thrusts_mid]
-    if form == "wrench":
-        path.append(thrusts)
+    # The rotors also cancel the offset's cable moment -b f_L: they carry G [0, b f_L] on
+    # top of the planned net wrench (docs/theory.md (4.22)), bounded at every node (and
+    # added, from the node, to the interval's Bernstein middle coefficient).
+    share = G[:, 1] * (offset_arms(phi, theta, c.offset, CASADI)[1] * terms["tension"])
+    path = [terms["tension"] - floor, thrusts_mid + share, thrusts + share]
     terminal = ca.vertcat(phi - s["phi_f"], theta - s["theta_f"], dphi, dtheta, terminal_wrench)
     return {
         "x": x, "u": u, "p": P, "t": t, "T": T, "h": h,
@@ -475,3 +521,4 @@ class _Coefficients:
         self.mass, self.length = s["mass"], s["length"]
         self.inertia, self.gravity = s["inertia"], s["gravity"]
         self.torque_row = [s["torque_row"][i] for i in range(4)]
+        self.offset = (s["offset"][0], s["offset"][1])

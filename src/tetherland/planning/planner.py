@@ -209,6 +209,7 @@ def trajectory_meta(scenario: Scenario, spec: ManeuverSpec) -> TrajectoryMeta:
         R_WA=geo.R_WA,
         p_A=geo.p_A,
         gravity=p.gravity,
+        r_att_B=np.asarray(scenario.vehicle.cable_attachment, dtype=float),
     )
 
 

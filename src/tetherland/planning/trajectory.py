@@ -84,6 +84,9 @@ class TrajectoryMeta:
     gravity : float
     version : str
         tetherland version that made it.
+    r_att_B : (3,) array
+        Cable attachment offset in F_B the plan's model counts exactly [m] (zeros: the
+        chapter's cable at the centre of mass; files without it load as zeros).
     """
 
     scenario: str
@@ -97,13 +100,15 @@ class TrajectoryMeta:
     p_A: FloatArray = field(default_factory=lambda: np.zeros(3))
     gravity: float = GRAVITY
     version: str = __version__
+    r_att_B: FloatArray = field(default_factory=lambda: np.zeros(3))
 
     @functools.cached_property
     def params(self) -> PlanarParams:
         """The planar model constants (computed once)."""
         return PlanarParams.from_matrices(
-            self.mass, self.length, self.inertia_B, self.allocation, self.heading, self.gravity
-        )
+            self.mass, self.length, self.inertia_B, self.allocation, self.heading, self.gravity,
+            r_att_B=self.r_att_B,
+        )  # fmt: skip
 
     def to_json(self) -> dict[str, Any]:
         return codec.meta_to_json(self)

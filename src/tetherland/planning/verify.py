@@ -155,8 +155,9 @@ def verify(
     s = trajectory.sample(times)
     end = trajectory.sample([trajectory.duration])
     x_end = np.array([end.phi[0, 0], end.theta_A[0, 0], end.phi[0, 1], end.theta_A[0, 1]])
+    thrusts = spec.model.rotor_thrusts(s.states().T, s.tension).T  # with the offset's b f_L
     return _check(
-        spec, tol, s.t, s.phi[:, 0], s.tension, s.t, s.thrusts, _final_error(spec, x_end),
+        spec, tol, s.t, s.phi[:, 0], s.tension, s.t, thrusts, _final_error(spec, x_end),
         CheckScope.RESIMULATION,
     )  # fmt: skip
 
@@ -203,9 +204,10 @@ def verify_nodes(
         if not gap <= tol.gap
         else None
     )
-    f0, df0 = X[:-1, 4:8], X[:-1, 8:12]
-    arcs = np.stack((f0, f0 + 0.5 * h[:, None] * df0, X[1:, 4:8]), axis=1)  # (N, 3, 4)
     tension = np.asarray(spec.model.derivatives(X.T)["tension"])
+    share = spec.model.rotor_thrusts(X.T, tension).T - X[:, 4:8]  # the offset's G [0, b f_L]
+    f0, df0 = X[:-1, 4:8] + share[:-1], X[:-1, 8:12]
+    arcs = np.stack((f0, f0 + 0.5 * h[:, None] * df0, X[1:, 4:8] + share[1:]), axis=1)
     return _check(
         spec, tol, times, X[:, 0], tension, np.repeat(times[:-1], 3), arcs.reshape(-1, 4),
         _final_error(spec, X[-1]), CheckScope.NODES, extra=gap_issue,

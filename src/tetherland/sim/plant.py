@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
 from tetherland.errors import SimulationError
-from tetherland.geometry import FloatArray
+from tetherland.geometry import FloatArray, landed_rotation
 from tetherland.interfaces import StateEstimate
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.cable import Cable, make_cable
@@ -136,9 +136,10 @@ class Plant:
         return RigidBodyState.at_rest(p, rotmat_to_quat(R))
 
     def landed_state(self) -> RigidBodyState:
-        """At rest at the landing point p*_L with z_B = z_S and x_B = x_S (condition (2))."""
+        """At rest at the landing point p*_L with z_B = z_S (condition (2)) and x_B at the
+        planner's heading psi* from x_S (:func:`tetherland.geometry.landed_rotation`)."""
         geo = self.layout.geometry
-        R = heading_rotation(geo.surface.z_S, geo.surface.x_S)
+        R = landed_rotation(geo.surface.R_WS, math.radians(self.scenario.planner.heading_deg))
         return RigidBodyState.at_rest(geo.p_R_landed, rotmat_to_quat(R))
 
     def reset(
