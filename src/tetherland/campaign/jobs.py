@@ -48,7 +48,7 @@ def _analysis_verdict(plant: Scenario, belief: Scenario, method: str) -> dict[st
 
 _LANDING_KEYS = (
     "position_error_m", "attitude_error_rad", "touchdown_speed_mps",
-    "touchdown_angular_rate_rps", "touchdown_accel_mps2", "slip_m", "min_tension_N",
+    "touchdown_angular_rate_rps", "touchdown_accel_mps2", "slip_m", "settle_m", "min_tension_N",
 )  # fmt: skip
 _local = threading.local()
 

@@ -128,6 +128,16 @@ class PositionController:
         """Clear the integral of the position error (call when the controller takes over)."""
         self._integral[:] = 0.0
 
+    def seed_integral(self, force_W: FloatArray) -> None:
+        """Start the integral at the force ``force_W`` F_W [N] (clamped per axis like the
+        integral itself): the bumpless hand-over from a controller that was already
+        holding the model error (mass, thrust coefficient) this one would integrate."""
+        if self.k_i <= 0.0:
+            return
+        bound = self.integral_max / (self.mass * self.k_i)
+        np.clip(-np.asarray(force_W, float) / (self.mass * self.k_i), -bound, bound,
+                out=self._integral)  # fmt: skip
+
     @property
     def integral(self) -> FloatArray:
         """Integral of the position error [m s] (the live array: compiled controllers

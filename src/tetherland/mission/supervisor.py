@@ -6,6 +6,10 @@ transition with its reason). It sees only the estimate, never the plant's truth:
 
 - a hook is taken as caught when the estimated tension passes the threshold for the dwell
   time while stretching; without tension the hook counts as missed and is retried;
+- touchdown is confirmed by the multi-signal rule of :mod:`tetherland.mission.contact`
+  (clearance, link stall, surface force), near the end of the planned landing (whose clock
+  slows near the surface, :class:`~tetherland.mission.contact.SlowApproach`) and in the
+  guarded descent past it;
 - switches are bumpless (6.6.3): a tethered reference starts at the current output and
   blends onto the plan; the release after the takeoff starts at the current position with
   the cable pull as a force feed-forward (the reference acceleration f_L d/m) that fades
@@ -39,6 +43,14 @@ from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
 from tetherland.geometry import theta_A_from_z_B
 from tetherland.interfaces import Command, ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.mission.contact import (
+    ContactDecision,
+    ContactRule,
+    SlowApproach,
+    contact_hold,
+    early_contact_armed,
+    guarded_descent,
+)
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
@@ -161,7 +173,9 @@ class MissionSupervisor:
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
-        self._contact_rule = ThresholdDwell(math.radians(cfg.contact_error_deg), cfg.contact_dwell)
+        self._contact_rule = ContactRule(scenario)
+        self._slow = SlowApproach(cfg, self._contact_rule.geometry, scenario.tether.length)
+        self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)
         self._path = self._new_path(0.0, wp.start).to(
@@ -397,6 +411,8 @@ class MissionSupervisor:
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
+            self._slow.start(t)
+            self._landing_rate = 0.0
             self._enter(
                 Phase.TETHERED_LANDING, t,
                 f"estimated tension {est.tension:.2f} N above {cfg.tension_threshold} N "
@@ -415,44 +431,33 @@ class MissionSupervisor:
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t)
 
-    def _contact(self, t: float, est: StateEstimate, ref: Reference, reason: str) -> Reference:
-        """Touchdown detected: hold the current link elevation until the motors go off."""
-        assert est.link is not None and ref.output is not None
+    def _contact(
+        self, t: float, est: StateEstimate, ref: Reference, decision: ContactDecision, when: str
+    ) -> Reference:
+        """Touchdown confirmed: hold the link at contact until the motors go off."""
         self.times["t_L"] = t
-        out = np.zeros((5, 4))
-        out[0] = ref.output[0]
-        out[0, 0] = est.link.phi
-        self._hold = Reference(
-            t=t, mode=ControlMode.TETHERED, phase=int(Phase.TOUCHDOWN), output=out,
-            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-        )  # fmt: skip
+        self._hold = contact_hold(self.cfg, t, est, ref, int(Phase.TOUCHDOWN))
+        assert decision.evidence is not None
+        reason = f"contact {when} (t_L): {decision.evidence.describe()}"
         self._event(t, "touchdown", reason)
         if self.phase != Phase.TOUCHDOWN:
             self._enter(Phase.TOUCHDOWN, t, reason)
         return self._hold
 
-    def _touching(self, t: float, est: StateEstimate, ref: Reference) -> bool:
-        """The surface stops the link: phi stays above the descending reference."""
-        assert ref.output is not None
-        if est.link is None:
-            return False
-        return self._contact_rule.update(t, est.link.phi - ref.output[0, 0])
-
-    def _near(self, est: StateEstimate) -> bool:
-        """The link is low enough for the surface to be touching (contact_gate_deg)."""
-        gate = math.radians(self.cfg.contact_gate_deg)
-        return est.link is not None and est.link.phi - self.geo.phi_star < gate
-
     def _tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         track = self._track.track
-        ref = self._track.reference(t, self.phase)
-        if t > track.t0 + (1.0 - self.cfg.contact_window) * track.duration and self._near(est):
-            if self._touching(t, est, ref):
-                return self._contact(t, est, ref, "contact before the planned end (t_L)")
+        tau = self._slow.advance(t, est, self._landing_rate)  # the slowed plan clock
+        planned = self._track.reference(tau, self.phase)
+        self._landing_rate = abs(float(planned.output[1, 0]))
+        ref = self._slow.scale(planned, t)
+        if early_contact_armed(self.cfg, tau, track.t0, track.duration):
+            decision = self._contact_rule.update(t, est, ref.output[0, 0])
+            if decision.confirmed:
+                return self._contact(t, est, ref, decision, "before the planned end")
         else:
-            self._contact_rule.reset()
-        if t >= track.t_end:
+            self._contact_rule.idle()
+        if tau >= track.t_end:
             self.times["t_L_plan"] = t
             self._search_start = t
             self._hold = None
@@ -463,24 +468,16 @@ class MissionSupervisor:
         """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
         assert self._track is not None and self._search_start is not None
         ref = self._track.reference(t, self.phase)
-        rate = math.radians(self.cfg.touchdown_rate_deg)
-        depth = math.radians(self.cfg.touchdown_search_deg)
-        s = min(rate * (t - self._search_start), depth)
-        out = ref.output.copy()
-        out[0, 0] -= s
-        out[1, 0] = -rate if s < depth else 0.0
-        return Reference(
-            t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=out,
-            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-        )  # fmt: skip
+        return guarded_descent(self.cfg, ref, t - self._search_start, int(self.phase))
 
     def _touchdown(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         cfg = self.cfg
         if self._hold is None:  # searching for the surface
             ref = self._search_reference(t)
-            if self._touching(t, est, ref):
-                return self._contact(t, est, ref, "contact during the guarded descent (t_L)")
+            decision = self._contact_rule.update(t, est, ref.output[0, 0])
+            if decision.confirmed:
+                return self._contact(t, est, ref, decision, "during the guarded descent")
             limit = cfg.touchdown_search_deg / cfg.touchdown_rate_deg + cfg.touchdown_search_grace
             if t > self._search_start + limit:
                 self.abort(t, est, "fault: no contact within touchdown_search_deg beyond phi*")

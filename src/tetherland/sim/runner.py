@@ -216,6 +216,7 @@ class Runner:
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
         self._p_A, self._R_WA = geo.p_A, geo.R_WA
         self._cable_force_index = SENSOR_SLICES["cable_force"].start
+        self._accelerometer = SENSOR_SLICES["accelerometer"]
         self._provenance: dict[str, Any] | None = None
 
     def _truth_estimate(self) -> StateEstimate:
@@ -223,11 +224,14 @@ class Runner:
         s = self._snap.copy()
         plant = self.plant
         engaged = plant.hook.engaged
+        external_B = self.scenario.vehicle.mass * plant.sensordata[self._accelerometer]
+        external_B[2] -= float(plant.rotor_thrusts.sum())
         return StateEstimate(
             t=self._t_snap,
             body=RigidBodyState(s[0:3], s[7:10], s[3:7], s[10:13]),
             link=link_state_of(s, self._r_att, self._p_A, self._R_WA) if engaged else None,
             tension=plant.sensordata[self._cable_force_index].item(),
+            external_force_B=external_B,
         )
 
     def run(

@@ -11,8 +11,9 @@ serve every landing method (docs/theory.md section 5):
 * (1) ||p_RL(t_L) - p*_L||, p_RL = p - h_R z_B; (2) angle(z_B(t_L), z_S);
   (3) ||p'(t_L-)||, ||omega(t_L-)||; (4) ||p''(t_L-)|| from the true specific force and
   ||omega'(t_L-)|| from the two ticks before;
-* (5) observed over the first motors-off interval after touchdown: the slip of p_RL over
-  the whole interval and the speed from ``verdict.rest_settle`` after its start;
+* (5) observed over the first motors-off interval after touchdown: the slip of p_RL along
+  the surface (sliding; its settling along the normal onto all landers is reported apart)
+  over the whole interval and the speed from ``verdict.rest_settle`` after its start;
 * crash: a normal force above ``verdict.crash_force`` on the hub or a rotor guard, at any
   time of the run.
 
@@ -198,6 +199,7 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
         "touchdown_accel_mps2": measures["accel"],
         "touchdown_angular_accel_rps2": measures["angular_accel"],
         "slip_m": measures["slip"] if rested else None,
+        "settle_m": measures["settle"] if rested else None,
         "rest_speed_mps": measures["rest_speed"] if rested else None,
         "motors_off_t": float(t[rest_idx[0]]) if rested else None,
         **tension,
