@@ -97,7 +97,7 @@ class FaultDetectionConfig(Section):
     robot measures: commanded torque, estimated tension, link geometry and the
     estimator's covariance."""
 
-    rotor_torque: float = Field(0.06, gt=0, le=10)
+    rotor_torque: float = Field(0.1, gt=0, le=10)
     """Rotor fault: low-passed roll/pitch torque the controller commands beyond the
     estimated cable torque, in (0, 10] [N m]."""
     rotor_filter_time: float = Field(0.3, gt=0, le=10)
