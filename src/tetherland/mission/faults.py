@@ -45,6 +45,8 @@ ANCHOR_PHASES = frozenset({Phase.STRETCH, Phase.TETHERED_LANDING, Phase.TETHERED
 """Phases in which a taut cable's length is checked."""
 SNAP_PHASES = frozenset({Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF})
 """Tethered flight: the cable carries the vehicle (the takeoff from ``airborne`` on)."""
+SNAP_PLAN_FACTOR = 3.0
+"""The snap rule watches where the planned tension is at least this many snap_tension."""
 JAM_PHASES = frozenset({Phase.RETURN, Phase.LAND})
 """Phases after the unhooking pass: any tension means the hook is still engaged."""
 
@@ -149,12 +151,20 @@ class FaultMonitor:
         return ry * fz - rz * fy, rz * fx - rx * fz
 
     def check(
-        self, t: float, est: StateEstimate, phase: Phase, airborne: bool
+        self,
+        t: float,
+        est: StateEstimate,
+        phase: Phase,
+        airborne: bool,
+        nominal_tension: float | None = None,
     ) -> FaultDetection | None:
         """Run every rule at time ``t`` in ``phase``; the first fault found, or None.
 
         ``airborne`` says the vehicle has been off the pad long enough for the torque
-        rule (``airborne_delay``).
+        rule (``airborne_delay``). ``nominal_tension`` is the plan's tension at ``t`` [N]
+        (None: unknown): the snap rule only watches where the plan needs at least
+        :data:`SNAP_PLAN_FACTOR` times ``snap_tension`` (near a flat touchdown the planned
+        tension itself falls towards zero, and the slower slack-cable rule covers it).
         """
         cfg = self.cfg
         cov = est.covariance
@@ -169,7 +179,10 @@ class FaultMonitor:
                 )  # fmt: skip
         found = self._rotor_rule(t, est, phase, airborne)
         if found is None:
-            found = self._snap_rule(t, est, phase, airborne)
+            needs = nominal_tension is None or (
+                nominal_tension >= SNAP_PLAN_FACTOR * self.cfg.snap_tension
+            )
+            found = self._snap_rule(t, est, phase, airborne and needs)
         if found is None:
             found = self._anchor_rule(t, est, phase)
         if found is None:

@@ -317,7 +317,11 @@ class MissionSupervisor:
         airborne = t >= self.cfg.settle_time + det.airborne_delay and not (
             self.phase == Phase.TETHERED_TAKEOFF and t < self._phase_start + det.airborne_delay
         )
-        found = self.monitor.check(t, est, self.phase, airborne)
+        planned = None
+        if self.phase in (Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF):
+            ff = ref.feedforward
+            planned = ff.tension if ff is not None else 0.0  # off the plan: not needed
+        found = self.monitor.check(t, est, self.phase, airborne, planned)
         if found is not None:
             self._on_fault(t, est, found)
             return
@@ -328,7 +332,11 @@ class MissionSupervisor:
         if not active or est.link is None or self._track is None:
             self._slack.reset()
             return
-        if self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
+        if self._contact_rule.geometry.clearance(body.p_W, body.R_WB) < self.cfg.contact_clearance:
+            # the landers are at the surface and may carry the vehicle: a slackening cable
+            # is expected there (flat ground, gentle slopes), not a fault
+            self._slack.reset()
+        elif self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
             self.abort(
                 t,
                 est,
