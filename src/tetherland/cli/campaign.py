@@ -126,14 +126,17 @@ def campaign(
             progress.update(task, advance=1, description=f"runs (last: {rec['method']} {status})")
 
         # a polite stop (SIGTERM, e.g. from a batch scheduler) ends like Ctrl-C: the pool's
-        # workers are shut down with it instead of being orphaned
-        previous = signal.signal(signal.SIGTERM, _interrupt)
+        # workers are shut down with it instead of being orphaned. SIGINT gets the same
+        # handler explicitly: a shell starts background jobs with SIGINT ignored, and
+        # Python then keeps ignoring it
+        previous = {sig: signal.signal(sig, _interrupt) for sig in (signal.SIGTERM, signal.SIGINT)}
         try:
             result = run_campaign(
                 spec, store, executor, provenance=record, on_result=on_result, on_start=on_start
             )
         finally:
-            signal.signal(signal.SIGTERM, previous)
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
 
     plot_success(
         result.summary, directory / "success_rate.png", spec.sweep.key if spec.sweep else None
