@@ -113,7 +113,9 @@ def main() -> None:
         ax.set_xticklabels([f"{m}\n{int(s)} deg" for m in MATERIALS for s in SLOPES], fontsize=8)
         ax.set_ylabel(label)
         ax.grid(axis="y", alpha=0.3)
-    axes[0].legend(title="attachment offset (x: none landed)", fontsize=8, loc="lower left")
+    axes[0].set_ylim(0, 135)
+    axes[0].legend(title="attachment offset (x: none landed)", fontsize=8, title_fontsize=8,
+                   loc="upper center", ncol=3)  # fmt: skip
     fig.tight_layout()
     fig.savefig(args.png, dpi=110)
     print(f"figure: {args.png}")
