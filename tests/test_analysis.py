@@ -285,6 +285,25 @@ def test_condition_5_observed_detects_slip():
     assert not condition_5_observed(sliding, np.full((50, 3), 0.01), tol).holds
 
 
+def test_condition_5_counts_sliding_along_the_surface_not_settling_onto_the_landers():
+    """A vehicle pivoting flat onto all landers when the thrust goes moves p_RL mostly
+    along the normal: with z_S that is settle, not slip; sliding along the surface is."""
+    tol = LandingTolerances()
+    beta = math.radians(70.0)
+    z_S = np.array([-math.sin(beta), 0.0, math.cos(beta)])
+    x_S = np.array([math.cos(beta), 0.0, math.sin(beta)])  # along the fall line
+    s = np.linspace(0.0, 1.0, 50)[:, None]
+    settling = -0.015 * s * z_S + 0.004 * s * x_S  # 15 mm down the normal, 4 mm along
+    c = condition_5_observed(settling, np.zeros((50, 3)), tol, z_S)
+    got = {m.name: m.value for m in c.measures}
+    assert c.holds
+    assert got["slip"] == pytest.approx(0.004, abs=1e-12)
+    assert got["settle"] == pytest.approx(0.015, abs=1e-12)
+    assert not condition_5_observed(settling, np.zeros((50, 3)), tol).holds  # no normal given
+    sliding = 0.012 * s * x_S  # 12 mm down the fall line
+    assert not condition_5_observed(sliding, np.zeros((50, 3)), tol, z_S).holds
+
+
 def test_condition_5_static_uses_force_balance():
     s = plane(50.0)
     free = contact_forces(s, 1.0, 0.0, s.z_S)

@@ -254,7 +254,9 @@ def test_killed_campaign_resumes_with_every_run_exactly_once(tmp_path: Path):
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_interrupt_stops_cleanly_with_exit_130(tmp_path: Path, sig):
     out = tmp_path / "camp"
-    cmd = [EXE, "campaign", "slope50", "--job", "analysis", "--runs", "400", "--workers", "2",
+    # enough analysis runs (about a minute) that a loaded machine cannot finish them all
+    # between the fifth result and the signal
+    cmd = [EXE, "campaign", "slope50", "--job", "analysis", "--runs", "4000", "--workers", "2",
            "--out", str(out)]  # fmt: skip
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 120

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.control import (
     DflController,
@@ -206,3 +207,33 @@ def test_dfl_restarts_from_motors_off_at_the_nominal_thrust(scenario, plans):
     on = ctrl.update(0.002, est, ref)
     assert on.diagnostics["singular"] == 0.0
     assert on.thrust == pytest.approx(traj.nominal(0.0).f_R, rel=0.02)
+
+
+
+def test_tethered_to_free_flight_continues_the_commanded_force(scenario, plans):
+    """Tethered -> free flight (the release, an abort): the free-flight integral starts at
+    the force the tethered law was commanding minus the free-flight law's own, so the first
+    free-flight command is the last tethered force (bumpless); a plain reset would drop
+    what the tethered law held (here the plan's 2 N start tension)."""
+    traj = plans["landing"]
+    geo = LandingGeometry.from_scenario(scenario)
+    est = estimate_of(start_state(traj), 0.0, geo, scenario.tether.length)
+    # a clamp of 0.5 m g per axis holds the start tension's 2.3 N along x_W
+    wide = load_scenario("slope50", [*CENTRED, "controller.free_flight.integral_force_max=0.5"])
+    ctrl = SwitchingController(wide)
+    last = ctrl.update(0.0, est, TrajectoryTrack(traj, 0.0, 500.0).reference(0.0))
+    F_last = last.thrust * quat_to_rotmat(est.body.q_WB)[:, 2]
+    hold = Reference(t=0.002, p_W=np.array([est.body.p_W, np.zeros(3), np.zeros(3)]))
+    first = ctrl.update(0.002, est, hold)
+    pos = ctrl.free_flight.position
+    bound = pos.integral_max
+    assert np.all(np.abs(pos.integral_force) < bound)  # not clamped: the premise
+    assert first.thrust == pytest.approx(last.thrust, rel=1e-3)
+    # the desired force is the last one: integral + m (g z_W - k_v v), v from the estimate
+    m = scenario.vehicle.mass
+    F_0 = m * (GRAVITY * np.array([0.0, 0.0, 1.0]) - pos.k_v * est.body.v_W)
+    np.testing.assert_allclose(pos.integral_force + F_0, F_last, atol=1e-9)
+    # a plain reset (from motors off) would start at F_0: more than 2 N off (the pull)
+    assert np.linalg.norm(F_last - F_0) > 2.0
+    ctrl.free_flight.reset()
+    np.testing.assert_array_equal(pos.integral_force, 0.0)

@@ -58,12 +58,10 @@ def test_designs_are_ranked_and_keep_the_margins(at_60):
     assert at_60.landed_margin >= max(d.landed_rotor_margin for d in at_60.designs) - 1e-12
 
 
-@pytest.mark.parametrize("rank", [0, 1])
-def test_overrides_reproduce_the_design_with_the_planner_and_the_analysis(at_60, rank):
+def _check_design(d, base: tuple[str, ...] = ()) -> None:
     """Apply the printed overrides as `--set` would, re-plan with a fresh planner and
     re-check everything: solved, rotor bounds, tension > 0, same margins and clearance."""
-    d = at_60.designs[rank]
-    sc = load_scenario("slope50", list(d.overrides))
+    sc = load_scenario("slope50", [*base, *d.overrides])
     planner = Planner()
     plans = [planner.plan(sc, m) for m in ("landing", "takeoff")]
     v = sc.vehicle
@@ -83,6 +81,31 @@ def test_overrides_reproduce_the_design_with_the_planner_and_the_analysis(at_60,
     assert pass_clearance(sc, geo, hooking_pass(sc, geo)) == pytest.approx(
         d.min_clearance, abs=1e-5
     )
+
+
+@pytest.mark.parametrize("rank", [0, 1])
+def test_overrides_reproduce_the_design_with_the_planner_and_the_analysis(at_60, rank):
+    _check_design(at_60.designs[rank])
+
+
+def test_wall_designs_are_verified_by_the_planner_and_the_analysis(wall):
+    """The best two designs on a vertical wall, re-planned and re-analysed."""
+    for d in wall.designs[:2]:
+        _check_design(d, RELAXED)
+
+
+def test_overhang_design_is_verified_by_the_planner_and_the_analysis(planner):
+    """93 deg (overhang93's slope): the best design, re-planned and re-analysed; its landed
+    hover is the force balance f_R = m g cos(beta - gamma)/cos(gamma), sin(gamma) = h_att/l."""
+    over = search_designs(load_scenario("slope50", RELAXED), 93.0, planner=planner)
+    assert over.feasible
+    d = over.chosen
+    _check_design(d, RELAXED)
+    p = d.point
+    gamma = math.asin((0.1 + p.attachment[2] - p.h_A) / p.length)
+    a = analyze(load_scenario("slope50", [*RELAXED, *d.overrides])).tethered
+    beta = math.radians(93.0)
+    assert a.hover_thrust == pytest.approx(g * math.cos(beta - gamma) / math.cos(gamma), rel=1e-9)
 
 
 def test_plan_margin_counts_the_cable_offset_torque_at_the_landed_hover(planner):
@@ -170,13 +193,13 @@ def test_landed_hover_limits_bind(planner, overrides, slope, attachments, bindin
 
 
 def test_plan_rotor_margin_binds_when_the_start_hover_torque_is_too_large(planner):
-    """A 10 N start tension on a 30 cm mast: the landed hover (1.2 N tension) is fine, the
-    planner (which plans with the cable at the CoM) solves, but cancelling
-    r_z f_L cos(phi + theta_A) in the taut start hover leaves the rotor floor."""
+    """A 10 N start tension on a 30 cm mast: the landed hover (1.2 N tension) is fine, but
+    cancelling r_z f_L cos(phi + theta_A) in the taut start hover leaves the rotor range;
+    the planner's pre-check (which bounds both hovers with the offset torque) refuses it."""
     sc = load_scenario("slope50", ["planner.start_tension=10"])
     space = DesignSpace(lengths=(1.0,), attachment_z=(0.3,), anchor_heights=(0.0,))
     r = search_designs(sc, 20.0, space, planner)
-    assert r.limit is DesignLimit.PLAN_ROTOR_MARGIN
+    assert r.limit is DesignLimit.PLAN and "cable-offset torque" in r.reason
     # the start hover's thrusts, by hand: f = G [f_R, tau_y] with tau_y = r_z f_L cos(phi+theta)
     landing = planner.plan(load_scenario("slope50", ["planner.start_tension=10",
                                                      "surface.slope_deg=20", "tether.length=1",
@@ -186,7 +209,9 @@ def test_plan_rotor_margin_binds_when_the_start_hover_torque_is_too_large(planne
     f_R, f_L = spec.hover("start")
     tau = 0.3 * f_L * math.cos(spec.phi_start + spec.theta_start)
     thrusts = spec.params.G @ np.array([f_R, tau])
-    assert f"{rotor_margin(thrusts, 0.2, 6.0):.3f} N" in r.reason
+    assert rotor_margin(thrusts, 0.2, 6.0) < 0.25  # beyond vehicle.control_margin
+    assert f"{thrusts.max():.2f} N per rotor" in r.reason
+    assert f"{tau:+.3f} N m" in r.reason
 
 
 def test_invalid_slope_and_inputs_are_config_errors(planner):

@@ -116,3 +116,30 @@ def test_remainder_matches_math_remainder():
     for x in np.concatenate((rng.uniform(-20, 20, 2000), np.arange(-7, 8) * math.pi)):
         assert math.isclose(kernels.remainder(x, 2 * math.pi), math.remainder(x, 2 * math.pi),
                             abs_tol=1e-12)  # fmt: skip
+
+
+@settings(max_examples=200, deadline=None)
+@given(SEEDS)
+def test_compiled_attitude_feedforward_matches_the_reference(seed):
+    from tetherland.control.feedforward import attitude_feedforward, attitude_feedforward_fast
+
+    rng = np.random.default_rng(seed)
+    F = rng.normal(0, 10, 3) + np.array([0.0, 0.0, rng.uniform(-5, 20)])
+    dF, ddF = rng.normal(0, 10 ** rng.uniform(-3, 2), (2, 3))
+    yaw = rng.uniform(-math.pi, math.pi)
+    fast = attitude_feedforward_fast(F, dF, ddF, yaw)
+    for got, want in zip(fast, attitude_feedforward(F, dF, ddF, yaw), strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+
+
+def test_compiled_attitude_feedforward_reports_the_same_singularities():
+    from tetherland.control.feedforward import attitude_feedforward, attitude_feedforward_fast
+    from tetherland.errors import SingularityError
+
+    zero = np.zeros(3)
+    cases = [(zero, 0.3), (np.array([2.0, 0.0, 0.0]), 0.0)]  # no force; thrust along heading
+    for F, yaw in cases:
+        for fn in (attitude_feedforward, attitude_feedforward_fast):
+            with pytest.raises(SingularityError) as err:
+                fn(F, np.ones(3), np.ones(3), yaw)
+            assert "undefined" in str(err.value)

@@ -97,6 +97,9 @@ class StateEstimate:
         Estimated link angles (phi, delta) and rates, when tethered [rad, rad/s].
     tension : float or None
         Estimated cable tension f_L [N].
+    external_force_B : (3,) array or None
+        Estimated non-rotor force on the vehicle in F_B, m (f_B - b_a) - f_R e3 (cable,
+        surface contact, wind) [N].
     """
 
     t: float
@@ -106,6 +109,7 @@ class StateEstimate:
     covariance: FloatArray | None = None
     link: LinkState | None = None
     tension: float | None = None
+    external_force_B: FloatArray | None = None
 
 
 class ControlMode(IntEnum):
@@ -261,7 +265,8 @@ class Estimator(Protocol):
 
 @runtime_checkable
 class CommandAware(Protocol):
-    """Optional estimator capability: told each command sent (e.g. for tension estimation)."""
+    """Optional estimator or reference-source capability: told each command sent (e.g. for
+    tension estimation, or the supervisor's fault monitor)."""
 
     def command_sent(self, t: float, command: Command) -> None:
         """``command`` is applied from time ``t`` on."""

@@ -136,9 +136,9 @@ def condition_5_static(contact: ContactForces) -> ConditionResult:
 
 
 def condition_5_observed(
-    p_RL: ArrayLike, v_W: ArrayLike, tol: LandingTolerances
+    p_RL: ArrayLike, v_W: ArrayLike, tol: LandingTolerances, z_S: ArrayLike | None = None
 ) -> ConditionResult:
-    """(5) observed: while resting, p_RL stays put (slip) and the speed stays near zero.
+    """(5) observed: while resting, p_RL does not slide (slip) and the speed stays near zero.
 
     Parameters
     ----------
@@ -146,15 +146,29 @@ def condition_5_observed(
         Lander point over the resting interval [m].
     v_W : (n, 3) array
         Velocity over the same interval [m/s].
+    z_S : (3,) array, optional
+        Surface normal at the landing point. Given, the slip is the largest displacement
+        of p_RL *along the surface* (sliding), and the displacement along the normal (the
+        vehicle settling onto all its landers when the thrust goes) is reported apart as
+        ``settle``; without it, the whole displacement counts as slip.
     """
     p = np.asarray(p_RL, dtype=float).reshape(-1, 3)
     v = np.asarray(v_W, dtype=float).reshape(-1, 3)
-    slip = float(np.max(np.linalg.norm(p - p[0], axis=1))) if len(p) else math.inf
+    d = p - p[0] if len(p) else np.zeros((0, 3))
+    settle = 0.0 if len(p) else math.inf
+    if z_S is not None and len(p):
+        n = np.asarray(z_S, dtype=float)
+        n = n / np.linalg.norm(n)
+        along = d @ n
+        settle = float(np.max(np.abs(along)))
+        d = d - np.outer(along, n)
+    slip = float(np.max(np.linalg.norm(d, axis=1))) if len(p) else math.inf
     speed = float(np.max(np.linalg.norm(v, axis=1))) if len(v) else math.inf
     return _result(
         5,
         Measure("slip", slip, tol.slip, "m"),
         Measure("rest_speed", speed, tol.rest_speed, "m/s"),
+        Measure("settle", settle, math.inf, "m"),
         note="observed while resting",
     )
 
@@ -202,7 +216,7 @@ def evaluate_landing(
             condition_2(z_B, z_S, tol),
             condition_3(v_W, omega_B, tol),
             condition_4(a_W, omega_dot_B, tol),
-            condition_5_observed(rest_p_RL, rest_v_W, tol),
+            condition_5_observed(rest_p_RL, rest_v_W, tol, z_S),
         )
     )
 

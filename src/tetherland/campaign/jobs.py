@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from tetherland.analysis import analyze
+from tetherland.campaign.faults import fault_time, phase_at, sample_fault
 from tetherland.campaign.perturb import Perturbation, apply_perturbation, sample_perturbation
 from tetherland.campaign.spec import RunSpec
 from tetherland.config import Scenario, apply_overrides, scenario_from_dict
@@ -47,7 +48,7 @@ def _analysis_verdict(plant: Scenario, belief: Scenario, method: str) -> dict[st
 
 _LANDING_KEYS = (
     "position_error_m", "attitude_error_rad", "touchdown_speed_mps",
-    "touchdown_angular_rate_rps", "touchdown_accel_mps2", "slip_m", "min_tension_N",
+    "touchdown_angular_rate_rps", "touchdown_accel_mps2", "slip_m", "settle_m", "min_tension_N",
 )  # fmt: skip
 _local = threading.local()
 
@@ -69,6 +70,11 @@ def campaign_fields(summary: dict[str, Any]) -> dict[str, Any]:
         "reason": summary["reason"],
         "aborted": summary["aborted"],
         "abort_reason": summary["abort_reason"],
+        "safe_stop": summary.get("safe_stop"),
+        "phases": [
+            {"name": p["name"], "start": p["start"], "end": p["end"]}
+            for p in summary.get("phases", [])
+        ],
         "crashed": summary["crashed"],
         "landing": {k: landing.get(k) for k in _LANDING_KEYS}
         | {"conditions": landing.get("conditions")},
@@ -124,12 +130,22 @@ def execute(job: Job) -> dict[str, Any]:
         perturbation = sample_perturbation(truth, np.random.default_rng(run.seed))
         record["perturbation"] = perturbation.to_dict()
         plant, belief = apply_perturbation(truth, perturbation)
+        faults = None
+        if run.fault is not None:  # its own stream: the perturbation stays that of the seed
+            assert run.fault_slice is not None
+            rng = np.random.default_rng([run.seed, 15])
+            faults = sample_fault(run.fault, run.fault_slice, belief, rng)
+            plant = plant.model_copy(update={"faults": faults})
+            record["fault"] = {"kind": run.fault, "t": fault_time(faults),
+                               **faults.model_dump(mode="json")}  # fmt: skip
         if job.kind == "analysis":
             verdict = _analysis_verdict(plant, belief, run.method)
         else:
             verdict = run_for_campaign(
                 plant, belief, perturbation, run.method, run.seed, job.controller
             )
+            if faults is not None:
+                record["fault"]["phase"] = phase_at(verdict["phases"], fault_time(faults))
         record.update(status="ok", error=None, verdict=verdict)
     except TetherlandError as err:
         record.update(status="error", error=str(err), verdict={"success": False})

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from tetherland.campaign.executors import Executor
+from tetherland.campaign.faults import fault_table
 from tetherland.campaign.jobs import Job, execute, lost_record
 from tetherland.campaign.spec import CampaignSpec
 from tetherland.campaign.stats import RateSummary, summarize
@@ -95,6 +96,7 @@ def run_campaign(
             "finished_runs": len({r["run_id"] for r in records}),
             "complete": len({r["run_id"] for r in records}) == total,
             "rates": [s.to_dict() for s in summary],
+            **({"faults": fault_table(records)} if spec.faults else {}),
             "spec": spec.to_dict(),
             "provenance": provenance or {},
         },

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from tetherland.campaign.faults import DEFAULT_WINDOW, FAULT_KINDS, time_slice
 from tetherland.errors import ConfigError
 from tetherland.methods import method_names
 
@@ -63,6 +64,10 @@ class RunSpec:
     seed: int
     sweep_key: str | None
     sweep_value: float | None
+    fault: str | None = None
+    """Fault campaigns: the fault kind (:mod:`tetherland.campaign.faults`)."""
+    fault_slice: tuple[float, float] | None = None
+    """... and the slice of the fault-time window its time is drawn from [s]."""
 
 
 @dataclass(frozen=True)
@@ -77,6 +82,10 @@ class CampaignSpec:
     job: str = "mission"
     controller: str = "hierarchical"
     extra: dict[str, Any] = field(default_factory=dict)
+    faults: tuple[str, ...] = ()
+    """Fault kinds: ``runs`` tethered runs each instead of the methods (issue 15)."""
+    fault_window: tuple[float, float] = DEFAULT_WINDOW
+    """Window of the fault times [s]."""
 
     def __post_init__(self) -> None:
         if self.runs < 1:
@@ -88,6 +97,13 @@ class CampaignSpec:
             )
         if self.job not in JOBS:
             raise ConfigError(f"job must be one of {JOBS}, got {self.job!r}")
+        bad_faults = [k for k in self.faults if k not in FAULT_KINDS]
+        if bad_faults:
+            raise ConfigError(
+                f"--faults: unknown fault kind {bad_faults} (allowed: {', '.join(FAULT_KINDS)})"
+            )
+        if self.faults and (self.sweep is not None or self.job != "mission"):
+            raise ConfigError("--faults runs missions without --sweep (and --job mission)")
 
     def fingerprint(self) -> str:
         """Stable hash of everything that decides the results (for --resume checks)."""
@@ -97,10 +113,24 @@ class CampaignSpec:
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["methods"] = list(self.methods)
+        if not self.faults:  # campaigns without faults keep their fingerprint
+            del d["faults"], d["fault_window"]
+        else:
+            d["faults"], d["fault_window"] = list(self.faults), list(self.fault_window)
         return d
 
     def expand(self) -> list[RunSpec]:
         """Every run of the campaign, in a deterministic order."""
+        if self.faults:
+            return [
+                RunSpec(
+                    f"{kind}-{i:05d}", "tethered", i,
+                    int(np.random.SeedSequence([self.seed, 15, j, i]).generate_state(1)[0]),
+                    None, None, kind, time_slice(self.fault_window, i, self.runs),
+                )
+                for i in range(self.runs)  # interleaved: a partial campaign has every kind
+                for j, kind in enumerate(self.faults)
+            ]
         sweep_values: tuple[float | None, ...] = self.sweep.values if self.sweep else (None,)
         key = self.sweep.key if self.sweep else None
         specs = []

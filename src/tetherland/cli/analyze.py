@@ -6,6 +6,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from tetherland.analysis import LandingAnalysis
 from tetherland.analysis import analyze as run_analysis
 from tetherland.cli.common import (
     JsonOption,
@@ -16,18 +17,38 @@ from tetherland.cli.common import (
     resolve_scenario,
     vec,
 )
+from tetherland.config import Scenario
 from tetherland.io import dumps_json
 from tetherland.provenance import provenance
 
 
 def analyze(scenario: ScenarioArg, overrides: SetOption = None, json: JsonOption = False) -> None:
-    """Analyse landing on the scenario's surface with and without a tether (Table 6.1)."""
+    """Analyse landing on the scenario's surface with and without a tether (Table 6.1).
+
+    Exits with 1 and one line naming the binding reason when the tethered landing is
+    infeasible on this surface (the report is still printed), with 2 on bad input.
+    """
     sc = resolve_scenario(scenario, overrides)
     result = run_analysis(sc)
     if json:
         doc = {"scenario": sc.name, **result.to_dict(), "provenance": provenance(sc)}
         typer.echo(dumps_json(doc), nl=False)
-        return
+    else:
+        _print_report(sc, result)
+    t = result.tethered
+    if not t.feasible:
+        binding = t.binding.value if t.binding is not None else "unknown"
+        why = t.reasons[0] if t.reasons else "no feasible landed hover"
+        typer.echo(
+            f"error: tethered landing infeasible on {deg(result.geometry.surface.slope, 1)} "
+            f"(binding: {binding}): {why}",
+            err=True,
+        )
+        raise typer.Exit(1)
+
+
+def _print_report(sc: Scenario, result: LandingAnalysis) -> None:
+    """The human-readable report: geometry, Table 6.1, reasons and binding limits."""
 
     t, g = result.tethered, result.geometry
     console.print(

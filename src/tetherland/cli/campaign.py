@@ -12,11 +12,22 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemaining
 from rich.table import Table
 
 from tetherland.campaign import CampaignSpec, Sweep, make_executor, open_store, run_campaign
+from tetherland.campaign.faults import DEFAULT_WINDOW, fault_table, parse_faults, parse_window
 from tetherland.campaign.plots import plot_errors, plot_success
 from tetherland.cli.common import ScenarioArg, SetOption, console, resolve_scenario
 from tetherland.errors import ConfigError
 from tetherland.io import prepare_output_dir
 from tetherland.provenance import provenance
+
+
+def _fault_table(counts: dict[str, dict[str, dict[str, int]]]) -> Table:
+    table = Table(title="Faults: phase at the fault time x outcome (runs)")
+    for col in ("fault", "phase", "outcomes"):
+        table.add_column(col)
+    for kind, phases in counts.items():
+        for phase, outcomes in phases.items():
+            table.add_row(kind, phase, ", ".join(f"{o} {n}" for o, n in sorted(outcomes.items())))
+    return table
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -54,9 +65,24 @@ def campaign(
             "--job", help="mission (closed-loop simulation) or analysis (static feasibility, fast)."
         ),
     ] = "mission",
+    faults: Annotated[
+        str | None,
+        typer.Option(
+            "--faults",
+            help="Fault campaign: --runs tethered runs per fault kind, comma-separated: "
+            "rotor, snap, mocap, anchor, jam (docs/faults.md).",
+        ),
+    ] = None,
+    fault_window: Annotated[
+        str,
+        typer.Option("--fault-window", help="START:END of the fault times [s] (stratified)."),
+    ] = f"{DEFAULT_WINDOW[0]:g}:{DEFAULT_WINDOW[1]:g}",
     overrides: SetOption = None,
 ) -> None:
-    """Run randomised missions for each method (and sweep value) and summarise success rates."""
+    """Run randomised missions for each method (and sweep value) and summarise success rates.
+
+    With --faults, run --runs tethered missions per fault kind instead, with the fault
+    times drawn across the mission, and print fault x phase x outcome."""
     sc = resolve_scenario(scenario, overrides)
     if seed < 0:
         raise ConfigError(f"--seed must be >= 0 (got {seed})")
@@ -70,6 +96,8 @@ def campaign(
         seed=seed,
         job=job,
         controller=controller,
+        faults=parse_faults(faults) if faults is not None else (),
+        fault_window=parse_window(fault_window),
     )
     if spec.sweep is not None:  # validate every swept value up front: fail fast, one line
         for value in spec.sweep.values:
@@ -98,14 +126,17 @@ def campaign(
             progress.update(task, advance=1, description=f"runs (last: {rec['method']} {status})")
 
         # a polite stop (SIGTERM, e.g. from a batch scheduler) ends like Ctrl-C: the pool's
-        # workers are shut down with it instead of being orphaned
-        previous = signal.signal(signal.SIGTERM, _interrupt)
+        # workers are shut down with it instead of being orphaned. SIGINT gets the same
+        # handler explicitly: a shell starts background jobs with SIGINT ignored, and
+        # Python then keeps ignoring it
+        previous = {sig: signal.signal(sig, _interrupt) for sig in (signal.SIGTERM, signal.SIGINT)}
         try:
             result = run_campaign(
                 spec, store, executor, provenance=record, on_result=on_result, on_start=on_start
             )
         finally:
-            signal.signal(signal.SIGTERM, previous)
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
 
     plot_success(
         result.summary, directory / "success_rate.png", spec.sweep.key if spec.sweep else None
@@ -131,6 +162,8 @@ def campaign(
             f"[{100 * s.ci_low:.1f}, {100 * s.ci_high:.1f}] %",
         )
     console.print(table)
+    if spec.faults:
+        console.print(_fault_table(fault_table(store.load())))
     results, summary = directory / "results.jsonl", directory / "summary.json"
     console.print(f"results: {results} (table), {summary}, plots in {directory}")
     if result.interrupted:

@@ -14,6 +14,7 @@ from tetherland.errors import ConfigError
 from tetherland.io import dumps_json, prepare_output_dir
 from tetherland.methods import get_method, method_names
 from tetherland.runs import run_mission, save_run
+from tetherland.verdict import Outcome
 
 CONTROLLERS = ("hierarchical", "dfl")
 
@@ -93,7 +94,9 @@ def mission(
 
     Writes the log, summary.json, the figure 6.5 plots and the 3D path (and an mp4 with
     --video, run.mcap for Foxglove or Rerun with --mcap) into --out; --live streams the
-    run to Foxglove while it flies. Exit code 0 when the mission succeeded, 1 when it failed.
+    run to Foxglove while it flies. Exit code 0 when the mission succeeded, 1 when it failed;
+    a mission that cannot be planned (a slope the vehicle cannot reach) prints one line with
+    the reason, writes no results and exits 1.
     """
     sc = resolve_scenario(scenario, overrides)
     how = get_method(method, "--method")
@@ -129,6 +132,12 @@ def mission(
         if view is not None:
             view.finish(result.summary)
             view.close()
+        if result.summary["outcome"] == Outcome.NO_RUN.value:
+            # a valid request the vehicle cannot fly (no plan): one line, exit 1, no files
+            if json:
+                typer.echo(dumps_json(result.summary), nl=False)
+            typer.echo(f"error: mission not flown: {result.summary['reason']}", err=True)
+            raise typer.Exit(1)
         progress.update(task, description="writing results")
         files = save_run(result, directory, video=video)
         if mcap and result.log is not None:

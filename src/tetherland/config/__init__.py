@@ -8,6 +8,7 @@
 
 from tetherland.config.base import Section, Vec3
 from tetherland.config.control import ControllerConfig, FreeFlightGains, TetheredGains
+from tetherland.config.faults import FaultDetectionConfig, FaultKind, FaultsConfig
 from tetherland.config.loader import (
     ScenarioInfo,
     apply_overrides,
@@ -42,6 +43,9 @@ __all__ = [
     "AnchorConfig",
     "CableModel",
     "ControllerConfig",
+    "FaultDetectionConfig",
+    "FaultKind",
+    "FaultsConfig",
     "FreeFlightGains",
     "ImuConfig",
     "MissionConfig",

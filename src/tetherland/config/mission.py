@@ -5,6 +5,7 @@ from __future__ import annotations
 from pydantic import Field
 
 from tetherland.config.base import Section
+from tetherland.config.faults import FaultDetectionConfig
 
 
 class MissionConfig(Section):
@@ -46,13 +47,36 @@ class MissionConfig(Section):
     """Guarded touchdown: after the planned landing, the link elevation reference keeps
     descending at this rate until contact is detected (surface closer or farther than
     believed) [deg/s]."""
+    touchdown_approach_speed: float = Field(0.03, ge=0, le=5)
+    """Slow approach: within reach of the believed surface the planned landing's clock is
+    slowed so that the link reference approaches the surface no faster than this plus
+    ``touchdown_approach_gain`` times the estimated lander clearance (0: no slowing) [m/s]."""
+    touchdown_approach_gain: float = Field(2.0, ge=0, le=100)
+    """... the allowed approach speed grows by this per metre of clearance [1/s]."""
     touchdown_search_deg: float = Field(6.0, gt=0, le=45)
     """Guarded touchdown: how far beyond the planned phi* the search goes [deg]."""
     contact_error_deg: float = Field(0.8, gt=0, le=45)
-    """Contact is detected when the estimated link elevation stays this far above the
+    """Contact signal "link stall": the estimated link elevation stays this far above the
     descending reference (the surface stops the vehicle) [deg]."""
-    contact_dwell: float = Field(0.1, ge=0, le=5)
-    """... for this long [s]."""
+    contact_stall_rate_deg: float = Field(0.5, gt=0, le=45)
+    """... while the estimated link elevation rate stays below this (a link that still
+    moves lags its reference; a stopped one is held) [deg/s]."""
+    contact_clearance: float = Field(0.015, gt=0, le=1)
+    """Contact signal "clearance": the lowest lander tip of the estimated pose is less than
+    this above the believed surface [m]."""
+    contact_force: float = Field(0.15, ge=0, le=100)
+    """Contact signal "surface force": the estimated external force across the cable,
+    on the believed surface normal and low-passed, exceeds this [N]."""
+    contact_force_time_constant: float = Field(0.05, ge=0, le=5)
+    """Low-pass time constant of the estimated surface force [s]."""
+    contact_impact_force: float = Field(1.5, gt=0, le=1000)
+    """... or one unfiltered sample of it exceeded this within twice the dwell (impact) [N]."""
+    contact_dwell: float = Field(0.3, ge=0, le=5)
+    """Contact is confirmed when every contact signal has held for this long (longer than
+    a gust stalls the link) [s]."""
+    contact_press_deg: float = Field(0.3, ge=0, le=10)
+    """After contact the link reference is held this far below the contact elevation, so
+    that the landers stay loaded until the motors go off [deg]."""
     contact_window: float = Field(0.25, ge=0, le=1)
     """Fraction of the landing duration, at its end, in which early contact is detected [-]."""
     contact_gate_deg: float = Field(2.0, gt=0, le=45)
@@ -103,3 +127,5 @@ class MissionConfig(Section):
     """Simulated time with the motors off on the pad before the run ends [s]."""
     max_duration: float = Field(180.0, gt=0, le=3600)
     """The run ends (failed) if the mission has not finished by then [s]."""
+    detection: FaultDetectionConfig = FaultDetectionConfig()
+    """Limits of the fault monitor (rotor, anchor belief, motion capture, hook jam)."""

@@ -7,6 +7,7 @@ from pydantic import Field, model_validator
 from tetherland import geometry as geo
 from tetherland.config.base import Section
 from tetherland.config.control import ControllerConfig
+from tetherland.config.faults import FaultsConfig
 from tetherland.config.mission import MissionConfig
 from tetherland.config.perching import PerchingConfig
 from tetherland.config.perturbation import PerturbationConfig
@@ -40,6 +41,8 @@ class Scenario(Section):
     perturbation: PerturbationConfig = PerturbationConfig()
     perching: PerchingConfig = PerchingConfig()
     verdict: VerdictConfig = VerdictConfig()
+    faults: FaultsConfig = FaultsConfig()
+    """Injected faults (the plant's truth; the robot's belief never has them)."""
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:

@@ -36,6 +36,9 @@ class VerdictConfig(Section):
     (rotor spin-down, contact transient); the slip is measured over the whole rest [s]."""
     contact_force: float = Field(0.05, gt=0, le=100)
     """Touchdown: a normal force above this on a lander (or on the frame) [N]."""
+    safe_stop_speed_mps: float = Field(0.3, gt=0, le=10)
+    """Safe stop: largest vehicle speed at the end of the run for the supervisor's safe
+    state (hover, landed, motors off) to count as reached, in (0, 10] [m/s]."""
     return_position_m: float = Field(0.1, gt=0, le=10)
     """Return: largest ||p_RL - pad|| at the end of the run; the cable must also be
     unhooked by then [m]."""

@@ -19,6 +19,7 @@ from tetherland.control.common import cable_torque
 from tetherland.control.dfl_model import DFL_RELATIVE_DEGREES, dfl_function
 from tetherland.control.dfl_terms import dfl_terms_into
 from tetherland.control.kernels import (
+    cancel_cable_torque,
     mix_into,
     mix_reference,
     quat_rotmat3,
@@ -225,18 +226,10 @@ def dfl_into(
     if par[3] != 0.0 and tension > 0.0:
         phi, delta = link[0], link[1]
         cd = math.cos(delta)
-        xa0, xa1, xa2 = cd * math.cos(phi), -math.sin(delta), cd * math.sin(phi)
-        dw = np.empty(3)
-        for i in range(3):
-            dw[i] = R_WA[i, 0] * xa0 + R_WA[i, 1] * xa1 + R_WA[i, 2] * xa2
-        db0 = R[0, 0] * dw[0] + R[1, 0] * dw[1] + R[2, 0] * dw[2]
-        db1 = R[0, 1] * dw[0] + R[1, 1] * dw[1] + R[2, 1] * dw[2]
-        db2 = R[0, 2] * dw[0] + R[1, 2] * dw[1] + R[2, 2] * dw[2]
-        r0, r1, r2 = par[5], par[6], par[7]
-        f0, f1, f2 = -tension * db0, -tension * db1, -tension * db2
-        t0 -= r1 * f2 - r2 * f1
-        t1 -= r2 * f0 - r0 * f2
-        t2 -= r0 * f1 - r1 * f0
+        t0, t1, t2 = cancel_cable_torque(
+            t0, t1, t2, R, R_WA, cd * math.cos(phi), -math.sin(delta), cd * math.sin(phi),
+            tension, par[5], par[6], par[7],
+        )  # fmt: skip
     h = par[4]
     thrust = f + 0.5 * fd * h + u[0] * h * h / 6.0
     lead = fd + 0.5 * u[0] * h

@@ -13,9 +13,10 @@ import numpy as np
 from tetherland.config import Scenario
 from tetherland.control import kernels
 from tetherland.control.mixer import Mixer, command_from
-from tetherland.control.position import PositionController
+from tetherland.control.position import PositionController, PositionReference
 from tetherland.errors import SingularityError
 from tetherland.interfaces import Command, Reference, StateEstimate
+from tetherland.rotations import quat_to_rotmat
 
 
 class FreeFlightController:
@@ -53,6 +54,21 @@ class FreeFlightController:
         """Clear the position integral (the controller is taking over)."""
         self.position.reset()
         self._t_last = None
+
+    def hand_over(self, estimate: StateEstimate, reference: Reference, thrust: float) -> None:
+        """Take over from a controller that commanded ``thrust`` [N] along the estimated z_B:
+        the position integral starts at the difference between that force and this law's
+        with an empty integral, so the first command continues the last one (the model
+        error the other controller held, e.g. a believed mass 4 % light, is not dropped
+        and integrated again while the vehicle sags near a wall)."""
+        self.reset()
+        P = reference.p_W
+        if P is None or not math.isfinite(thrust):
+            return
+        body = estimate.body
+        F_last = thrust * quat_to_rotmat(body.q_WB)[:, 2]
+        F_0, _ = self.position.desired_force(body, PositionReference.from_rows(P, reference.yaw))
+        self.position.seed_integral(F_last - F_0)
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         """Rotor commands tracking ``reference.p_W`` (rows p, v, a) with ``reference.yaw``."""

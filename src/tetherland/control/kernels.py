@@ -367,6 +367,24 @@ def free_flight_into(
     mix_into(thrust, t0, t1, t2, F, False, mix, out)
 
 
+@njit(cache=True)
+def cancel_cable_torque(
+    t0: float, t1: float, t2: float, R: FloatArray, R_WA: FloatArray,
+    xa0: float, xa1: float, xa2: float, tension: float, r0: float, r1: float, r2: float,
+) -> tuple[float, float, float]:  # fmt: skip
+    """tau - r_att x (-f_L d_B), d_B = R^T R_WA x_L (the link direction x_L in F_A given as
+    (xa0, xa1, xa2), in F_B): the torque that cancels the cable's at the attachment offset
+    (docs/theory.md section 7.7; :func:`tetherland.control.common.cable_torque`)."""
+    dw = np.empty(3)
+    for i in range(3):
+        dw[i] = R_WA[i, 0] * xa0 + R_WA[i, 1] * xa1 + R_WA[i, 2] * xa2
+    db0 = R[0, 0] * dw[0] + R[1, 0] * dw[1] + R[2, 0] * dw[2]
+    db1 = R[0, 1] * dw[0] + R[1, 1] * dw[1] + R[2, 1] * dw[2]
+    db2 = R[0, 2] * dw[0] + R[1, 2] * dw[1] + R[2, 2] * dw[2]
+    f0, f1, f2 = -tension * db0, -tension * db1, -tension * db2
+    return t0 - (r1 * f2 - r2 * f1), t1 - (r2 * f0 - r0 * f2), t2 - (r0 * f1 - r1 * f0)
+
+
 # ================================================================== hierarchical
 
 
@@ -552,19 +570,9 @@ def hierarchical_into(
             state[5 + i] = R_d[i // 3, i % 3]
     t0, t1, t2 = _attitude_torque(R, omega_B, R_d, ff_omega, ff_omega_dot, feedforward, par, 20)
     if par[7] != 0.0 and tension > 0.0:
-        # tau -= r_att x (-f_L d_B), d_B = R^T R_WA x_L (the link direction in F_B)
-        xa0, xa1, xa2 = cd * cp, -sd, cd * sp
-        dw = np.empty(3)
-        for i in range(3):
-            dw[i] = R_WA[i, 0] * xa0 + R_WA[i, 1] * xa1 + R_WA[i, 2] * xa2
-        db0 = R[0, 0] * dw[0] + R[1, 0] * dw[1] + R[2, 0] * dw[2]
-        db1 = R[0, 1] * dw[0] + R[1, 1] * dw[1] + R[2, 1] * dw[2]
-        db2 = R[0, 2] * dw[0] + R[1, 2] * dw[1] + R[2, 2] * dw[2]
-        r0, r1, r2 = par[8], par[9], par[10]
-        f0, f1, f2 = -tension * db0, -tension * db1, -tension * db2
-        t0 -= r1 * f2 - r2 * f1
-        t1 -= r2 * f0 - r0 * f2
-        t2 -= r0 * f1 - r1 * f0
+        t0, t1, t2 = cancel_cable_torque(
+            t0, t1, t2, R, R_WA, cd * cp, -sd, cd * sp, tension, par[8], par[9], par[10]
+        )
     mix_into(max(f_R, 0.0), t0, t1, t2, omega_B, False, mix, out)
     # diagnostics: theta_A of the actual z_B (geometry.theta_A_from_z_B) and heading psi
     R_AB = tmul3(R_WA, R)

@@ -21,7 +21,7 @@ import numpy as np
 from tetherland import GRAVITY
 from tetherland.config.control import FreeFlightGains
 from tetherland.control.attitude import AttitudeController, AttitudeGains
-from tetherland.control.feedforward import attitude_feedforward
+from tetherland.control.feedforward import attitude_feedforward_fast
 from tetherland.geometry import FloatArray
 from tetherland.rotations import rotation_from_z_and_yaw
 from tetherland.state import RigidBodyState
@@ -128,6 +128,16 @@ class PositionController:
         """Clear the integral of the position error (call when the controller takes over)."""
         self._integral[:] = 0.0
 
+    def seed_integral(self, force_W: FloatArray) -> None:
+        """Start the integral at the force ``force_W`` F_W [N] (clamped per axis like the
+        integral itself): the bumpless hand-over from a controller that was already
+        holding the model error (mass, thrust coefficient) this one would integrate."""
+        if self.k_i <= 0.0:
+            return
+        bound = self.integral_max / (self.mass * self.k_i)
+        np.clip(-np.asarray(force_W, float) / (self.mass * self.k_i), -bound, bound,
+                out=self._integral)  # fmt: skip
+
     @property
     def integral(self) -> FloatArray:
         """Integral of the position error [m s] (the live array: compiled controllers
@@ -166,16 +176,23 @@ class PositionController:
         return F, limited
 
     def update(
-        self, state: RigidBodyState, ref: PositionReference, dt: float | None = None
+        self,
+        state: RigidBodyState,
+        ref: PositionReference,
+        dt: float | None = None,
+        rates: tuple[FloatArray, FloatArray] | None = None,
     ) -> WrenchCommand:
-        """Wrench tracking ``ref`` from ``state`` (``dt`` [s] since the last call: integral)."""
+        """Wrench tracking ``ref`` from ``state`` (``dt`` [s] since the last call: integral).
+
+        ``rates``: :meth:`feedforward_rates` of ``ref`` when the caller has them already.
+        """
         F, limited = self.desired_force(state, ref, dt)
         R = state.R_WB
         R_d = rotation_from_z_and_yaw(F, ref.yaw)
         thrust = float(F @ R[:, 2])
         omega_d = omega_dot_d = None
         if ref.j_W is not None:
-            omega_d, omega_dot_d = self.feedforward_rates(ref)
+            omega_d, omega_dot_d = rates if rates is not None else self.feedforward_rates(ref)
         tau = self.attitude.torque(R, state.omega_B, R_d, omega_d, omega_dot_d)
         return WrenchCommand(thrust=thrust, torque_B=tau, R_d=R_d, limited=limited)
 
@@ -187,5 +204,5 @@ class PositionController:
         F_n[2] += m * self.g
         dF = m * np.asarray(ref.j_W, dtype=float)
         ddF = _ZERO3 if ref.s_W is None else m * np.asarray(ref.s_W, dtype=float)
-        _, omega_d, omega_dot_d = attitude_feedforward(F_n, dF, ddF, ref.yaw)
+        _, omega_d, omega_dot_d = attitude_feedforward_fast(F_n, dF, ddF, ref.yaw)
         return omega_d, omega_dot_d

@@ -3,8 +3,9 @@
 The supervisor makes the transfer bumpless by starting the next controller's reference at
 the current output (by flatness, the same output means the same nominal input); this
 controller dispatches on ``Reference.mode``, resets the controller it switches to
-(the DFL thrust extension starts at the last commanded thrust) and records the command
-jump of every switch.
+(the DFL thrust extension starts at the last commanded thrust; from tethered flight the
+free-flight position integral starts at the force the tethered law was commanding) and
+records the command jump of every switch.
 """
 
 from __future__ import annotations
@@ -79,7 +80,11 @@ class SwitchingController:
         mode = reference.mode
         if mode != self.mode and self.mode is not None:
             if mode == ControlMode.FREE_FLIGHT:
-                self.free_flight.reset()
+                if self.mode == ControlMode.TETHERED and self.last is not None:
+                    # from tethered flight (release, abort): continue the commanded force
+                    self.free_flight.hand_over(estimate, reference, self.last.thrust or 0.0)
+                else:
+                    self.free_flight.reset()
             if mode == ControlMode.TETHERED:
                 if isinstance(self.tethered, DflController):
                     # from flight: continue the commanded thrust (bumpless); from motors off

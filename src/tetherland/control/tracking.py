@@ -24,6 +24,7 @@ from tetherland.errors import TetherlandError
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
 from tetherland.models.quadrotor import RotorLayout, RotorModel
+from tetherland.rotations import cross3
 
 _DIAGNOSTICS = ("position_error", "saturated")
 
@@ -73,15 +74,18 @@ class FreeFlightTracker:
         """Forget the previous tick (lag compensation restarts)."""
         self._last = None
 
-    def nominal_thrusts(self, ref: PositionReference) -> FloatArray:
-        """Rotor thrusts of the reference's nominal wrench (flatness) [N]."""
+    def nominal_thrusts(
+        self, ref: PositionReference, rates: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
+        """Rotor thrusts of the reference's nominal wrench (flatness) [N] (``rates``: the
+        reference's feed-forward body rates when the caller has them already)."""
         F = self.mass * np.asarray(ref.a_W, dtype=float)
         F[2] += self.mass * self.position.g
         tau = np.zeros(3)
         if ref.j_W is not None:
-            w, w_dot = self.position.feedforward_rates(ref)
+            w, w_dot = rates if rates is not None else self.position.feedforward_rates(ref)
             J = self.inertia
-            tau = J * w_dot + np.cross(w, J * w)
+            tau = J * w_dot + cross3(w, J * w)
         return self._Gi @ np.concatenate(([float(np.linalg.norm(F))], tau))
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
@@ -104,11 +108,12 @@ class FreeFlightTracker:
         self._t_int = t
         if float(np.linalg.norm(ref.v_W)) > 0.05:
             dt = None
-        wrench = self.position.update(body, ref, dt)
+        rates = None if ref.j_W is None else self.position.feedforward_rates(ref)
+        wrench = self.position.update(body, ref, dt, rates)
         alloc = self.layout.allocate(np.concatenate(([wrench.thrust], wrench.torque_B)))
         f_dot = None
         if self.lag_compensation:
-            f_n = self.nominal_thrusts(ref)
+            f_n = self.nominal_thrusts(ref, rates)
             last = self._last
             if last is not None and 0.0 < t - last[0] <= 2.5 * self._period:
                 f_dot = (f_n - last[1]) / (t - last[0])

@@ -158,6 +158,7 @@ class UkfEstimator:
             covariance=ukf.covariance,
             link=LinkState(phi, delta, phi_dot, delta_dot),
             tension=tension.filtered,
+            external_force_B=out[kernels.EXTERNAL],
         )
         return self._cached
 

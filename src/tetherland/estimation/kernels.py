@@ -13,8 +13,9 @@ instantaneous cable tension (docs/theory.md section 8)
 :func:`tetherland.estimation.tension.tension_from_forces`); a property test checks both.
 
 Layout of ``out`` (:data:`WIDTH` floats): p_W, v_W, q_WB, omega_B, accel bias b_a, gyro
-bias b_g (the log's estimate columns in order), link [phi, delta, phi', delta'], d_B and
-the raw tension. ``geo`` = [r_att_B (3), p_A (3), R_WA (3x3, row-major)].
+bias b_g (the log's estimate columns in order), link [phi, delta, phi', delta'], d_B, the
+raw tension and the external force m (f_B - b_a) - f_R e3 in F_B (everything but the
+rotors: cable, contact, wind). ``geo`` = [r_att_B (3), p_A (3), R_WA (3x3, row-major)].
 """
 
 from __future__ import annotations
@@ -31,7 +32,8 @@ from tetherland.state import link_into, link_state_reference
 P_W, V_W, Q_WB, OMEGA_B = slice(0, 3), slice(3, 6), slice(6, 10), slice(10, 13)
 ACCEL_BIAS, GYRO_BIAS, LINK, D_B = slice(13, 16), slice(16, 19), slice(19, 23), slice(23, 26)
 TENSION = 26
-WIDTH = 27
+EXTERNAL = slice(27, 30)
+WIDTH = 30
 
 
 def pack_geometry(r_att_B: FloatArray, p_A: FloatArray, R_WA: FloatArray) -> FloatArray:
@@ -67,7 +69,8 @@ def estimate_reference(
     r_att, p_A, R_WA = geo[0:3], geo[3:6], geo[6:15].reshape(3, 3)
     link, d_B = link_state_reference(np.concatenate((p_W, q_WB, v_W, omega_B)), r_att, p_A, R_WA)
     tension = tension_from_forces(thrust, f_mean_B - b_a, mass, d_B if d_B.any() else None)
-    return np.concatenate((p_W, v_W, q_WB, omega_B, b_a, b_g, link, d_B, [tension]))
+    external_B = mass * (f_mean_B - b_a) - thrust * np.array([0.0, 0.0, 1.0])
+    return np.concatenate((p_W, v_W, q_WB, omega_B, b_a, b_g, link, d_B, [tension], external_B))
 
 
 @njit(cache=True)
@@ -100,3 +103,6 @@ def estimate_into(
         out[TENSION] = dx * rx + dy * ry + dz * rz
     else:
         out[TENSION] = math.sqrt(rx * rx + ry * ry + rz * rz)
+    out[27] = -rx  # the external force, m (f_B - b_a) - f_R e3
+    out[28] = -ry
+    out[29] = -rz

@@ -3,27 +3,33 @@
 It maps an observation of :class:`~tetherland.gym.env.TetheredEnv` to an action, for
 learning from demonstration. It holds the plan (a :class:`TrajectoryTrack` started at
 t = 0) and the mission's :class:`~tetherland.control.SwitchingController` in tethered mode.
-Landing ends as the mission's touchdown phase does: contact is believed near the end of
-the plan when the estimated link stops following the reference, past the planned end a
-guarded descent lowers phi_d at ``mission.touchdown_rate_deg`` until it does; the expert
-then holds the link where it touched for ``mission.settle_time`` and idles the rotors at
-f_min (the action's zero: the motors-off of the mission). Takeoff holds the planned end
-hover.
+Landing ends as the mission's touchdown phase does, by the same rule
+(:mod:`tetherland.mission.contact`): contact is confirmed near the end of the plan, and
+past it in a guarded descent that lowers phi_d at ``mission.touchdown_rate_deg``, when the
+clearance, the link stall and (if the estimate carries it) the surface force agree; the
+expert then holds the link where it touched for ``mission.settle_time`` and idles the
+rotors at f_min (the action's zero: the motors-off of the mission). An observation holds
+no external force, so the expert's rule uses the clearance and the link stall. Takeoff
+holds the planned end hover.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
 from tetherland.config import Scenario
 from tetherland.control import SwitchingController
-from tetherland.estimation import ThresholdDwell
-from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.geometry import FloatArray
 from tetherland.gym.env import estimate_of
-from tetherland.interfaces import ControlMode, Reference
+from tetherland.interfaces import Reference
+from tetherland.mission.contact import (
+    ContactRule,
+    contact_hold,
+    early_contact_armed,
+    guarded_descent,
+)
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.maneuver import Maneuver
@@ -61,7 +67,6 @@ class ExpertPolicy:
         self.kind = controller
         v = scenario.vehicle
         self.rotors = RotorModel.from_config(v)
-        self._phi_star = LandingGeometry.from_scenario(scenario).phi_star
         self._f_min, self._f_span = v.f_min, v.f_max - v.f_min
         self.reset()
 
@@ -74,8 +79,7 @@ class ExpertPolicy:
     def reset(self) -> None:
         """Start a new episode (fresh controller state, no touchdown yet)."""
         self.controller = SwitchingController(self.scenario, self.kind)
-        m = self.scenario.mission
-        self._contact = ThresholdDwell(math.radians(m.contact_error_deg), m.contact_dwell)
+        self._contact = ContactRule(self.scenario)
         self._hold: Reference | None = None
 
     def __call__(self, observation: FloatArray) -> FloatArray:
@@ -91,10 +95,9 @@ class ExpertPolicy:
     def reference(self, t: float, est: Any) -> Reference:
         """The tethered reference at ``t``: the plan, then the guarded touchdown (landing).
 
-        As the mission's supervisor: contact counts from the last ``mission.contact_window``
-        of the plan on, once the link is within ``mission.contact_gate_deg`` of phi*, when
-        the estimated link stays ``contact_error_deg`` above the reference for
-        ``contact_dwell``; past the plan's end phi_d descends at ``touchdown_rate_deg``.
+        As the mission's supervisor (:class:`~tetherland.mission.contact.ContactRule`):
+        contact counts from the last ``mission.contact_window`` of the plan on; past the
+        plan's end phi_d descends at ``touchdown_rate_deg``.
         """
         if self._hold is not None:
             return self._hold
@@ -103,27 +106,12 @@ class ExpertPolicy:
             return ref
         m = self.scenario.mission
         T = self.plan.duration
-        out = ref.output
         if t >= T:
-            rate, depth = math.radians(m.touchdown_rate_deg), math.radians(m.touchdown_search_deg)
-            s = min(rate * (t - T), depth)
-            out = out.copy()
-            out[0, 0] -= s
-            out[1, 0] = -rate if s < depth else 0.0
-            ref = Reference(t=t, mode=ControlMode.TETHERED, output=out, thrust_ff=ref.thrust_ff,
-                            feedforward=ref.feedforward)  # fmt: skip
-        link = est.link
-        near = link is not None and link.phi - self._phi_star < math.radians(m.contact_gate_deg)
-        if t > (1.0 - m.contact_window) * T and near:
-            if self._contact.update(t, link.phi - out[0, 0]):
-                hold = np.zeros((5, 4))
-                hold[0] = out[0]
-                hold[0, 0] = link.phi
-                self._hold = Reference(
-                    t=t, mode=ControlMode.TETHERED, output=hold, thrust_ff=ref.thrust_ff,
-                    feedforward=ref.feedforward,
-                )  # fmt: skip
+            ref = guarded_descent(m, ref, t - T, ref.phase)
+        if early_contact_armed(m, t, 0.0, T):
+            if self._contact.update(t, est, ref.output[0, 0]).confirmed:
+                self._hold = contact_hold(m, t, est, ref, ref.phase)
                 return self._hold
         else:
-            self._contact.reset()
+            self._contact.idle()
         return ref

@@ -62,6 +62,7 @@ class TetheredMethod:
             ),
             times=dict(sup.times),
             abort_reason=sup.abort_reason,
+            safe_state=sup.safe_state,
             finished=any(r.phase == Phase.DONE for r in sup.records),
             takeoff_target=tuple(float(x) for x in takeoff.output(takeoff.duration).value),
             home_pad_W=tuple(float(x) for x in plan.waypoints.start),

@@ -6,14 +6,23 @@ transition with its reason). It sees only the estimate, never the plant's truth:
 
 - a hook is taken as caught when the estimated tension passes the threshold for the dwell
   time while stretching; without tension the hook counts as missed and is retried;
+- touchdown is confirmed by the multi-signal rule of :mod:`tetherland.mission.contact`
+  (clearance, link stall, surface force), near the end of the planned landing (whose clock
+  slows near the surface, :class:`~tetherland.mission.contact.SlowApproach`) and in the
+  guarded descent past it;
 - switches are bumpless (6.6.3): a tethered reference starts at the current output and
   blends onto the plan; the release after the takeoff starts at the current position with
   the cable pull as a force feed-forward (the reference acceleration f_L d/m) that fades
   out along the release leg; a safe hover from tethered flight starts where the position
   error reproduces the pull (p + f_L d / (m k_x)), as in stretching;
 - an operator abort (``mission.abort_time``) or a fault (slack cable or large tracking error
-  in a tethered phase, a non-finite estimate) moves to a safe state from any phase: hover
-  in free flight, or stay put when the motors are already off on the surface.
+  in a tethered phase, a non-finite estimate, or one of the measured-signal rules of
+  :class:`~tetherland.mission.faults.FaultMonitor`: rotor, anchor belief, motion capture,
+  hook jam) moves to a safe state from any phase: hover in free flight (away from the
+  surface after a slack cable; inside the cable's reach when the hook jams), land on the
+  start pad (a weak rotor before hooking or after unhooking), or stay put when the motors
+  are already off on the surface. :attr:`MissionSupervisor.safe_state` names the one
+  reached.
 
 The plan (trajectories, waypoints, clearance) is made before by
 :func:`~tetherland.mission.plan.plan_mission`; the phases and their allowed successors are
@@ -28,12 +37,21 @@ from types import MappingProxyType
 
 import numpy as np
 
-from tetherland.config import Scenario
+from tetherland.config import FaultKind, Scenario
 from tetherland.control.common import heading_of
 from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
 from tetherland.geometry import theta_A_from_z_B
-from tetherland.interfaces import ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.interfaces import Command, ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.mission.contact import (
+    ContactDecision,
+    ContactRule,
+    SlowApproach,
+    contact_hold,
+    early_contact_armed,
+    guarded_descent,
+)
+from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan
@@ -63,6 +81,13 @@ TRANSITIONS: Mapping[Phase, frozenset[Phase]] = MappingProxyType({
 })  # fmt: skip
 """Every phase and the phases it may move to. An abort moves to SAFE_HOVER (hover in
 free flight), or to ABORTED directly when the motors are off on the surface."""
+
+
+_UNHOOKED = frozenset({_P.TAKEOFF, _P.APPROACH, _P.RETRY, _P.RETURN})
+"""Free-flight phases without the cable: a weak rotor lands on the start pad from them."""
+_NEAR_MECHANISM = frozenset({_P.HOOKING, _P.RELEASE, _P.UNHOOK})
+"""Free-flight phases close to the anchoring mechanism: a fault's safe hover moves away
+from the surface."""
 
 
 class TransitionError(TetherlandError):
@@ -139,10 +164,18 @@ class MissionSupervisor:
         self.times: dict[str, float] = {}
         self.hook_attempts = 0
         self.abort_reason: str | None = None
+        self.safe_state: str | None = None
+        """The safe state reached after an abort: "hover", "landed" or "motors_off"."""
+        self.fault: FaultDetection | None = None
+        """The fault the monitor detected, if any."""
+        self.monitor = FaultMonitor(scenario, self.geo)
+        self._safe_land = False
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
-        self._contact_rule = ThresholdDwell(math.radians(cfg.contact_error_deg), cfg.contact_dwell)
+        self._contact_rule = ContactRule(scenario)
+        self._slow = SlowApproach(cfg, self._contact_rule.geometry, scenario.tether.length)
+        self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)
         self._path = self._new_path(0.0, wp.start).to(
@@ -218,24 +251,79 @@ class MissionSupervisor:
         return float(np.linalg.norm(est.body.p_W - p)) <= tol
 
     # ------------------------------------------------------------------ abort and faults
-    def abort(self, t: float, est: StateEstimate, reason: str) -> None:
-        """Go to the safe state from the current phase and log ``reason``."""
+    def abort(
+        self, t: float, est: StateEstimate, reason: str, *, hover_at: np.ndarray | None = None,
+        land: bool = False, away: bool = False,
+    ) -> None:  # fmt: skip
+        """Go to the safe state from the current phase and log ``reason``.
+
+        Hover where the vehicle is (at the pull point in a tethered phase, ``away`` from
+        the surface by ``mission.detection.away_distance``), or at ``hover_at``; or, with
+        ``land``, fly back to the start pad and land (free flight).
+        """
         if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
             return
         self.abort_reason = reason
         self._event(t, "abort", reason)
         if self.phase == Phase.MOTORS_OFF:
             self._enter(Phase.ABORTED, t, f"abort while landed, motors stay off: {reason}")
+            self.safe_state = "motors_off"
             self._terminate_at = t
             return
         start = self._pull_point(est) if self.phase.tethered else est.body.p_W
-        self._path = self._new_path(t, start).to(start, pause=self.cfg.safe_hover_time)
+        if away:
+            start = start + self.cfg.detection.away_distance * self.geo.surface.z_S
+        self._path = self._new_path(t, est.body.p_W if away else start)
+        if land:
+            wp = self.wp
+            self._path = (
+                self._path.to(np.array([*start[:2], max(start[2], wp.z_safe)]))
+                .to(np.array([*wp.start[:2], wp.z_safe]))
+                .to(wp.start + self.cfg.takeoff_height * Z_W)
+                .to(wp.start - self.cfg.pad_press_depth * Z_W, speed=self.cfg.hook_speed,
+                    pause=self.cfg.settle_time)
+            )  # fmt: skip
+            self._safe_land = True
+        else:
+            target = start if hover_at is None else np.asarray(hover_at, dtype=float)
+            self._path = self._path.to(target, pause=self.cfg.safe_hover_time)
         self._enter(Phase.SAFE_HOVER, t, f"abort: {reason}")
+
+    def command_sent(self, t: float, command: Command) -> None:
+        """The runner tells each command sent (``CommandAware``): for the fault monitor."""
+        self.monitor.command_sent(t, command)
+
+    def _on_fault(self, t: float, est: StateEstimate, found: FaultDetection) -> None:
+        """A measured-signal fault: log it and move to the safe state of its kind."""
+        self.fault = found
+        self._event(t, "fault", found.reason)
+        if found.kind == FaultKind.JAM:  # still hooked: hover inside the cable's reach
+            self.abort(t, est, found.reason, hover_at=self.wp.hook_start)
+        elif found.kind == FaultKind.ROTOR and self.phase in _UNHOOKED:
+            self.abort(t, est, found.reason, land=True)
+        elif found.kind == FaultKind.SNAP or self.phase in _NEAR_MECHANISM:
+            self.abort(t, est, found.reason, away=True)  # stop away from the surface
+        else:
+            self.abort(t, est, found.reason)
 
     def _check_faults(self, t: float, est: StateEstimate, ref: Reference) -> None:
         body = est.body
         if not math.isfinite(sum(body.p_W.tolist()) + sum(body.q_WB.tolist())):
             self.abort(t, est, "fault: the state estimate is not finite")
+            return
+        if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
+            return
+        det = self.cfg.detection
+        airborne = t >= self.cfg.settle_time + det.airborne_delay and not (
+            self.phase == Phase.TETHERED_TAKEOFF and t < self._phase_start + det.airborne_delay
+        )
+        planned = None
+        if self.phase in (Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF):
+            ff = ref.feedforward
+            planned = ff.tension if ff is not None else 0.0  # off the plan: not needed
+        found = self.monitor.check(t, est, self.phase, airborne, planned)
+        if found is not None:
+            self._on_fault(t, est, found)
             return
         active = self.phase == Phase.TETHERED_LANDING or (
             self.phase == Phase.TETHERED_TAKEOFF and self._track is not None
@@ -244,9 +332,16 @@ class MissionSupervisor:
         if not active or est.link is None or self._track is None:
             self._slack.reset()
             return
-        if self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
+        if self._contact_rule.geometry.clearance(body.p_W, body.R_WB) < self.cfg.contact_clearance:
+            # the landers are at the surface and may carry the vehicle: a slackening cable
+            # is expected there (flat ground, gentle slopes), not a fault
+            self._slack.reset()
+        elif self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
             self.abort(
-                t, est, f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)"
+                t,
+                est,
+                f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)",
+                away=True,
             )
             return
         if ref.output is None:
@@ -324,6 +419,8 @@ class MissionSupervisor:
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
+            self._slow.start(t)
+            self._landing_rate = 0.0
             self._enter(
                 Phase.TETHERED_LANDING, t,
                 f"estimated tension {est.tension:.2f} N above {cfg.tension_threshold} N "
@@ -342,44 +439,33 @@ class MissionSupervisor:
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t)
 
-    def _contact(self, t: float, est: StateEstimate, ref: Reference, reason: str) -> Reference:
-        """Touchdown detected: hold the current link elevation until the motors go off."""
-        assert est.link is not None and ref.output is not None
+    def _contact(
+        self, t: float, est: StateEstimate, ref: Reference, decision: ContactDecision, when: str
+    ) -> Reference:
+        """Touchdown confirmed: hold the link at contact until the motors go off."""
         self.times["t_L"] = t
-        out = np.zeros((5, 4))
-        out[0] = ref.output[0]
-        out[0, 0] = est.link.phi
-        self._hold = Reference(
-            t=t, mode=ControlMode.TETHERED, phase=int(Phase.TOUCHDOWN), output=out,
-            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-        )  # fmt: skip
+        self._hold = contact_hold(self.cfg, t, est, ref, int(Phase.TOUCHDOWN))
+        assert decision.evidence is not None
+        reason = f"contact {when} (t_L): {decision.evidence.describe()}"
         self._event(t, "touchdown", reason)
         if self.phase != Phase.TOUCHDOWN:
             self._enter(Phase.TOUCHDOWN, t, reason)
         return self._hold
 
-    def _touching(self, t: float, est: StateEstimate, ref: Reference) -> bool:
-        """The surface stops the link: phi stays above the descending reference."""
-        assert ref.output is not None
-        if est.link is None:
-            return False
-        return self._contact_rule.update(t, est.link.phi - ref.output[0, 0])
-
-    def _near(self, est: StateEstimate) -> bool:
-        """The link is low enough for the surface to be touching (contact_gate_deg)."""
-        gate = math.radians(self.cfg.contact_gate_deg)
-        return est.link is not None and est.link.phi - self.geo.phi_star < gate
-
     def _tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         track = self._track.track
-        ref = self._track.reference(t, self.phase)
-        if t > track.t0 + (1.0 - self.cfg.contact_window) * track.duration and self._near(est):
-            if self._touching(t, est, ref):
-                return self._contact(t, est, ref, "contact before the planned end (t_L)")
+        tau = self._slow.advance(t, est, self._landing_rate)  # the slowed plan clock
+        planned = self._track.reference(tau, self.phase)
+        self._landing_rate = abs(float(planned.output[1, 0]))
+        ref = self._slow.scale(planned, t)
+        if early_contact_armed(self.cfg, tau, track.t0, track.duration):
+            decision = self._contact_rule.update(t, est, ref.output[0, 0])
+            if decision.confirmed:
+                return self._contact(t, est, ref, decision, "before the planned end")
         else:
-            self._contact_rule.reset()
-        if t >= track.t_end:
+            self._contact_rule.idle()
+        if tau >= track.t_end:
             self.times["t_L_plan"] = t
             self._search_start = t
             self._hold = None
@@ -390,24 +476,16 @@ class MissionSupervisor:
         """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
         assert self._track is not None and self._search_start is not None
         ref = self._track.reference(t, self.phase)
-        rate = math.radians(self.cfg.touchdown_rate_deg)
-        depth = math.radians(self.cfg.touchdown_search_deg)
-        s = min(rate * (t - self._search_start), depth)
-        out = ref.output.copy()
-        out[0, 0] -= s
-        out[1, 0] = -rate if s < depth else 0.0
-        return Reference(
-            t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=out,
-            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-        )  # fmt: skip
+        return guarded_descent(self.cfg, ref, t - self._search_start, int(self.phase))
 
     def _touchdown(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         cfg = self.cfg
         if self._hold is None:  # searching for the surface
             ref = self._search_reference(t)
-            if self._touching(t, est, ref):
-                return self._contact(t, est, ref, "contact during the guarded descent (t_L)")
+            decision = self._contact_rule.update(t, est, ref.output[0, 0])
+            if decision.confirmed:
+                return self._contact(t, est, ref, decision, "during the guarded descent")
             limit = cfg.touchdown_search_deg / cfg.touchdown_rate_deg + cfg.touchdown_search_grace
             if t > self._search_start + limit:
                 self.abort(t, est, "fault: no contact within touchdown_search_deg beyond phi*")
@@ -512,7 +590,13 @@ class MissionSupervisor:
 
     def _safe_hover(self, t: float, est: StateEstimate) -> Reference:
         if t >= self._path.t_end:
+            if self._safe_land:
+                self._enter(Phase.ABORTED, t, "safe landing on the start pad: motors off")
+                self.safe_state = "landed"
+                self._terminate_at = t + self.cfg.done_hold_time
+                return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
             self._enter(Phase.ABORTED, t, "safe hover held: run ended")
+            self.safe_state = "hover"
             self._final_mode = ControlMode.FREE_FLIGHT
             self._terminate_at = t
         return self._free(t)

@@ -21,6 +21,7 @@ from tetherland.interfaces import Estimator
 from tetherland.methods import ControllerChoice, Flight, Planners, get_method
 from tetherland.provenance import provenance
 from tetherland.sim import Plant, Runner, SimLog
+from tetherland.sim.faults import faulty_belief
 from tetherland.state import RigidBodyState
 from tetherland.verdict import RunRecord, Verdict, judge, not_flown
 
@@ -136,6 +137,8 @@ def run_mission(
         watch the supervisor's phase, for example).
     """
     belief = belief or scenario
+    if scenario.faults.active or belief.faults.active:  # the robot never knows the faults
+        belief = faulty_belief(belief, scenario.faults)
     how = get_method(method)
     if how.name == "tethered":
         controller = controller or belief.controller.kind

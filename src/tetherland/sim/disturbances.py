@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Protocol
 
@@ -35,14 +36,33 @@ class WindGusts:
         self._body = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_BODY, "vehicle")
         self._xfrc = plant.data.xfrc_applied
         self.peak = 0.0
+        # raised-cosine gusts (campaign.perturb.Gust) as plain tuples sorted by start,
+        # so that a tick skips the gusts that are over or still to come with two
+        # comparisons; any other GustLike is asked through its force(t)
+        windows = [
+            (float(g.t_start), float(g.duration), float(g.force_W[0]), float(g.force_W[1]))
+            for g in self.gusts
+            if all(hasattr(g, a) for a in ("t_start", "duration", "force_W"))
+        ]
+        self._windows = sorted(windows) if len(windows) == len(self.gusts) else None
 
     def force_at(self, t: float) -> np.ndarray:
         """Total gust force at time ``t`` in F_W [N]."""
         fx = fy = 0.0
-        for g in self.gusts:
-            gx, gy = g.force(t)
-            fx += gx
-            fy += gy
+        if self._windows is None:
+            for g in self.gusts:
+                gx, gy = g.force(t)
+                fx += gx
+                fy += gy
+            return np.array([fx, fy, 0.0])
+        for t_start, duration, peak_x, peak_y in self._windows:
+            if t < t_start:
+                break  # sorted by start: the rest are still to come
+            s = (t - t_start) / duration
+            if s <= 1.0:  # the raised cosine of Gust.force
+                k = 0.5 * (1.0 - math.cos(2.0 * math.pi * s))
+                fx += k * peak_x
+                fy += k * peak_y
         return np.array([fx, fy, 0.0])
 
     def __call__(self, t: float, plant: Plant) -> None:

@@ -45,6 +45,8 @@ class HookEventKind(IntEnum):
     ENGAGED = 1
     RELEASED = 2
     MISSED = 3
+    SNAPPED = 4
+    """Fault: the cable broke (distance and point: the attachment point then)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,7 +103,9 @@ class Hook:
         "_prev",
         "capture_radius",
         "events",
+        "jammed",
         "miss_radius",
+        "severed",
     )
 
     def __init__(
@@ -127,19 +131,33 @@ class Hook:
         self._engaged = False
         self._prev: tuple[float, float, float] | None = None
         self.events: list[HookEvent] = []
+        self.jammed = False
+        """Fault: crossing the disk back does not release the cable."""
+        self.severed = False
+        """Fault: the cable is broken; it never engages again."""
 
     @property
     def engaged(self) -> bool:
         """True while the cable is attached to the anchor."""
         return self._engaged
 
+    def sever(self, t: float, p_att_W: ArrayLike) -> None:
+        """Fault: the cable breaks at ``t`` with the attachment point at ``p_att_W``; it
+        is detached and never engages again."""
+        p = np.asarray(p_att_W, dtype=float)
+        dist = float(np.linalg.norm(p - np.asarray(self._p_A)))
+        self.events.append(HookEvent(t, HookEventKind.SNAPPED, dist, p.copy()))
+        self._engaged = False
+        self.severed = True
+
     @property
     def state(self) -> HookState:
         return HookState.ENGAGED if self._engaged else HookState.DISENGAGED
 
     def reset(self, engaged: bool = False) -> None:
-        """Forget the previous position and events; set the state."""
+        """Forget the previous position, events and faults; set the state."""
         self._engaged = bool(engaged)
+        self.jammed = self.severed = False
         self._prev = None
         self.events.clear()
 
@@ -198,6 +216,8 @@ class Hook:
         forward = prev_s < 0.0 <= s
         backward = prev_s >= 0.0 > s
         if not ((forward and not self._engaged) or (backward and self._engaged)):
+            return None
+        if (forward and self.severed) or (backward and self.jammed):
             return None
         lam = prev_s / (prev_s - s)
         ox, oy, oz = self._offset

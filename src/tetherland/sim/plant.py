@@ -95,6 +95,7 @@ class Plant:
         self._w_cmd = [0.0, 0.0, 0.0, 0.0]
         self._spinning_up = True  # False once the speeds equal the command (no work to do)
         self._settle_tol = 1e-12 * self._w_max
+        self._gear0 = self.model.actuator_gear[0:4].copy()  # nominal rotor gears
         # Views into MjData (stable for the life of ``data``).
         self._ctrl = self.data.ctrl[0:4]  # rotor thrusts (the elastic cable owns ctrl[4])
         self._p_att_view = self.data.site_xpos[self._att_site]
@@ -162,6 +163,7 @@ class Plant:
         """
         mujoco.mj_resetData(self.model, self.data)
         self._tick = 0
+        self.model.actuator_gear[0:4] = self._gear0
         self._write_state(self.start_state() if state is None else state)
         w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
         self.command(w0)
@@ -272,6 +274,29 @@ class Plant:
             if w != cmd[i]:
                 cmd[i] = w
                 self._spinning_up = True
+
+    def set_rotor_efficiency(self, efficiency: ArrayLike) -> None:
+        """Scale each rotor's thrust and drag torque by ``efficiency`` (4 factors in (0, 1],
+        a rotor fault; :meth:`reset` restores 1) [-].
+
+        The factor scales the MuJoCo actuator gear: the speeds, the commands and
+        :attr:`rotor_thrusts` stay the model's c_f w^2, the force applied is eff c_f w^2.
+        """
+        eff = np.asarray(efficiency, dtype=float)
+        if eff.shape != (4,) or not np.all((eff > 0.0) & (eff <= 1.0)):
+            raise ValueError(f"rotor efficiency must be 4 factors in (0, 1], got {efficiency}")
+        self.model.actuator_gear[0:4] = self._gear0 * eff[:, None]
+
+    @property
+    def rotor_efficiency(self) -> FloatArray:
+        """Current thrust factor of each rotor [-]."""
+        return self.model.actuator_gear[0:4, 2] / self._gear0[:, 2]
+
+    def snap_cable(self) -> None:
+        """The cable breaks now: detached, and the hook can never engage it again."""
+        self.hook.sever(self.time, self.attachment_point())
+        self._set_cable(False)
+        self._track_hook_point()
 
     @property
     def speed_limit(self) -> float:

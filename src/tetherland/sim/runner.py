@@ -43,6 +43,7 @@ from tetherland.interfaces import (
 )
 from tetherland.provenance import provenance
 from tetherland.sim.baselines import ConstantReference, TruthEstimator
+from tetherland.sim.faults import FaultInjector, mocap_outage
 from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
 from tetherland.sim.mjcf import SENSOR_SLICES
 from tetherland.sim.plant import Plant, link_state_of
@@ -207,12 +208,15 @@ class Runner:
         self.seed = int(seed)
         self.diagnostic_keys = tuple(diagnostic_keys)
         self.observers = tuple(observers)
+        if scenario.faults.active:  # the plant-side faults of [faults] (sim/faults.py)
+            self.observers += (FaultInjector(scenario.faults),)
         self._snap = np.zeros(13)  # [qpos (7), qvel (6)] at the control tick
         self._t_snap = 0.0
         geo = self.plant.layout.geometry
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
         self._p_A, self._R_WA = geo.p_A, geo.R_WA
         self._cable_force_index = SENSOR_SLICES["cable_force"].start
+        self._accelerometer = SENSOR_SLICES["accelerometer"]
         self._provenance: dict[str, Any] | None = None
 
     def _truth_estimate(self) -> StateEstimate:
@@ -220,11 +224,14 @@ class Runner:
         s = self._snap.copy()
         plant = self.plant
         engaged = plant.hook.engaged
+        external_B = self.scenario.vehicle.mass * plant.sensordata[self._accelerometer]
+        external_B[2] -= float(plant.rotor_thrusts.sum())
         return StateEstimate(
             t=self._t_snap,
             body=RigidBodyState(s[0:3], s[7:10], s[3:7], s[10:13]),
             link=link_state_of(s, self._r_att, self._p_A, self._R_WA) if engaged else None,
             tension=plant.sensordata[self._cable_force_index].item(),
+            external_force_B=external_B,
         )
 
     def run(
@@ -299,12 +306,14 @@ class Runner:
         rng = np.random.default_rng(self.seed) if rng is None else rng
         rng_imu, rng_mocap = rng.spawn(2)
         imu = Imu(sc.sensors.imu, rng_imu, sc.sensors.noise_scale)
-        mocap = Mocap(sc.sensors.mocap, rng_mocap, sc.sensors.noise_scale)
+        mocap = Mocap(sc.sensors.mocap, rng_mocap, sc.sensors.noise_scale,
+                      mocap_outage(sc.faults))  # fmt: skip
         reference = self.reference
         if reference is None:
             reference = ConstantReference(p_W=plant.qpos[0:3].copy())
         estimator, controller = self.estimator, self.controller
         command_aware = isinstance(estimator, CommandAware)
+        reference_aware = isinstance(reference, CommandAware)  # e.g. a fault monitor
 
         n_ctrl = sched.control_every
         n_ticks = round(duration * sched.steps_per_second) // n_ctrl * n_ctrl
@@ -393,6 +402,8 @@ class Runner:
                 command(cmd.rotor_speeds)
                 if command_aware:
                     estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
+                if reference_aware:
+                    reference.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
                 imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
                 imu_y[3:6] = sample.omega_B
                 bias_into(bias_buf)

@@ -110,10 +110,16 @@ class Mocap:
     rng : numpy.random.Generator
     noise_scale : float
         Multiplier of the noise intensities (not of latency or dropouts) [-].
+    outage : (float, float), optional
+        Fault: no pose is delivered for measurement times in [start, end) [s].
     """
 
     def __init__(
-        self, config: MocapConfig, rng: np.random.Generator, noise_scale: float = 1.0
+        self,
+        config: MocapConfig,
+        rng: np.random.Generator,
+        noise_scale: float = 1.0,
+        outage: tuple[float, float] | None = None,
     ) -> None:
         self.config = config
         self.period = 1.0 / config.rate_hz
@@ -124,6 +130,8 @@ class Mocap:
         self._drop_rate = config.dropout_rate
         self._drop_duration = config.dropout_duration
         self._drop_until = -math.inf
+        self._outage = (math.inf, math.inf) if outage is None else (float(outage[0]),
+                                                                      float(outage[1]))
         self._next_drop = self._draw_gap(0.0)
         self._z: list[list[float]] = []
         self._j = NOISE_BLOCK
@@ -158,7 +166,7 @@ class Mocap:
         self._j += 1
         if t_delivered is None:
             t_delivered = t_measured + self.latency
-        if self.in_dropout(t_measured):
+        if self.in_dropout(t_measured) or self._outage[0] <= t_measured < self._outage[1]:
             return MocapSample(t_measured, t_delivered, _NAN3.copy(), _NAN4.copy(), False)
         sp, st = self._sigma_p, self._sigma_theta
         px, py, pz = np.asarray(p_W, dtype=float).tolist()

@@ -11,8 +11,9 @@ serve every landing method (docs/theory.md section 5):
 * (1) ||p_RL(t_L) - p*_L||, p_RL = p - h_R z_B; (2) angle(z_B(t_L), z_S);
   (3) ||p'(t_L-)||, ||omega(t_L-)||; (4) ||p''(t_L-)|| from the true specific force and
   ||omega'(t_L-)|| from the two ticks before;
-* (5) observed over the first motors-off interval after touchdown: the slip of p_RL over
-  the whole interval and the speed from ``verdict.rest_settle`` after its start;
+* (5) observed over the first motors-off interval after touchdown: the slip of p_RL along
+  the surface (sliding; its settling along the normal onto all landers is reported apart)
+  over the whole interval and the speed from ``verdict.rest_settle`` after its start;
 * crash: a normal force above ``verdict.crash_force`` on the hub or a rotor guard, at any
   time of the run.
 
@@ -51,8 +52,12 @@ class Outcome(enum.Enum):
     """The physics diverged or a component raised an error during the run."""
     CRASHED = "crashed"
     """The frame (hub or rotor guards) touched something."""
+    SAFE_STOP = "safe_stop"
+    """The supervisor detected a fault and reached its defined safe state (hover held,
+    landed on the start pad, or motors off on the surface), at rest and without a crash."""
     ABORTED = "aborted"
-    """The supervisor moved to a safe state (operator abort or a detected fault)."""
+    """The supervisor moved to a safe state (an operator abort, or a fault whose safe state
+    was not verified reached)."""
     NO_TOUCHDOWN = "no_touchdown"
     """No touchdown in the method's landing phases."""
     LANDING_CONDITIONS = "landing_conditions"
@@ -194,6 +199,7 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
         "touchdown_accel_mps2": measures["accel"],
         "touchdown_angular_accel_rps2": measures["angular_accel"],
         "slip_m": measures["slip"] if rested else None,
+        "settle_m": measures["settle"] if rested else None,
         "rest_speed_mps": measures["rest_speed"] if rested else None,
         "motors_off_t": float(t[rest_idx[0]]) if rested else None,
         **tension,
@@ -285,8 +291,13 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
         landing.get("min_tension_N") is None or landing["min_tension_N"] > 0.0
     ):
         checks.append((Outcome.SLACK_CABLE, "cable went slack where the plan needs tension"))
-    if record.abort_reason is not None:
-        checks.append((Outcome.ABORTED, f"aborted: {record.abort_reason}"))
+    safe_stop = _safe_stop(log, record, truth)
+    if safe_stop["reached"]:
+        checks.append((Outcome.SAFE_STOP,
+                       f"safe stop ({record.safe_state}): {record.abort_reason}"))  # fmt: skip
+    elif record.abort_reason is not None:
+        why = f"; {safe_stop['why']}" if safe_stop.get("why") else ""
+        checks.append((Outcome.ABORTED, f"aborted: {record.abort_reason}{why}"))
     if landing.get("reached") and takeoff.get("required") and not takeoff.get("completed"):
         checks.append((Outcome.NO_TAKEOFF, "takeoff not completed"))
     if takeoff.get("completed") and ret.get("required") and not ret.get("completed"):
@@ -318,6 +329,7 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
         "status": status.value,
         "aborted": record.abort_reason is not None,
         "abort_reason": record.abort_reason,
+        "safe_stop": safe_stop,
         "crashed": crashed,
         "phases": [p.to_dict() for p in record.phases],
         "times": dict(record.times),
@@ -343,6 +355,28 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
     return Verdict(success=success, outcome=outcome, reasons=reasons, summary=summary)
 
 
+OPERATOR_ABORT = "operator abort"
+"""Prefix of the abort reason of an operator abort (never a safe stop: nothing failed)."""
+
+
+def _safe_stop(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
+    """Did a fault abort end in the supervisor's safe state, at rest, without a crash?"""
+    reason = record.abort_reason
+    if reason is None or reason.startswith(OPERATOR_ABORT):
+        return {"reached": False}
+    if record.safe_state is None:
+        return {"reached": False, "why": "no safe state reached by the end of the run"}
+    speed = float(np.linalg.norm(log["v_W"][-1])) if len(log) else math.nan
+    crashed = bool(np.any(np.nan_to_num(log["frame_force"]) > truth.verdict.crash_force))
+    limit = truth.verdict.safe_stop_speed_mps
+    out: dict[str, Any] = {"state": record.safe_state, "final_speed_mps": speed}
+    if crashed:
+        return out | {"reached": False, "why": "crashed"}
+    if not speed <= limit:
+        return out | {"reached": False, "why": f"final speed {speed:.3g} m/s > {limit:g} m/s"}
+    return out | {"reached": True}
+
+
 def _hook(log: SimLog, record: RunRecord) -> dict[str, Any] | None:
     if record.hook_attempts is None:
         return None
@@ -366,6 +400,7 @@ def not_flown(record: RunRecord, reason: str) -> Verdict:
         "status": None,
         "aborted": False,
         "abort_reason": None,
+        "safe_stop": {"reached": False},
         "crashed": False,
         "landing": {"reached": False},
         "takeoff": {"required": record.expects.takeoff},

@@ -119,6 +119,10 @@ class RunRecord:
         t_maneuver, t_motors_off, ...) [s].
     abort_reason : str or None
         Why the supervisor went to a safe state, if it did.
+    safe_state : str or None
+        The safe state the supervisor reached after an abort: ``"hover"`` (safe hover
+        held), ``"landed"`` (landed in free flight on the start pad) or ``"motors_off"``
+        (stayed put on the surface with the motors off).
     finished : bool
         The method reached its planned end state.
     takeoff_target : (4,) tuple or None
@@ -149,6 +153,7 @@ class RunRecord:
     phases: tuple[PhaseSpan, ...] = ()
     times: Mapping[str, float] = field(default_factory=dict)
     abort_reason: str | None = None
+    safe_state: str | None = None
     finished: bool = False
     takeoff_target: tuple[float, ...] | None = None
     home_pad_W: tuple[float, float, float] | None = None
@@ -183,6 +188,7 @@ class RunRecord:
             "phases": [p.to_dict() for p in self.phases],
             "times": {k: float(v) for k, v in self.times.items()},
             "abort_reason": self.abort_reason,
+            "safe_state": self.safe_state,
             "finished": self.finished,
             "takeoff_target": None if self.takeoff_target is None else list(self.takeoff_target),
             "home_pad_W": None if self.home_pad_W is None else list(self.home_pad_W),
@@ -225,6 +231,7 @@ class RunRecord:
                 phases=tuple(PhaseSpan(**p) for p in data.get("phases", [])),
                 times={k: float(v) for k, v in data.get("times", {}).items()},
                 abort_reason=data.get("abort_reason"),
+                safe_state=data.get("safe_state"),
                 finished=bool(data.get("finished", False)),
                 takeoff_target=_tuple(data.get("takeoff_target")),
                 home_pad_W=_tuple(data.get("home_pad_W")),

@@ -1,0 +1,134 @@
+"""Fault injection (``[faults]``, the plant's truth) and fault detection limits
+(``[mission.detection]``, what the robot's supervisor uses), issue 15.
+
+``[faults]`` says what goes wrong in the simulated world; the default is no fault. The
+robot never reads it: the belief a run flies on has it reset (:mod:`tetherland.sim.faults`),
+so every fault must be detected from what the robot measures
+(:mod:`tetherland.mission.faults`).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from typing import Annotated
+
+from pydantic import Field, model_validator
+
+from tetherland.config.base import Section
+
+Efficiency = Annotated[float, Field(gt=0, le=1)]
+"""A rotor thrust factor in (0, 1]."""
+AnchorError = Annotated[float, Field(ge=-0.5, le=0.5)]
+"""One component of the anchor belief error, in [-0.5, 0.5] m."""
+
+
+class FaultKind(enum.Enum):
+    """The injectable fault kinds (campaign names)."""
+
+    ROTOR = "rotor"
+    SNAP = "snap"
+    MOCAP = "mocap"
+    ANCHOR = "anchor"
+    JAM = "jam"
+
+
+class FaultsConfig(Section):
+    """What goes wrong in the plant, its sensors or the robot's belief (default: nothing)."""
+
+    rotor_efficiency: tuple[Efficiency, Efficiency, Efficiency, Efficiency] = (1.0, 1.0, 1.0, 1.0)
+    """Thrust (and drag torque) factor of each rotor from ``rotor_fault_time`` on, each in
+    (0, 1] [-]."""
+    rotor_fault_time: float = Field(0.0, ge=0, le=3600)
+    """Mission time from which ``rotor_efficiency`` applies, in [0, 3600] [s]."""
+    cable_snap_time: float | None = Field(None, ge=0, le=3600)
+    """Mission time at which the cable breaks (None: never), in [0, 3600] [s]."""
+    mocap_outage_start: float | None = Field(None, ge=0, le=3600)
+    """Mission time at which motion capture stops delivering poses (None: no outage),
+    in [0, 3600] [s]."""
+    mocap_outage_duration: float = Field(1.0, gt=0, le=3600)
+    """Length of the motion-capture outage, in (0, 3600] [s]."""
+    anchor_belief_error: tuple[AnchorError, AnchorError, AnchorError] = (0.0, 0.0, 0.0)
+    """The robot believes the anchor at p_A + this (F_W), each component in [-0.5, 0.5]
+    [m]."""
+    hook_jam: bool = False
+    """The hook does not release the cable (the unhooking pass leaves it engaged)."""
+
+    @model_validator(mode="after")
+    def _finite_outage(self) -> FaultsConfig:
+        if self.mocap_outage_start is not None and not math.isfinite(
+            self.mocap_outage_start + self.mocap_outage_duration
+        ):
+            raise ValueError("mocap_outage_start + mocap_outage_duration must be finite")
+        return self
+
+    @property
+    def rotor_fault(self) -> bool:
+        """Some rotor has a thrust factor below 1."""
+        return any(e < 1.0 for e in self.rotor_efficiency)
+
+    @property
+    def anchor_error(self) -> bool:
+        return any(e != 0.0 for e in self.anchor_belief_error)
+
+    def kinds(self) -> tuple[FaultKind, ...]:
+        """The fault kinds this section injects (empty: none)."""
+        kinds = []
+        if self.rotor_fault:
+            kinds.append(FaultKind.ROTOR)
+        if self.cable_snap_time is not None:
+            kinds.append(FaultKind.SNAP)
+        if self.mocap_outage_start is not None:
+            kinds.append(FaultKind.MOCAP)
+        if self.anchor_error:
+            kinds.append(FaultKind.ANCHOR)
+        if self.hook_jam:
+            kinds.append(FaultKind.JAM)
+        return tuple(kinds)
+
+    @property
+    def active(self) -> bool:
+        """Some fault is injected."""
+        return bool(self.kinds())
+
+
+class FaultDetectionConfig(Section):
+    """Limits of the supervisor's fault monitor (docs/faults.md); every signal is one the
+    robot measures: commanded torque, estimated tension, link geometry and the
+    estimator's covariance."""
+
+    rotor_torque: float = Field(0.1, gt=0, le=10)
+    """Rotor fault: low-passed roll/pitch torque the controller commands beyond the
+    estimated cable torque, in (0, 10] [N m]."""
+    rotor_filter_time: float = Field(0.3, gt=0, le=10)
+    """Time constant of that low-pass, in (0, 10] [s]."""
+    rotor_dwell: float = Field(0.15, ge=0, le=10)
+    """How long the torque must stay beyond ``rotor_torque``, in [0, 10] [s]."""
+    airborne_delay: float = Field(1.5, ge=0, le=60)
+    """The torque check starts this long after the takeoff from the pad (and this long into
+    a tethered takeoff), the motion-capture check this long into the mission, in [0, 60]
+    [s]."""
+    anchor_length_error: float = Field(0.04, gt=0, le=1)
+    """Anchor belief error: the taut cable's estimated length (believed anchor to the
+    estimated attachment point, less the stretch) differs from the cable length by more
+    than this, in (0, 1] [m]."""
+    anchor_dwell: float = Field(0.2, ge=0, le=10)
+    """... for this long, in [0, 10] [s]."""
+    position_std: float = Field(0.0016, gt=0, le=1)
+    """Motion-capture loss: the estimator's position standard deviation (largest axis)
+    exceeds this, from ``airborne_delay`` into the mission (the filter has converged from
+    its initial covariance), in (0, 1] [m]. The default is passed after about 0.7 s
+    without a pose (slope50 sensors; 0.2 s dropouts at 1/s stay below 1.2 mm); shorter
+    outages are bridged by the IMU."""
+    snap_tension: float = Field(0.1, ge=0, le=100)
+    """Cable snap: estimated tension below this in tethered flight, in [0, 100] [N]."""
+    snap_dwell: float = Field(0.04, ge=0, le=10)
+    """... for this long (much shorter than the slack rule: without the cable, inclined
+    hovering accelerates the vehicle at f_L/m), in [0, 10] [s]."""
+    jam_tension: float = Field(1.0, gt=0, le=1000)
+    """Hook jam: estimated tension above this after the unhooking pass, in (0, 1000] [N]."""
+    jam_dwell: float = Field(0.2, ge=0, le=10)
+    """... for this long, in [0, 10] [s]."""
+    away_distance: float = Field(0.3, ge=0, le=5)
+    """Snapped cable: the safe hover is this far from the surface along z_S beyond where
+    the fault was detected, in [0, 5] [m]."""

@@ -1,0 +1,370 @@
+"""The guarded touchdown: contact confirmed by several signals (docs/theory.md section 10.2).
+
+One rule for the mission's supervisor and the gym expert. Near the end of the planned
+landing, and past it while the link reference keeps descending (:func:`guarded_descent`),
+contact with the surface is believed only when every signal agrees for
+``mission.contact_dwell``:
+
+1. **clearance**: the lowest lander tip of the estimated pose is within
+   ``contact_clearance`` of the *believed* surface (and the link within
+   ``contact_gate_deg`` of the believed phi*), so a lagging link far above the surface is
+   a tracking error;
+2. **link stall**: the estimated link stays ``contact_error_deg`` above the descending
+   reference *and* its rate is below ``contact_stall_rate_deg``: the surface stops it (a
+   link that still moves lags, it is not stopped);
+3. **contact force** (when the estimate carries the external force, i.e. the IMU's
+   specific force and the rotors' thrust): the external force on the vehicle without its
+   component along the cable, projected on the believed surface normal, low-passed, is
+   above ``contact_force``, or an impact above ``contact_impact_force`` was seen within
+   twice the dwell.
+
+A gust pushes the vehicle away from the surface only while it lasts and gives no
+clearance; an anchor belief error shifts the link angles but not the surface force. A
+descent that stalls above the surface therefore goes on until the surface pushes back.
+At contact the reference holds the link ``contact_press_deg`` below the contact elevation
+(:func:`contact_hold`), which keeps the landers loaded until the motors go off.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from tetherland.config import Scenario
+from tetherland.config.mission import MissionConfig
+from tetherland.geometry import FloatArray, LandingGeometry, effective_h_R
+from tetherland.interfaces import ControlMode, Feedforward, Reference, StateEstimate
+from tetherland.rotations import quat_to_rotmat
+
+
+class ContactStatus(enum.Enum):
+    """What the rule concludes at one tick."""
+
+    NONE = "none"
+    """Some signal disagrees (or the rule is not armed)."""
+    CANDIDATE = "candidate"
+    """Every signal agrees, for less than the dwell."""
+    CONFIRMED = "confirmed"
+    """Every signal has agreed for the dwell: touchdown (t_L)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ContactEvidence:
+    """The signals of one tick.
+
+    Attributes
+    ----------
+    clearance : float
+        Estimated height of the lowest lander tip above the believed surface [m].
+    link_lag : float
+        Estimated link elevation minus the reference, phi^ - phi_d [rad].
+    link_rate : float
+        Estimated link elevation rate [rad/s].
+    normal_force : float or None
+        Low-passed estimated surface force along the believed normal (None: the estimate
+        carries no external force) [N].
+    near, stalled, pressed : bool
+        Signals 1-3 of the module docstring (``pressed`` is True without a force signal).
+    """
+
+    clearance: float
+    link_lag: float
+    link_rate: float
+    normal_force: float | None
+    near: bool
+    stalled: bool
+    pressed: bool
+
+    def describe(self) -> str:
+        """One line for the mission's event log."""
+        force = "n/a" if self.normal_force is None else f"{self.normal_force:.2f} N"
+        return (
+            f"clearance {100.0 * self.clearance:.1f} cm, link {math.degrees(self.link_lag):.2f}"
+            f" deg above the reference at {math.degrees(self.link_rate):.2f} deg/s, "
+            f"surface force {force}"
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class ContactDecision:
+    """The rule's answer at one tick, with its evidence (None when not armed)."""
+
+    status: ContactStatus
+    evidence: ContactEvidence | None = None
+
+    @property
+    def confirmed(self) -> bool:
+        return self.status is ContactStatus.CONFIRMED
+
+
+_NOT_ARMED = ContactDecision(ContactStatus.NONE)
+
+
+@dataclass(frozen=True)
+class ContactGeometry:
+    """What the rule knows of the (believed) vehicle and surface (fixed for a run).
+
+    Attributes
+    ----------
+    z_S : (3,) array
+        Believed surface normal in F_W.
+    surface_point : (3,) array
+        A point of the believed surface plane P_S in F_W [m].
+    tips_B : (4, 3) array
+        Lander tips' lowest points in F_B (landers plane at -h_R) [m].
+    sag : float
+        How far the landers plane sits below P_S when landed (0 on a plane; the pipe sag) [m].
+    p_A : (3,) array
+        Believed anchor in F_W [m].
+    r_att_B : (3,) array
+        Cable attachment point in F_B [m].
+    phi_star : float
+        Believed final link elevation [rad].
+    """
+
+    z_S: FloatArray
+    surface_point: FloatArray
+    tips_B: FloatArray
+    sag: float
+    p_A: FloatArray
+    r_att_B: FloatArray
+    phi_star: float
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> ContactGeometry:
+        geo = LandingGeometry.from_scenario(scenario)
+        v = scenario.vehicle
+        w = v.lander_half_width
+        tips = np.array([[sx * w, sy * w, -v.h_R] for sx in (1, -1) for sy in (1, -1)])
+        return cls(
+            z_S=geo.surface.z_S.copy(),
+            surface_point=geo.p_L.copy(),
+            tips_B=tips,
+            sag=v.h_R - effective_h_R(scenario),
+            p_A=geo.p_A.copy(),
+            r_att_B=np.asarray(v.cable_attachment, dtype=float),
+            phi_star=geo.phi_star,
+        )
+
+    def clearance(self, p_W: FloatArray, R_WB: FloatArray) -> float:
+        """Height of the lowest lander tip above the believed surface [m] (0 when landed)."""
+        heights = (p_W - self.surface_point) @ self.z_S + (self.tips_B @ (R_WB.T @ self.z_S))
+        return float(heights.min()) + self.sag
+
+    def normal_force(self, p_W: FloatArray, R_WB: FloatArray, external_B: FloatArray) -> float:
+        """The surface's push N of an external force f = -f_L d + N z_S (+ wind) [N].
+
+        The cable pulls along -d (d from the anchor to the attachment point), the surface
+        pushes along z_S; N = (f.z_S - (f.d)(d.z_S)) / (1 - (d.z_S)^2) whatever the tension
+        (f.z_S where d is along z_S). ``external_B`` is m (f_B - b_a) - f_R e3 in F_B.
+        """
+        f_W = R_WB @ external_B
+        z = self.z_S
+        d = p_W + R_WB @ self.r_att_B - self.p_A
+        n = float(np.linalg.norm(d))
+        fz = float(f_W @ z)
+        if n < 1e-9:
+            return fz
+        d /= n
+        dz = float(d @ z)
+        across = 1.0 - dz * dz
+        if across < 1e-6:
+            return fz
+        return (fz - float(f_W @ d) * dz) / across
+
+
+class ContactRule:
+    """The multi-signal contact rule of the guarded touchdown (mutable run state).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The believed scenario (``[mission]`` thresholds, vehicle, surface, anchor).
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        cfg: MissionConfig = scenario.mission
+        self.cfg = cfg
+        self.geometry = ContactGeometry.from_scenario(scenario)
+        self._error = math.radians(cfg.contact_error_deg)
+        self._stall = math.radians(cfg.contact_stall_rate_deg)
+        self._gate = math.radians(cfg.contact_gate_deg)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the dwell, the filtered force and the last impact."""
+        self._since: float | None = None
+        self._force: float | None = None
+        self._t_force: float | None = None
+        self._impact_at = -math.inf
+
+    def _filtered_force(self, t: float, raw: float) -> float:
+        tau = self.cfg.contact_force_time_constant
+        if self._force is None or self._t_force is None or tau == 0.0:
+            self._force = raw
+        else:
+            a = 1.0 - math.exp(-max(t - self._t_force, 0.0) / tau)
+            self._force += a * (raw - self._force)
+        self._t_force = t
+        return self._force
+
+    def evidence(self, t: float, est: StateEstimate, phi_d: float) -> ContactEvidence | None:
+        """The signals at ``t`` against the reference elevation ``phi_d`` [rad] (updates the
+        force filter and the impact memory); None without a link estimate."""
+        link = est.link
+        if link is None:
+            return None
+        cfg, geo = self.cfg, self.geometry
+        p_W = est.body.p_W
+        R_WB = quat_to_rotmat(est.body.q_WB)
+        clearance = geo.clearance(p_W, R_WB)
+        lag = link.phi - phi_d
+        near = clearance < cfg.contact_clearance and link.phi - geo.phi_star < self._gate
+        stalled = lag > self._error and abs(link.phi_dot) < self._stall
+        force: float | None = None
+        pressed = True
+        if est.external_force_B is not None:
+            raw = geo.normal_force(p_W, R_WB, est.external_force_B)
+            force = self._filtered_force(t, raw)
+            if raw > cfg.contact_impact_force:
+                self._impact_at = t
+            pressed = force > cfg.contact_force or t - self._impact_at <= 2.0 * cfg.contact_dwell
+        return ContactEvidence(clearance, lag, link.phi_dot, force, near, stalled, pressed)
+
+    def update(self, t: float, est: StateEstimate, phi_d: float) -> ContactDecision:
+        """Feed one tick; CONFIRMED once every signal has agreed for ``contact_dwell``."""
+        ev = self.evidence(t, est, phi_d)
+        if ev is None or not (ev.near and ev.stalled and ev.pressed):
+            self._since = None
+            return ContactDecision(ContactStatus.NONE, ev)
+        if self._since is None:
+            self._since = t
+        if t - self._since >= self.cfg.contact_dwell - 1e-12:
+            return ContactDecision(ContactStatus.CONFIRMED, ev)
+        return ContactDecision(ContactStatus.CANDIDATE, ev)
+
+    def idle(self) -> ContactDecision:
+        """The rule is not armed at this tick (far from the planned end): restart it."""
+        self._since = None
+        return _NOT_ARMED
+
+
+def early_contact_armed(cfg: MissionConfig, t: float, t0: float, duration: float) -> bool:
+    """Early contact counts in the last ``contact_window`` of a landing planned from ``t0``
+    over ``duration`` seconds."""
+    return t > t0 + (1.0 - cfg.contact_window) * duration
+
+
+def guarded_descent(cfg: MissionConfig, ref: Reference, elapsed: float, phase: int) -> Reference:
+    """The planned end with phi_d lowered at ``touchdown_rate_deg`` for ``elapsed`` seconds,
+    down to ``touchdown_search_deg`` below it (the guarded descent past the plan)."""
+    assert ref.output is not None
+    rate = math.radians(cfg.touchdown_rate_deg)
+    depth = math.radians(cfg.touchdown_search_deg)
+    s = min(rate * max(elapsed, 0.0), depth)
+    out = ref.output.copy()
+    out[0, 0] -= s
+    out[1, 0] = -rate if s < depth else 0.0
+    return Reference(
+        t=ref.t, mode=ControlMode.TETHERED, phase=phase, output=out,
+        thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+    )  # fmt: skip
+
+
+def contact_hold(
+    cfg: MissionConfig, t: float, est: StateEstimate, ref: Reference, phase: int
+) -> Reference:
+    """The reference held from contact until the motors go off: the plan's delta,
+    theta_A, psi and the estimated link elevation less ``contact_press_deg``, at rest."""
+    assert est.link is not None and ref.output is not None
+    out = np.zeros((5, 4))
+    out[0] = ref.output[0]
+    out[0, 0] = est.link.phi - math.radians(cfg.contact_press_deg)
+    return Reference(
+        t=t, mode=ControlMode.TETHERED, phase=phase, output=out,
+        thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+    )  # fmt: skip
+
+
+class SlowApproach:
+    """The plan's clock slowed near the surface: the last centimetres at a capped speed.
+
+    The link reference approaches the surface at l |phi_d'| (the attachment point moves
+    across the cable, nearly along z_S near phi*). Within reach of the believed surface
+    the plan's clock tau advances at alpha = min(1, v_cap / (l |phi_d'(tau)|)) with
+    v_cap = ``touchdown_approach_speed`` + ``touchdown_approach_gain`` * clearance: the
+    closer the estimated landers, the slower the reference, and every output (tilt too)
+    still follows the planned path. The k-th derivative rows scale by alpha^k, as do the
+    feed-forward's rates (d alpha/dt is neglected: alpha changes slowly).
+
+    Parameters
+    ----------
+    cfg : MissionConfig
+    geometry : ContactGeometry
+    length : float
+        Believed cable length l [m].
+    """
+
+    def __init__(self, cfg: MissionConfig, geometry: ContactGeometry, length: float) -> None:
+        self.cfg = cfg
+        self.geometry = geometry
+        self.length = length
+        g = geometry
+        self._z = g.z_S.tolist()
+        self._o = g.surface_point.tolist()
+        # the lowest tip lies at most this far below the centre of mass, whatever the tilt
+        self._reach = float(np.linalg.norm(g.tips_B, axis=1).max()) - g.sag
+        self.start(0.0)
+
+    def start(self, t0: float) -> None:
+        """The plan starts at mission time ``t0`` (clock tau = t)."""
+        self.tau = t0
+        self._t = t0
+        self.alpha = 1.0
+
+    def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
+        """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
+        tau [rad/s]. Returns the new tau [s]."""
+        dt = t - self._t
+        self._t = t
+        cfg = self.cfg
+        alpha = 1.0
+        v0, gain = cfg.touchdown_approach_speed, cfg.touchdown_approach_gain
+        speed = self.length * abs(rate_at)
+        if v0 > 0.0 and speed > v0:
+            px, py, pz = est.body.p_W.tolist()
+            (zx, zy, zz), (ox, oy, oz) = self._z, self._o
+            low = (px - ox) * zx + (py - oy) * zy + (pz - oz) * zz - self._reach
+            if gain == 0.0 or low < (speed - v0) / gain:  # within reach: the exact clearance
+                clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
+                cap = v0 + gain * max(clearance, 0.0)
+                if speed > cap:
+                    alpha = cap / speed
+        self.alpha = alpha
+        self.tau += alpha * max(dt, 0.0)
+        return self.tau
+
+    def scale(self, ref: Reference, t: float) -> Reference:
+        """``ref`` (sampled at tau) for mission time ``t`` with its rates scaled by alpha."""
+        a = self.alpha
+        if a == 1.0 or ref.output is None:
+            if ref.t == t:
+                return ref
+            return Reference(
+                t=t, mode=ref.mode, phase=ref.phase, output=ref.output,
+                thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+            )  # fmt: skip
+        out = ref.output * np.array([1.0, a, a * a, a**3, a**4])[: ref.output.shape[0], None]
+        ff = ref.feedforward
+        if ff is not None:
+            ff = Feedforward(
+                omega_B=a * ff.omega_B, omega_dot_B=a * a * ff.omega_dot_B, f_R=ff.f_R,
+                f_R_dot=a * ff.f_R_dot, f_R_ddot=a * a * ff.f_R_ddot, tension=ff.tension,
+            )  # fmt: skip
+        return Reference(
+            t=t, mode=ref.mode, phase=ref.phase, output=out, thrust_ff=ref.thrust_ff,
+            feedforward=ff,
+        )  # fmt: skip

@@ -1,0 +1,266 @@
+"""Fault detection from what the robot measures (issue 15, docs/faults.md).
+
+:class:`FaultMonitor` runs inside the mission supervisor at every control tick. It reads
+only the state estimate (pose, covariance, estimated tension, link state w.r.t. the
+*believed* anchor) and the commands sent (it is ``CommandAware``); it never sees the
+injected faults. Each rule compares one measured signal with a ``[mission.detection]``
+limit held for a dwell time:
+
+* rotor: the roll/pitch torque the controller commands, low-passed, less the estimated
+  cable torque r_att x F_L (F_L = -f_L d in F_B, d the believed link direction). In steady
+  flight the rotors cancel the cable torque; a weak rotor i makes the controller command
+  the missing arm_i x (1 - eff_i) f_i, which stays;
+* anchor belief: with the cable taut, the believed anchor to the estimated attachment
+  point is l + f_L/k (the stretch of an elastic cable; l for an ideal one); a believed
+  anchor off along the cable shows as a length error;
+* motion capture: the estimator's position standard deviation grows while no pose
+  arrives (largest axis of the covariance; from ``airborne_delay`` on, once the filter has
+  converged from its initial covariance);
+* hook jam: an estimated tension after the unhooking pass (the cable still pulls);
+* cable snap: the estimated tension lost in tethered flight for a short dwell (and the
+  supervisor's missed-hook rule: no tension after stretching).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from tetherland.config import FaultKind, Scenario
+from tetherland.estimation import ThresholdDwell
+from tetherland.geometry import LandingGeometry
+from tetherland.interfaces import Command, StateEstimate
+from tetherland.mission.phases import Phase
+from tetherland.rotations import quat_to_rotmat
+
+ROTOR_PHASES = frozenset({
+    Phase.TAKEOFF, Phase.APPROACH, Phase.RETRY, Phase.HOOKING, Phase.STRETCH,
+    Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF, Phase.RELEASE, Phase.UNHOOK,
+    Phase.RETURN,
+})  # fmt: skip
+"""Airborne phases in which the torque rule runs (not on the pad or the surface)."""
+ANCHOR_PHASES = frozenset({Phase.STRETCH, Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF})
+"""Phases in which a taut cable's length is checked."""
+SNAP_PHASES = frozenset({Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF})
+"""Tethered flight: the cable carries the vehicle (the takeoff from ``airborne`` on)."""
+SNAP_PLAN_FACTOR = 3.0
+"""The snap rule watches where the planned tension is at least this many snap_tension."""
+JAM_PHASES = frozenset({Phase.RETURN, Phase.LAND})
+"""Phases after the unhooking pass: any tension means the hook is still engaged."""
+
+
+@dataclass(frozen=True)
+class FaultDetection:
+    """A detected fault.
+
+    Attributes
+    ----------
+    kind : FaultKind
+    t : float
+        Detection time [s].
+    reason : str
+        One line naming the signal and the limit (logged, and the abort reason).
+    """
+
+    kind: FaultKind
+    t: float
+    reason: str
+
+
+class FaultMonitor:
+    """The measured-signal fault rules of the module docstring.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The believed scenario (``mission.detection`` limits, mass, cable, attachment).
+    geometry : LandingGeometry
+        The believed geometry (anchor p_A).
+    """
+
+    def __init__(self, scenario: Scenario, geometry: LandingGeometry) -> None:
+        cfg = scenario.mission.detection
+        self.cfg = cfg
+        self._tension_threshold = scenario.mission.tension_threshold
+        self._p_A = geometry.p_A
+        self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+        self._length = scenario.tether.length
+        self._stiffness = scenario.tether.stiffness
+        self._rx, self._ry, self._rz = (float(x) for x in self._r_att)
+        self._ax, self._ay, self._az = (float(x) for x in self._p_A)
+        self._torque_cmd = (0.0, 0.0)
+        self._lp_x = self._lp_y = 0.0
+        self._t_last: float | None = None
+        self._rotor = ThresholdDwell(cfg.rotor_torque, cfg.rotor_dwell)
+        self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
+        self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
+        self._snap = ThresholdDwell(-cfg.snap_tension, cfg.snap_dwell)
+        self.torque_residual = 0.0
+        """Last low-passed roll/pitch torque residual [N m]."""
+        self.length_error = math.nan
+        """Last taut-cable length error [m] (NaN when not checked)."""
+        self.position_std = math.nan
+        """Last estimated position standard deviation, largest axis [m]."""
+
+    # ------------------------------------------------------------------ CommandAware
+    def command_sent(self, t: float, command: Command) -> None:
+        """Keep the commanded roll/pitch torque (zero with the motors off)."""
+        tau = command.torque_B
+        self._torque_cmd = (0.0, 0.0) if tau is None else (float(tau[0]), float(tau[1]))
+
+    # ------------------------------------------------------------------ rules
+    def cable_torque_B(self, est: StateEstimate) -> np.ndarray:
+        """Estimated cable torque r_att x F_L in F_B, F_L = -f_L d (toward the believed
+        anchor) [N m]."""
+        tension = max(est.tension or 0.0, 0.0)
+        R_WB = quat_to_rotmat(est.body.q_WB)
+        d = est.body.p_W + R_WB @ self._r_att - self._p_A
+        d /= max(float(np.linalg.norm(d)), 1e-9)
+        return np.cross(self._r_att, R_WB.T @ (-tension * d))
+
+    def _geometry(self, est: StateEstimate) -> tuple[float, float, float, float]:
+        """Scalar form (the control-rate path) of the attachment geometry: the unit link
+        direction d in F_B and the distance D = |p_att - p_A| [m]; :meth:`cable_torque_B`
+        is its plain reference (a test checks both agree)."""
+        w, x, y, z = est.body.q_WB.tolist()
+        px, py, pz = est.body.p_W.tolist()
+        rx, ry, rz = self._rx, self._ry, self._rz
+        # R_WB from the unit quaternion (w, x, y, z)
+        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
+        r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+        r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+        dx = px + r00 * rx + r01 * ry + r02 * rz - self._ax
+        dy = py + r10 * rx + r11 * ry + r12 * rz - self._ay
+        dz = pz + r20 * rx + r21 * ry + r22 * rz - self._az
+        D = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inv = 1.0 / max(D, 1e-9)
+        # d in F_B = R_WB^T d_W
+        bx = (r00 * dx + r10 * dy + r20 * dz) * inv
+        by = (r01 * dx + r11 * dy + r21 * dz) * inv
+        bz = (r02 * dx + r12 * dy + r22 * dz) * inv
+        return bx, by, bz, D
+
+    def cable_torque_xy(self, est: StateEstimate) -> tuple[float, float]:
+        """Roll and pitch of :meth:`cable_torque_B` in scalar form [N m]."""
+        tension = max(est.tension or 0.0, 0.0)
+        bx, by, bz, _ = self._geometry(est)
+        fx, fy, fz = -tension * bx, -tension * by, -tension * bz
+        rx, ry, rz = self._rx, self._ry, self._rz
+        return ry * fz - rz * fy, rz * fx - rx * fz
+
+    def check(
+        self,
+        t: float,
+        est: StateEstimate,
+        phase: Phase,
+        airborne: bool,
+        nominal_tension: float | None = None,
+    ) -> FaultDetection | None:
+        """Run every rule at time ``t`` in ``phase``; the first fault found, or None.
+
+        ``airborne`` says the vehicle has been off the pad long enough for the torque
+        rule (``airborne_delay``). ``nominal_tension`` is the plan's tension at ``t`` [N]
+        (None: unknown): the snap rule only watches where the plan needs at least
+        :data:`SNAP_PLAN_FACTOR` times ``snap_tension`` (near a flat touchdown the planned
+        tension itself falls towards zero, and the slower slack-cable rule covers it).
+        """
+        cfg = self.cfg
+        cov = est.covariance
+        if cov is not None:
+            std = math.sqrt(max(cov[0, 0], cov[1, 1], cov[2, 2]))
+            self.position_std = std
+            if t >= cfg.airborne_delay and std > cfg.position_std:
+                return FaultDetection(
+                    FaultKind.MOCAP, t,
+                    f"fault: motion capture lost (estimated position std {100 * std:.1f} cm "
+                    f"> {100 * cfg.position_std:g} cm)",
+                )  # fmt: skip
+        found = self._rotor_rule(t, est, phase, airborne)
+        if found is None:
+            needs = nominal_tension is None or (
+                nominal_tension >= SNAP_PLAN_FACTOR * self.cfg.snap_tension
+            )
+            found = self._snap_rule(t, est, phase, airborne and needs)
+        if found is None:
+            found = self._anchor_rule(t, est, phase)
+        if found is None:
+            found = self._jam_rule(t, est, phase)
+        return found
+
+    def _rotor_rule(
+        self, t: float, est: StateEstimate, phase: Phase, airborne: bool
+    ) -> FaultDetection | None:
+        dt = 0.0 if self._t_last is None else t - self._t_last
+        self._t_last = t
+        if not (airborne and phase in ROTOR_PHASES):
+            self._lp_x = self._lp_y = 0.0
+            self._rotor.reset()
+            return None
+        cx, cy = self.cable_torque_xy(est)
+        a = 1.0 - math.exp(-dt / self.cfg.rotor_filter_time)
+        self._lp_x += a * (self._torque_cmd[0] + cx - self._lp_x)
+        self._lp_y += a * (self._torque_cmd[1] + cy - self._lp_y)
+        self.torque_residual = r = math.hypot(self._lp_x, self._lp_y)
+        if self._rotor.update(t, r):
+            return FaultDetection(
+                FaultKind.ROTOR, t,
+                f"fault: rotor thrust lost (commanded roll/pitch torque beyond the cable's "
+                f"{r:.3f} N m > {self.cfg.rotor_torque:g} N m)",
+            )  # fmt: skip
+        return None
+
+    def _snap_rule(
+        self, t: float, est: StateEstimate, phase: Phase, airborne: bool
+    ) -> FaultDetection | None:
+        if not (airborne and phase in SNAP_PHASES):
+            self._snap.reset()
+            return None
+        tension = est.tension or 0.0
+        if self._snap.update(t, -tension):
+            return FaultDetection(
+                FaultKind.SNAP, t,
+                f"fault: cable lost in tethered flight (estimated tension {tension:.2f} N < "
+                f"{self.cfg.snap_tension:g} N for {self.cfg.snap_dwell:g} s)",
+            )  # fmt: skip
+        return None
+
+    def _anchor_rule(self, t: float, est: StateEstimate, phase: Phase) -> FaultDetection | None:
+        tension = est.tension or 0.0
+        if phase not in ANCHOR_PHASES or tension < self._tension_threshold:
+            self._anchor.reset()
+            self.length_error = math.nan
+            return None
+        stretch = 0.0 if self._stiffness is None else tension / self._stiffness
+        err = self._geometry(est)[3] - self._length - stretch
+        self.length_error = err
+        if self._anchor.update(t, abs(err)):
+            return FaultDetection(
+                FaultKind.ANCHOR, t,
+                f"fault: anchor belief error (taut cable {100 * err:+.1f} cm off its length "
+                f"from the believed anchor, limit {100 * self.cfg.anchor_length_error:g} cm)",
+            )  # fmt: skip
+        return None
+
+    def _jam_rule(self, t: float, est: StateEstimate, phase: Phase) -> FaultDetection | None:
+        if phase not in JAM_PHASES:
+            self._jam.reset()
+            return None
+        if self._jam.update(t, est.tension or 0.0):
+            return FaultDetection(
+                FaultKind.JAM, t,
+                f"fault: hook did not release (estimated tension {est.tension:.2f} N > "
+                f"{self.cfg.jam_tension:g} N after unhooking)",
+            )  # fmt: skip
+        return None
+
+
+__all__ = [
+    "ANCHOR_PHASES",
+    "JAM_PHASES",
+    "ROTOR_PHASES",
+    "SNAP_PHASES",
+    "FaultDetection",
+    "FaultMonitor",
+]

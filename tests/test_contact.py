@@ -1,0 +1,276 @@
+"""The guarded touchdown's multi-signal contact rule (issue 15) and its campaign regressions."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tetherland.campaign.jobs import Job, execute, run_scenario
+from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
+from tetherland.campaign.spec import CampaignSpec, Sweep
+from tetherland.config import load_scenario, with_overrides
+from tetherland.geometry import LandingGeometry
+from tetherland.interfaces import ControlMode, Feedforward, Reference, StateEstimate
+from tetherland.mission import Phase
+from tetherland.mission.contact import (
+    ContactGeometry,
+    ContactRule,
+    SlowApproach,
+    contact_hold,
+    guarded_descent,
+)
+from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.runs import run_mission
+from tetherland.sim.disturbances import WindGusts
+from tetherland.state import LinkState, RigidBodyState
+
+RATE = 500.0  # control rate of the synthetic ticks [Hz]
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_scenario("slope50", ["tether.length=1.2", "tether.hook_drop=1.0"])
+
+
+@pytest.fixture(scope="module")
+def geo(scenario):
+    return LandingGeometry.from_scenario(scenario)
+
+
+def rot_x(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def landed_pose(geo, height: float = 0.0, tilt: float = 0.0):
+    """Centre of mass ``height`` above the landed one, z_B tilted by ``tilt`` about x_S."""
+    R_WS = np.column_stack((geo.surface.x_S, geo.surface.y_S, geo.surface.z_S))
+    R_WB = R_WS @ rot_x(tilt)
+    return geo.p_R_landed + height * geo.surface.z_S, R_WB
+
+
+def estimate(geo, scenario, t, *, phi, phi_dot, height=0.0, normal=0.0, tension=3.0):
+    """An estimate at the landed pose with the given link and an external force made of
+    the cable pull along -d and a surface push ``normal`` along z_S."""
+    p_W, R_WB = landed_pose(geo, height)
+    r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+    d = p_W + R_WB @ r_att - geo.p_A
+    d /= np.linalg.norm(d)
+    f_W = -tension * d + normal * geo.surface.z_S
+    body = RigidBodyState(p_W, np.zeros(3), rotmat_to_quat(R_WB), np.zeros(3))
+    return StateEstimate(
+        t=t, body=body, link=LinkState(phi, 0.0, phi_dot, 0.0), tension=tension,
+        external_force_B=R_WB.T @ f_W,
+    )  # fmt: skip
+
+
+def test_clearance_of_the_lowest_lander_tip(scenario, geo):
+    """Landed flat: 0; raised by h: h; tilted by a about x_S: h_R (1 - cos a) - w sin a
+    (the tip at -w drops by w sin a, the landers plane rises by h_R (1 - cos a))."""
+    cg = ContactGeometry.from_scenario(scenario)
+    v = scenario.vehicle
+    assert cg.clearance(*landed_pose(geo)) == pytest.approx(0.0, abs=1e-12)
+    assert cg.clearance(*landed_pose(geo, 0.02)) == pytest.approx(0.02, abs=1e-12)
+    a = math.radians(4.0)
+    expected = v.h_R * (1.0 - math.cos(a)) - v.lander_half_width * math.sin(a)
+    assert cg.clearance(*landed_pose(geo, 0.0, a)) == pytest.approx(expected, abs=1e-12)
+
+
+@pytest.mark.parametrize("tension", [0.0, 2.0, 9.0])
+def test_the_surface_push_is_separated_from_the_cable_pull(scenario, geo, tension):
+    """f = -f_L d + N z_S: the estimate is N whatever the tension."""
+    cg = ContactGeometry.from_scenario(scenario)
+    est = estimate(geo, scenario, 0.0, phi=geo.phi_star, phi_dot=0.0, normal=0.7, tension=tension)
+    R_WB = quat_to_rotmat(est.body.q_WB)
+    assert cg.normal_force(est.body.p_W, R_WB, est.external_force_B) == pytest.approx(0.7)
+
+
+def feed(rule, geo, scenario, duration, *, lag_deg, rate_deg, normal, height=0.0, t0=0.0,
+         spike_at=None):  # fmt: skip
+    """Feed ``duration`` seconds of ticks with a constant lag above phi_d; return the
+    first time the rule confirms contact (None if never)."""
+    phi = geo.phi_star
+    phi_d = phi - math.radians(lag_deg)
+    n = round(duration * RATE)
+    for k in range(n + 1):
+        t = t0 + k / RATE
+        f = normal if spike_at is None or abs(t - spike_at) > 0.5 / RATE else 5.0
+        est = estimate(geo, scenario, t, phi=phi, phi_dot=math.radians(rate_deg),
+                       height=height, normal=f)  # fmt: skip
+        if rule.update(t, est, phi_d).confirmed:
+            return t - t0
+    return None
+
+
+def test_contact_needs_the_stall_the_clearance_and_the_surface_force(scenario, geo):
+    """Every signal alone or in pairs is not contact; all three for the dwell are."""
+    cfg = scenario.mission
+    rule = ContactRule(scenario)
+    # the anchor-belief case: the link held 1 deg above its reference near the surface,
+    # but nothing pushes back (a gust or a belief error, not the surface)
+    assert feed(rule, geo, scenario, 2.0, lag_deg=1.0, rate_deg=0.0, normal=0.0) is None
+    # the surface pushes, but the link still moves: not stopped yet
+    rule.reset()
+    assert feed(rule, geo, scenario, 2.0, lag_deg=1.0, rate_deg=2.0, normal=0.5) is None
+    # stalled and pushed, but 3 cm above the believed surface: not the surface
+    rule.reset()
+    high = feed(rule, geo, scenario, 2.0, lag_deg=1.0, rate_deg=0.0, normal=0.5, height=0.03)
+    assert high is None
+    # every signal: confirmed after the dwell (the force filter needs a few time constants)
+    rule.reset()
+    t = feed(rule, geo, scenario, 2.0, lag_deg=1.0, rate_deg=0.0, normal=0.5)
+    assert t is not None
+    tau = cfg.contact_force_time_constant
+    t_force = tau * math.log(0.5 / (0.5 - cfg.contact_force))  # filter reaches the threshold
+    assert cfg.contact_dwell <= t <= t_force + cfg.contact_dwell + 2.0 / RATE
+
+
+def test_an_impact_counts_as_the_force_signal_for_the_dwell(scenario, geo):
+    """A single 5 N sample (touchdown impact) with no lasting push: contact when the stall
+    lasts the dwell after it (the impact is remembered for twice the dwell)."""
+    cfg = scenario.mission
+    rule = ContactRule(scenario)
+    t = feed(rule, geo, scenario, 1.0, lag_deg=1.0, rate_deg=0.0, normal=0.0, spike_at=0.1)
+    assert t is not None and t == pytest.approx(0.1 + cfg.contact_dwell, abs=1.5 / RATE)
+    rule.reset()  # no impact, no push: never
+    assert feed(rule, geo, scenario, 1.0, lag_deg=1.0, rate_deg=0.0, normal=0.0) is None
+
+
+def test_a_gust_cannot_fake_contact_for_the_dwell(scenario, geo):
+    """A push shorter than the dwell (and no impact) is not contact; the dwell restarts."""
+    cfg = scenario.mission
+    rule = ContactRule(scenario)
+    short = 0.5 * cfg.contact_dwell
+    assert feed(rule, geo, scenario, short, lag_deg=1.0, rate_deg=0.0, normal=0.5) is None
+    assert feed(rule, geo, scenario, 1.0, lag_deg=1.0, rate_deg=3.0, normal=0.5, t0=short) is None
+
+
+def test_guarded_descent_and_hold(scenario):
+    """phi_d falls at touchdown_rate_deg down to touchdown_search_deg; the hold presses
+    contact_press_deg below the contact elevation, at rest."""
+    cfg = scenario.mission
+    out = np.zeros((5, 4))
+    out[0] = [-1.0, 0.01, 0.8, 0.2]
+    ref = Reference(t=0.0, mode=ControlMode.TETHERED, output=out, thrust_ff=9.0)
+    rate = math.radians(cfg.touchdown_rate_deg)
+    g = guarded_descent(cfg, ref, 1.0, 7)
+    assert g.output[0, 0] == pytest.approx(-1.0 - rate)
+    assert g.output[1, 0] == pytest.approx(-rate) and g.phase == 7
+    deep = guarded_descent(cfg, ref, 100.0, 7)
+    assert deep.output[0, 0] == pytest.approx(-1.0 - math.radians(cfg.touchdown_search_deg))
+    assert deep.output[1, 0] == 0.0
+    body = RigidBodyState(np.zeros(3), np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(3))
+    est = StateEstimate(t=2.0, body=body, link=LinkState(-1.02, 0.0, 0.0, 0.0))
+    hold = contact_hold(cfg, 2.0, est, g, 7)
+    assert hold.output[0, 0] == pytest.approx(-1.02 - math.radians(cfg.contact_press_deg))
+    assert np.all(hold.output[1:] == 0.0) and hold.output[0, 1:].tolist() == out[0, 1:].tolist()
+
+
+def test_the_slow_approach_caps_the_reference_speed_near_the_surface(scenario, geo):
+    """alpha = (v0 + k c) / (l |phi_d'|) within reach, 1 far away; the clock advances by
+    alpha dt and the k-th derivative rows (and the feed-forward rates) scale by alpha^k."""
+    cfg = scenario.mission
+    rule = ContactRule(scenario)
+    slow = SlowApproach(cfg, rule.geometry, scenario.tether.length)
+    l, v0, gain = scenario.tether.length, cfg.touchdown_approach_speed, cfg.touchdown_approach_gain
+    rate = math.radians(5.0)  # 0.1 m/s of reference speed at l = 1.2 m
+    c = 0.01
+    slow.start(10.0)
+    est = estimate(geo, scenario, 10.0, phi=geo.phi_star, phi_dot=0.0, height=c)
+    tau = slow.advance(10.1, est, rate)
+    alpha = (v0 + gain * c) / (l * rate)
+    assert 0.0 < alpha < 1.0
+    assert slow.alpha == pytest.approx(alpha) and tau == pytest.approx(10.0 + 0.1 * alpha)
+    far = estimate(geo, scenario, 10.1, phi=geo.phi_star, phi_dot=0.0, height=0.5)
+    assert slow.advance(10.2, far, rate) == pytest.approx(tau + 0.1) and slow.alpha == 1.0
+    slow.advance(10.3, est, rate)
+    out = np.arange(20.0).reshape(5, 4)
+    ff = Feedforward(omega_B=np.ones(3), omega_dot_B=np.ones(3), f_R=9.0, f_R_dot=1.0,
+                     f_R_ddot=1.0, tension=2.0)  # fmt: skip
+    ref = Reference(t=1.0, mode=ControlMode.TETHERED, output=out, thrust_ff=9.0, feedforward=ff)
+    scaled = slow.scale(ref, 10.3)
+    assert scaled.t == 10.3
+    for k in range(5):
+        assert scaled.output[k] == pytest.approx(alpha**k * out[k])
+    f = scaled.feedforward
+    assert f.omega_B == pytest.approx(alpha * ff.omega_B)
+    assert f.omega_dot_B == pytest.approx(alpha**2 * ff.omega_dot_B)
+    assert (f.f_R, f.tension) == (9.0, 2.0) and f.f_R_ddot == pytest.approx(alpha**2)
+
+
+# ---------------------------------------------------------------------- campaign regressions
+STUDY = ["tether.length=1.2", "tether.hook_drop=1.0"]
+"""The README's 1000-run slope study: base overrides, 100 runs per slope, seed 2026."""
+
+
+def study_run(slope: float, seed: int) -> Job:
+    """The campaign job of the study whose per-run seed is ``seed`` at ``slope``."""
+    base = load_scenario("slope50", STUDY)
+    spec = CampaignSpec(
+        scenario=base.model_dump(mode="json"), runs=100, methods=("tethered",),
+        sweep=Sweep.parse("surface.slope_deg=20,35,50,60,70"), seed=2026,
+    )  # fmt: skip
+    (run,) = [r for r in spec.expand() if r.seed == seed and r.sweep_value == slope]
+    return Job(scenario=spec.scenario, run=run)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("slope", "seed"), [(60.0, 2046954335), (70.0, 3556918803), (70.0, 1375799514)]
+)
+def test_previously_failing_study_runs_land(slope, seed):
+    """The study's failures at 60-70 deg (the guarded descent stopped above the surface:
+    the estimated link 0.8 deg off on a 1 cm anchor belief error and a gust): each run,
+    flown exactly as the campaign does, lands with conditions 1-5."""
+    record = execute(study_run(slope, seed))
+    assert record["status"] == "ok", record["error"]
+    verdict = record["verdict"]
+    assert verdict["success"], verdict["reason"]
+    landing = verdict["landing"]
+    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    tol = load_scenario("slope50").verdict
+    assert landing["touchdown_speed_mps"] < tol.speed_mps
+    assert landing["slip_m"] < tol.slip_m
+
+
+def test_contact_settings_are_validated():
+    """Every new contact field names itself and its range on bad input."""
+    from tetherland.errors import ConfigError
+
+    base = load_scenario("slope50")
+    for bad in ("mission.contact_clearance=0", "mission.contact_stall_rate_deg=-1",
+                "mission.contact_press_deg=20", "mission.contact_impact_force=0"):  # fmt: skip
+        with pytest.raises(ConfigError, match=bad.split("=")[0].split(".")[1]):
+            with_overrides(base, [bad])
+
+
+@pytest.mark.slow
+def test_the_motors_go_off_on_the_surface_not_above_it():
+    """The 70 deg run 3556918803 used to believe contact 2.1 cm above the surface (the link
+    lagged 0.8 deg on a 1 cm anchor error and a gust) and dropped the vehicle when the
+    motors went off (a drop the judge counts as slip once a lander has grazed). Now the
+    landers carry load at every tick of the hold before the motors go off, and the true
+    clearance at that moment is below a millimetre."""
+    job = study_run(70.0, 3556918803)
+    truth = run_scenario(job)
+    perturbation = sample_perturbation(truth, np.random.default_rng(job.run.seed))
+    plant, belief = apply_perturbation(truth, perturbation)
+    period = 1.0 / plant.controller.rate_hz
+    wind: list[WindGusts] = []
+    result = run_mission(
+        plant, belief, seed=job.run.seed, observers=wind,
+        plant_setup=lambda p: wind.append(WindGusts(p, perturbation.gusts, period)),
+    )  # fmt: skip
+    assert result.summary["success"], result.summary["reason"]
+    log = result.log
+    phase = log["phase"]
+    off = int(np.argmax(phase == int(Phase.MOTORS_OFF)))
+    hold = np.nonzero(phase == int(Phase.TOUCHDOWN))[0]
+    t_L = result.flight.reference.times["t_L"]
+    held = hold[log["t"][hold] > t_L + 0.2]  # after the hold has settled
+    assert held.size > 0 and held[-1] == off - 1
+    assert np.all(log["lander_forces"][held].sum(axis=1) > 0.0)
+    R_WB = quat_to_rotmat(log["q_WB"][off])
+    assert ContactGeometry.from_scenario(plant).clearance(log["p_W"][off], R_WB) < 1e-3

@@ -1,0 +1,350 @@
+"""Fault injection and detection parts (issue 15): the [faults] section, the plant and
+sensor faults, the belief, the monitor's rules on constructed estimates, the campaign's
+fault draws and table."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tetherland import GRAVITY
+from tetherland.campaign import CampaignSpec, apply_perturbation, sample_perturbation
+from tetherland.campaign.faults import (
+    ANCHOR_ERROR,
+    FAULT_KINDS,
+    fault_table,
+    fault_time,
+    phase_at,
+    sample_fault,
+)
+from tetherland.cli import main
+from tetherland.config import FaultKind, FaultsConfig, load_scenario
+from tetherland.errors import ConfigError
+from tetherland.geometry import LandingGeometry
+from tetherland.interfaces import Command, StateEstimate
+from tetherland.mission import Phase
+from tetherland.mission.faults import FaultMonitor
+from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.faults import faulty_belief, mocap_outage
+from tetherland.sim.hook import Hook, HookEventKind
+from tetherland.sim.plant import Plant
+from tetherland.sim.sensors import Mocap
+from tetherland.state import LinkState, RigidBodyState
+
+
+@pytest.fixture(scope="module")
+def slope50():
+    return load_scenario("slope50")
+
+
+# ---------------------------------------------------------------------- configuration
+def test_default_is_no_fault(slope50):
+    assert slope50.faults == FaultsConfig()
+    assert slope50.faults.kinds() == () and not slope50.faults.active
+
+
+def test_every_kind_is_recognised():
+    f = FaultsConfig(
+        rotor_efficiency=(1.0, 0.5, 1.0, 1.0), cable_snap_time=3.0, mocap_outage_start=1.0,
+        anchor_belief_error=(0.0, 0.05, 0.0), hook_jam=True,
+    )  # fmt: skip
+    assert {k.value for k in f.kinds()} == set(FAULT_KINDS)
+    assert mocap_outage(f) == (1.0, 2.0)
+
+
+@pytest.mark.parametrize(
+    ("override", "field"),
+    [
+        ("faults.rotor_efficiency=[0.0, 1, 1, 1]", "faults.rotor_efficiency"),
+        ("faults.rotor_efficiency=[1, 1, 1.2, 1]", "faults.rotor_efficiency"),
+        ("faults.rotor_efficiency=[1, 1, 1]", "faults.rotor_efficiency"),
+        ("faults.cable_snap_time=-1", "faults.cable_snap_time"),
+        ("faults.mocap_outage_duration=0", "faults.mocap_outage_duration"),
+        ("faults.anchor_belief_error=[0.6, 0, 0]", "faults.anchor_belief_error"),
+        ("faults.hook_jam=3", "faults.hook_jam"),
+        ("faults.rotor_fault=1", "faults.rotor_fault"),
+        ("mission.detection.rotor_torque=0", "mission.detection.rotor_torque"),
+    ],
+)
+def test_bad_fault_values_give_one_line_errors(override, field):
+    with pytest.raises(ConfigError) as err:
+        load_scenario("slope50", [override])
+    message = str(err.value)
+    assert "\n" not in message and field in message
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["mission", "slope50", "--set", "faults.rotor_efficiency=[0, 1, 1, 1]"],
+        ["campaign", "slope50", "--faults", "rotor,wind"],
+        ["campaign", "slope50", "--faults", "rotor", "--fault-window", "9:3"],
+    ],
+)
+def test_cli_rejects_bad_faults_with_exit_2_and_one_line(capsys, tmp_path, argv):
+    out = tmp_path / "o"
+    code = main([*argv, "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 2 and err.count("\n") == 1, err
+    assert ("faults" in err or "fault-window" in err) and not out.exists()
+
+
+# ---------------------------------------------------------------------- belief
+def test_belief_moves_the_anchor_and_never_knows_the_faults(slope50):
+    e = (0.03, -0.02, 0.01)
+    truth = slope50.model_copy(
+        update={"faults": FaultsConfig(anchor_belief_error=e, hook_jam=True)}
+    )
+    belief = faulty_belief(truth, truth.faults)
+    geo_t, geo_b = LandingGeometry.from_scenario(truth), LandingGeometry.from_scenario(belief)
+    np.testing.assert_allclose(geo_b.p_A - geo_t.p_A, e, atol=1e-12)
+    # the believed anchor height above the (unchanged) surface follows e's normal part
+    assert belief.anchor.h_A == pytest.approx(geo_t.surface.z_S @ np.asarray(e))
+    assert belief.faults == FaultsConfig()
+
+
+def test_belief_below_the_surface_is_refused(slope50):
+    z_S = LandingGeometry.from_scenario(slope50).surface.z_S
+    f = FaultsConfig(anchor_belief_error=tuple(-0.05 * z_S))
+    with pytest.raises(ConfigError, match="below the surface"):
+        faulty_belief(slope50, f)
+
+
+# ---------------------------------------------------------------------- sensors and plant
+def test_mocap_outage_drops_exactly_the_window(slope50):
+    cfg = slope50.sensors.mocap.model_copy(update={"dropout_rate": 0.0})
+    mocap = Mocap(cfg, np.random.default_rng(0), outage=(0.5, 1.25))
+    t = np.arange(0.0, 2.0, 1.0 / cfg.rate_hz)
+    valid = np.array([mocap.measure(ti, np.zeros(3), np.array([1.0, 0, 0, 0])).valid for ti in t])
+    np.testing.assert_array_equal(valid, (t < 0.5) | (t >= 1.25))
+
+
+def test_rotor_efficiency_scales_thrust_and_drag_in_mujoco(slope50):
+    """Free fall with level rotors: a_z = sum(eff_i c_f w^2)/m - g, and the yaw torque of
+    the weakened pair no longer cancels: J_zz omega_z' = sum(sigma_i eff_i c_tau f_i)."""
+    plant = Plant(slope50)
+    v = slope50.vehicle
+    w = math.sqrt(v.mass * GRAVITY / 4 / v.thrust_coefficient)
+    start = RigidBodyState(np.array([0.0, 0.0, 3.0]), np.zeros(3), plant.start_state().q_WB,
+                           np.zeros(3))  # fmt: skip
+    eff = np.array([1.0, 0.5, 1.0, 0.5])
+    plant.reset(start, rotor_speeds=np.full(4, w))
+    plant.set_rotor_efficiency(eff)
+    np.testing.assert_allclose(plant.rotor_efficiency, eff)
+    n = 20
+    plant.step(n)
+    T = n * plant.dt
+    f = v.thrust_coefficient * w * w
+    a_z = eff.sum() * f / v.mass - GRAVITY
+    assert plant.state().v_W[2] == pytest.approx(a_z * T, rel=1e-3)
+    spins = np.asarray(plant.layout.rotors.spins, dtype=float)
+    c_tau = plant.layout.rotors.drag_coefficient
+    tau_z = float(spins @ (eff * c_tau * f))
+    assert abs(tau_z) > 0.0
+    assert plant.state().omega_B[2] == pytest.approx(tau_z / v.inertia[2] * T, rel=2e-2)
+    plant.reset(start)
+    np.testing.assert_allclose(plant.rotor_efficiency, 1.0)
+
+
+def test_jammed_hook_never_releases_and_a_snapped_cable_never_engages():
+    hook = Hook([0, 0, 0], [0, 0, -1], capture_radius=0.1, miss_radius=1.0)
+    hook.update(0.0, 0.0, 0.0, 0.2)
+    assert hook.update(0.1, 0.0, 0.0, -0.2) is HookEventKind.ENGAGED
+    hook.jammed = True
+    assert hook.update(0.2, 0.0, 0.0, 0.2) is None and hook.engaged  # back through: jammed
+    hook.sever(0.3, [0.0, 0.0, 0.2])
+    assert not hook.engaged and hook.events[-1].kind is HookEventKind.SNAPPED
+    assert hook.events[-1].distance == pytest.approx(0.2)
+    assert hook.update(0.4, 0.0, 0.0, -0.2) is None and not hook.engaged  # severed
+    hook.reset()
+    assert not (hook.jammed or hook.severed)
+
+
+# ---------------------------------------------------------------------- monitor rules
+def _hover_estimate(scenario, t: float, d_len: float, tension: float, std: float = 1e-4):
+    """A level estimate with the attachment point at ``d_len`` from the believed anchor,
+    straight up from it along z_S rotated toward the vehicle, and the given tension."""
+    geo = LandingGeometry.from_scenario(scenario)
+    r_att = np.asarray(scenario.vehicle.cable_attachment)
+    d = np.array([-0.6, 0.0, 0.8])  # unit, anchor -> attachment
+    q = rotmat_to_quat(np.eye(3))
+    p_W = geo.p_A + d_len * d - r_att
+    cov = np.eye(15) * std**2
+    return StateEstimate(
+        t=t, body=RigidBodyState(p_W, np.zeros(3), q, np.zeros(3)), covariance=cov,
+        link=LinkState(0.9, 0.0, 0.0, 0.0), tension=tension,
+    )  # fmt: skip
+
+
+def _balanced(scenario):
+    """Commanded torque that cancels the estimated cable torque (a healthy vehicle)."""
+    mon = FaultMonitor(scenario, LandingGeometry.from_scenario(scenario))
+    return lambda est: -mon.cable_torque_B(est)
+
+
+def _run(monitor, scenario, phase, seconds, torque_of, **kw):
+    dt = 1.0 / scenario.controller.rate_hz
+    for k in range(round(seconds / dt)):
+        t = 10.0 + k * dt
+        est = _hover_estimate(scenario, t, **kw)
+        monitor.command_sent(t, Command(np.zeros(4), torque_B=torque_of(est)))
+        found = monitor.check(t, est, phase, airborne=True)
+        if found is not None:
+            return found
+    return None
+
+
+def test_rotor_rule_ignores_the_cable_torque_and_sees_a_missing_rotor(slope50):
+    l = slope50.tether.length
+    geo = LandingGeometry.from_scenario(slope50)
+    mon = FaultMonitor(slope50, geo)
+
+    def compensating(est):  # rotors cancel the estimated cable torque exactly
+        return -mon.cable_torque_B(est)
+
+    assert np.linalg.norm(compensating(_hover_estimate(slope50, 0.0, l, 8.0))[:2]) > 0.01
+    assert _run(mon, slope50, Phase.TETHERED_LANDING, 2.0, compensating, d_len=l,
+                tension=8.0) is None  # fmt: skip
+    # a weak rotor: the controller also commands arm x (1 - eff) f about one axis
+    lim = slope50.mission.detection.rotor_torque
+    found = _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_LANDING, 3.0,
+                 lambda est: compensating(est) + np.array([1.5 * lim, 0.0, 0.0]),
+                 d_len=l, tension=8.0)  # fmt: skip
+    assert found is not None and found.kind is FaultKind.ROTOR
+    # it took the low-pass to 1/1.5 of the step (ln 3 time constants) plus the dwell
+    cfg = slope50.mission.detection
+    expected = cfg.rotor_filter_time * math.log(3.0) + cfg.rotor_dwell
+    assert found.t - 10.0 == pytest.approx(expected, abs=0.01)
+    assert mon.cable_torque_B(_hover_estimate(slope50, 0.0, l, 0.0)) == pytest.approx(0.0)
+
+
+def test_anchor_rule_measures_the_taut_cable_length(slope50):
+    geo = LandingGeometry.from_scenario(slope50)
+    l, k = slope50.tether.length, slope50.tether.stiffness
+    stretch = 0.0 if k is None else 8.0 / k
+    lim = slope50.mission.detection.anchor_length_error
+    none = _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_LANDING, 1.0,
+                _balanced(slope50), d_len=l + stretch + 0.5 * lim, tension=8.0)  # fmt: skip
+    assert none is None
+    mon = FaultMonitor(slope50, geo)
+    found = _run(mon, slope50, Phase.STRETCH, 1.0, _balanced(slope50),
+                 d_len=l + stretch - 1.5 * lim, tension=8.0)  # fmt: skip
+    assert found is not None and found.kind is FaultKind.ANCHOR
+    assert mon.length_error == pytest.approx(-1.5 * lim, abs=1e-9)
+    # slack cable: nothing to measure
+    assert _run(FaultMonitor(slope50, geo), slope50, Phase.STRETCH, 1.0, _balanced(slope50),
+                d_len=l - 0.3, tension=0.2) is None  # fmt: skip
+
+
+def test_mocap_jam_and_snap_rules(slope50):
+    geo = LandingGeometry.from_scenario(slope50)
+    l, cfg = slope50.tether.length, slope50.mission.detection
+    zero = _balanced(slope50)
+    found = _run(FaultMonitor(slope50, geo), slope50, Phase.APPROACH, 0.1, zero, d_len=0.5,
+                 tension=0.0, std=1.01 * cfg.position_std)  # fmt: skip
+    assert found is not None and found.kind is FaultKind.MOCAP
+    assert _run(FaultMonitor(slope50, geo), slope50, Phase.APPROACH, 0.5, zero, d_len=0.5,
+                tension=0.0, std=0.99 * cfg.position_std) is None  # fmt: skip
+    jam = _run(FaultMonitor(slope50, geo), slope50, Phase.RETURN, 1.0, zero, d_len=l,
+               tension=2.0 * cfg.jam_tension)  # fmt: skip
+    assert jam is not None and jam.kind is FaultKind.JAM
+    assert jam.t - 10.0 == pytest.approx(cfg.jam_dwell, abs=0.003)
+    # the same tension in a tethered phase is the plan, not a jam
+    assert _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_TAKEOFF, 1.0, zero,
+                d_len=l, tension=2.0 * cfg.jam_tension) is None  # fmt: skip
+    snap = _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_LANDING, 1.0, zero,
+                d_len=l, tension=0.0)  # fmt: skip
+    assert snap is not None and snap.kind is FaultKind.SNAP
+    assert snap.t - 10.0 == pytest.approx(cfg.snap_dwell, abs=0.003)
+
+
+# ---------------------------------------------------------------------- campaign
+def test_fault_campaign_draws_each_kind_across_the_window(slope50):
+    spec = CampaignSpec(scenario=slope50.model_dump(mode="json"), runs=20,
+                        faults=FAULT_KINDS, fault_window=(1.0, 72.0), seed=15)  # fmt: skip
+    runs = spec.expand()
+    assert len(runs) == 20 * len(FAULT_KINDS) and len({r.run_id for r in runs}) == len(runs)
+    assert {r.method for r in runs} == {"tethered"}
+    for kind in FAULT_KINDS:
+        mine = [r for r in runs if r.fault == kind]
+        times = []
+        for r in mine:
+            # as a campaign job draws it: on the perturbed belief of the run's seed
+            _, belief = apply_perturbation(
+                slope50, sample_perturbation(slope50, np.random.default_rng(r.seed))
+            )
+            f = sample_fault(kind, r.fault_slice, belief, np.random.default_rng([r.seed, 15]))
+            assert [k.value for k in f.kinds()] == [kind]
+            t = fault_time(f)
+            if kind in ("anchor", "jam"):
+                assert t is None
+            else:
+                assert r.fault_slice[0] <= t <= r.fault_slice[1]
+                times.append(t)
+            if kind == "anchor":
+                e = np.asarray(f.anchor_belief_error)
+                assert ANCHOR_ERROR[0] <= np.linalg.norm(e) <= ANCHOR_ERROR[1]
+                assert LandingGeometry.from_scenario(belief).surface.z_S @ e >= 0.0
+                faulty_belief(belief, f)  # accepted: the believed anchor is not below
+        if times:  # stratified: one time in each of the 20 slices of the window
+            slices = np.floor((np.array(times) - 1.0) / (71.0 / 20)).astype(int)
+            assert sorted(slices.tolist()) == list(range(20))
+    # without faults, the fingerprint of a campaign is what it was before faults existed
+    plain = CampaignSpec(scenario=slope50.model_dump(mode="json"), runs=2)
+    assert "faults" not in plain.to_dict()
+    with pytest.raises(ConfigError, match="--faults"):
+        CampaignSpec(scenario=slope50.model_dump(mode="json"), runs=2, faults=("wind",))
+
+
+def test_fault_table_counts_phase_and_outcome():
+    phases = [{"name": "takeoff", "start": 0.0, "end": 3.0},
+              {"name": "approach", "start": 3.0, "end": 15.0}]  # fmt: skip
+    assert phase_at(phases, 2.0) == "takeoff" and phase_at(phases, 3.0) == "approach"
+    assert phase_at(phases, None) == "all" and phase_at(phases, 20.0) == "after_end"
+    rec = [
+        {"run_id": "rotor-0", "status": "ok", "fault": {"kind": "rotor", "phase": "takeoff"},
+         "verdict": {"outcome": "safe_stop"}},
+        {"run_id": "rotor-1", "status": "ok", "fault": {"kind": "rotor", "phase": "takeoff"},
+         "verdict": {"outcome": "crashed"}},
+        {"run_id": "rotor-1", "status": "ok", "fault": {"kind": "rotor", "phase": "takeoff"},
+         "verdict": {"outcome": "crashed"}},
+        {"run_id": "jam-0", "status": "error", "fault": {"kind": "jam", "phase": "all"},
+         "verdict": {"success": False}},
+    ]  # fmt: skip
+    assert fault_table(rec) == {
+        "rotor": {"takeoff": {"safe_stop": 1, "crashed": 1}},
+        "jam": {"all": {"error": 1}},
+    }
+
+
+def test_cable_torque_is_r_att_cross_the_pull(slope50):
+    geo = LandingGeometry.from_scenario(slope50)
+    est = _hover_estimate(slope50, 0.0, slope50.tether.length, 5.0)
+    r_att = np.asarray(slope50.vehicle.cable_attachment)
+    d = np.array([-0.6, 0.0, 0.8])
+    R = quat_to_rotmat(est.body.q_WB)
+    np.testing.assert_allclose(
+        FaultMonitor(slope50, geo).cable_torque_B(est), np.cross(r_att, R.T @ (-5.0 * d)),
+        atol=1e-12,
+    )
+
+
+def test_scalar_cable_torque_agrees_with_the_reference(slope50):
+    """The control-rate scalar form against the numpy reference, random poses."""
+    mon = FaultMonitor(slope50, LandingGeometry.from_scenario(slope50))
+    rng = np.random.default_rng(4)
+    for _ in range(50):
+        q = rng.standard_normal(4)
+        q /= np.linalg.norm(q)
+        est = StateEstimate(
+            t=0.0, body=RigidBodyState(rng.uniform(-1, 1, 3), np.zeros(3), q, np.zeros(3)),
+            tension=float(rng.uniform(0, 10)),
+        )  # fmt: skip
+        np.testing.assert_allclose(mon.cable_torque_xy(est), mon.cable_torque_B(est)[:2],
+                                   atol=1e-12)  # fmt: skip
+        R = quat_to_rotmat(q)
+        D = np.linalg.norm(est.body.p_W + R @ np.asarray(slope50.vehicle.cable_attachment)
+                           - mon._p_A)  # fmt: skip
+        assert mon._geometry(est)[3] == pytest.approx(D, abs=1e-12)
