@@ -361,6 +361,25 @@ class LandingGeometry:
     """Elongation s of an elastic cable at the landed hover's tension [m]: the landed link
     is l + s long, and c, d~, phi*, p_L (or the anchor placed for p*_L) are those of
     l + s (:func:`stretched_landing`; 0 for an inextensible cable). ``length`` stays l."""
+    axial_stiffness: float | None = None
+    """Effective EA of the cable [N] that ``stretch`` was solved for (None: inextensible),
+    kept so that the analysis can re-solve the stretch at other slopes (:meth:`cosine_at`)."""
+
+    @property
+    def link_length(self) -> float:
+        """Length of the taut link in the tethered phase, l + s [m]: the cable stretched by
+        the landed hover's tension f_L (docs/theory.md section 4.2; l when inextensible).
+        Every model of the taut link (planner, flatness map, controllers) uses it."""
+        return self.length + self.stretch
+
+    def cosine_at(self, slope: float, mass: float, g: float = GRAVITY) -> float:
+        """c = (h_att - h_A)/(l + s) of this cable on a ``slope`` [rad] holding ``mass``
+        [kg] in the landed hover (s re-solved there by :func:`stretched_link_length`;
+        :attr:`c` at the surface's own slope, and for an inextensible cable) [-]."""
+        if self.axial_stiffness is None:
+            return self.c
+        h = self.h_att - self.h_A
+        return h / stretched_link_length(h, self.length, slope, mass, self.axial_stiffness, g)
 
     @property
     def gamma(self) -> float:
@@ -374,7 +393,8 @@ class LandingGeometry:
 
     @property
     def p_att_landed(self) -> FloatArray:
-        """Cable attachment point when landed, p~_L + h_att z_S + r_par = p_A + l d~ [m]."""
+        """Cable attachment point when landed, p~_L + h_att z_S + r_par = p_A + (l + s) d~
+        [m]."""
         return self.p_L + self.h_att * self.surface.z_S + self.r_par_W
 
     def to_anchor(self, v_W: ArrayLike) -> FloatArray:
@@ -382,8 +402,9 @@ class LandingGeometry:
         return self.R_WA.T @ np.asarray(v_W, dtype=float)
 
     def link_end(self, phi: float, delta: float) -> FloatArray:
-        """End of the taut link, p_A + l R_WA d_A(phi, delta): the attachment point [m]."""
-        return self.p_A + self.length * (self.R_WA @ link_direction(phi, delta))
+        """End of the taut link, p_A + (l + s) R_WA d_A(phi, delta): the attachment point
+        [m]."""
+        return self.p_A + self.link_length * (self.R_WA @ link_direction(phi, delta))
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> LandingGeometry:
@@ -407,7 +428,9 @@ class LandingGeometry:
         if EA is None:
             return rigid
         s = stretched_landing(rigid, scenario.vehicle.mass, EA).stretch
-        return landing_geometry(surface, stretch=s, **kwargs)  # type: ignore[arg-type]
+        return landing_geometry(
+            surface, stretch=s, axial_stiffness=EA, **kwargs  # type: ignore[arg-type]
+        )
 
 
 def landing_geometry(
@@ -421,13 +444,17 @@ def landing_geometry(
     landing_point: ArrayLike | None = None,
     r_par_W: ArrayLike | None = None,
     stretch: float = 0.0,
+    axial_stiffness: float | None = None,
 ) -> LandingGeometry:
     """Landing geometry from an explicit anchor or a desired landing point (6.8)-(6.13).
 
     With ``anchor`` given, the landing point is p~_L; otherwise the anchor is p~_A placed
     for ``landing_point`` (default: the surface origin). ``h_att`` (default ``h_R``) is
     the height of the cable attachment point when landed; the chapter's formulas use
-    h_R because its cable is attached at the centre of mass.
+    h_R because its cable is attached at the centre of mass. ``stretch`` s [m] makes the
+    landed link l + s long (an elastic cable at the landed hover's tension, docs/theory.md
+    section 13.2: c, d~, phi* and p~_L or p~_A are those of l + s); ``axial_stiffness``
+    EA [N] is only recorded (:meth:`LandingGeometry.cosine_at`).
     """
     h_att = h_R if h_att is None else h_att
     radius = length + stretch  # the landed link: l, or l + s for a stretched elastic cable
@@ -466,6 +493,7 @@ def landing_geometry(
         theta_A_star=theta_A_star,
         r_par_W=r_par,
         stretch=stretch,
+        axial_stiffness=axial_stiffness,
     )
 
 
@@ -570,6 +598,37 @@ class StretchedLanding:
         )
 
 
+def stretched_link_length(
+    height: float,
+    length: float,
+    slope: float,
+    mass: float,
+    axial_stiffness: float | None,
+    g: float = GRAVITY,
+) -> float:
+    """Length l + s [m] of a cable of unstretched ``length`` l [m] and stiffness EA =
+    ``axial_stiffness`` [N] holding ``mass`` [kg] in the landed inclined hover on a
+    ``slope`` [rad], its attachment ``height`` = h_att - h_A [m] above the anchor's height.
+
+    Solves s = f_L(c') l/EA, c' = height/(l + s), f_L = m g sin(beta)/cos(gamma') (6.10)
+    by fixed-point iteration (a contraction: ds'/ds = O(c^2 f_L/EA)); l for an
+    inextensible cable (EA None) or a slack one (|c'| >= 1 leaves it to the caller).
+    """
+    if axial_stiffness is None:
+        return length
+    s = 0.0
+    for _ in range(STRETCH_ITERATIONS):
+        c = height / (length + s)
+        if not abs(c) < 1.0:
+            return length + s
+        s_new = cable_stretch(landed_hover_tension(slope, c, mass, g), length, axial_stiffness)
+        done = abs(s_new - s) <= 1e-15 * length
+        s = s_new
+        if done:
+            break
+    return length + s
+
+
 def stretched_landing(
     geo: LandingGeometry, mass: float, axial_stiffness: float | None, g: float = GRAVITY
 ) -> StretchedLanding:
@@ -584,18 +643,13 @@ def stretched_landing(
     h = geo.h_att - geo.h_A
     l = geo.length
     beta = geo.surface.slope
-    s = 0.0
-    for _ in range(STRETCH_ITERATIONS):
-        f_L = landed_hover_tension(beta, h / (l + s), mass, g)
-        s_new = cable_stretch(f_L, l, axial_stiffness)
-        done = abs(s_new - s) <= 1e-15 * l
-        s = s_new
-        if done:
-            break
+    s = stretched_link_length(h, l, beta, mass, axial_stiffness, g) - l
     f_L = landed_hover_tension(beta, h / (l + s), mass, g)
     stretched = landing_geometry(
         geo.surface,
-        length=l + s,
+        length=l,
+        stretch=s,
+        axial_stiffness=axial_stiffness,
         h_R=geo.h_R,
         h_A=geo.h_A,
         h_att=geo.h_att,

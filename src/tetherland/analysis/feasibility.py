@@ -493,14 +493,23 @@ def max_feasible_slope(
 
 
 def tethered_slope_limit(
-    template: Surface, c: float, limits: VehicleLimits, g: float = GRAVITY
+    template: Surface,
+    c: float | Callable[[float], float],
+    limits: VehicleLimits,
+    g: float = GRAVITY,
 ) -> SlopeLimit:
     """Steepest slope in [0, pi] at which the landed hover of :func:`landed_hover` is
-    feasible for this cable geometry (c) and vehicle, and what binds beyond it."""
-    beta = max_feasible_slope(lambda b: landed_hover_at(template, b, c, limits, g).margin)
+    feasible for this cable geometry and vehicle, and what binds beyond it.
+
+    ``c`` is (h_att - h_A)/l, or a function of the slope [rad] for an elastic cable, whose
+    landed link l + s stretches with the slope's f_L (:meth:`LandingGeometry.cosine_at`).
+    """
+    c_at = c if callable(c) else (lambda _b: c)
+    beta = max_feasible_slope(lambda b: landed_hover_at(template, b, c_at(b), limits, g).margin)
     if beta is None or beta >= math.pi - 1e-12:
         return SlopeLimit(beta, None)
-    beyond = landed_hover_at(template, min(beta + 1e-6, math.pi), c, limits, g)
+    b = min(beta + 1e-6, math.pi)
+    beyond = landed_hover_at(template, b, c_at(b), limits, g)
     return SlopeLimit(beta, beyond.binding)
 
 
@@ -516,7 +525,9 @@ def analyze_tethered(
     cond5 = (
         by_reason[Infeasibility.NORMAL_FORCE].ok and by_reason[Infeasibility.FRICTION_MOTORS_OFF].ok
     )
-    limit = tethered_slope_limit(surface, geometry.c, limits, g)
+    limit = tethered_slope_limit(
+        surface, lambda b: geometry.cosine_at(b, limits.mass, g), limits, g
+    )
     return TetheredAnalysis(
         c=geometry.c,
         gamma=geometry.gamma,

@@ -48,6 +48,7 @@ from tetherland.geometry import (
     attachment_in_plane,
     effective_h_R,
     landing_geometry,
+    stretched_link_length,
 )
 from tetherland.mission.hooking import hooking_pass_for, pass_clearance
 from tetherland.planning import Maneuver, Planner, PlanResult
@@ -346,9 +347,10 @@ def _analysis_stage(base: Scenario, space: DesignSpace) -> list[_Candidate]:
     for length in space.lengths:
         for z in space.attachment_z:
             for h_A in space.anchor_heights:
-                c = (h_R + z - h_A) / length
-                if not abs(c) < 1.0:
+                h = h_R + z - h_A
+                if not abs(h) < length:
                     continue
+                c = h / _link_length(base, h, float(length), geo.surface.slope)
                 attachment = (float(rx), float(ry), float(z))
                 limits = replace(limits0, r_att_B=np.array(attachment))
                 hover = landed_hover(geo.surface, c, limits)
@@ -379,15 +381,25 @@ def _no_landed_hover(
     )
 
 
+def _link_length(base: Scenario, height: float, length: float, slope: float) -> float:
+    """The landed link l + s of a candidate cable ``length`` [m] on ``slope`` [rad] (the
+    base's material and vehicle; l when inextensible): :func:`stretched_link_length`."""
+    return stretched_link_length(
+        height, length, slope, base.vehicle.mass, base.tether.effective_axial_stiffness
+    )
+
+
 def _best_hooking(
     base: Scenario, surface: Surface, space: DesignSpace, cand: _Candidate
 ) -> _Hooking | None:
     """The hooking approach with the most clearance for this candidate (None: no valid
     hook drop, every one leaves the cable taut at capture)."""
     h_R = effective_h_R(base)
+    h = h_R + cand.attachment[2] - cand.h_A
     geo = landing_geometry(
         surface,
         length=cand.length,
+        stretch=_link_length(base, h, cand.length, surface.slope) - cand.length,
         h_R=h_R,
         h_att=h_R + cand.attachment[2],
         h_A=cand.h_A,
@@ -468,7 +480,8 @@ def _plan_stage(
 def landed_slope_limit(scenario: Scenario, length: float, space: DesignSpace) -> SlopeLimit:
     """Steepest slope whose landed hover is feasible for cable ``length`` [m], over the
     attachment offsets and anchor heights of ``space`` (the analysis' bound, without
-    hooking or planning), and what binds beyond it."""
+    hooking or planning), and what binds beyond it. An elastic cable's c = h/(l + s) is
+    re-solved at every slope searched (docs/theory.md section 13.2)."""
     base = design_base(scenario)
     surface = LandingGeometry.from_scenario(base).surface
     limits0 = VehicleLimits.from_scenario(base)
@@ -477,11 +490,13 @@ def landed_slope_limit(scenario: Scenario, length: float, space: DesignSpace) ->
     best = SlopeLimit(None, None)
     for z in space.attachment_z:
         for h_A in space.anchor_heights:
-            c = (h_R + z - h_A) / length
-            if not abs(c) < 1.0:
+            h = h_R + z - h_A
+            if not abs(h) < length:
                 continue
             limits = replace(limits0, r_att_B=np.array([rx, ry, z], dtype=float))
-            limit = tethered_slope_limit(surface, c, limits)
+            limit = tethered_slope_limit(
+                surface, lambda b, h=h: h / _link_length(base, h, length, b), limits
+            )
             if limit.max_slope_rad is not None and (
                 best.max_slope_rad is None or limit.max_slope_rad > best.max_slope_rad
             ):
