@@ -94,7 +94,8 @@ class DflController:
         self.R_WA = geo.R_WA
         self.r_att_B = np.asarray(v.cable_attachment, dtype=float)
         self.compensate_offset = gains.offset_compensation and bool(np.any(self.r_att_B))
-        self.model = model_parameters(v.mass, scenario.tether.length, tuple(v.inertia))
+        # The taut link stretched at the landed hover's tension, l + s (theory 4.2).
+        self.model = model_parameters(v.mass, geo.link_length, tuple(v.inertia))
         poles = (gains.dfl_link_pole,) * 2 + (gains.dfl_attitude_pole,) * 2
         self.integral = gains.dfl_integral
         self.integral_max = gains.dfl_integral_max

@@ -59,7 +59,7 @@ class HierarchicalController:
         gains = scenario.controller.tethered
         geo = LandingGeometry.from_scenario(scenario)
         self.mass = v.mass
-        self.length = scenario.tether.length
+        self.length = geo.link_length  # l + s: the taut link stretched at f_L (theory 4.2)
         self.g = GRAVITY
         self.R_WA = geo.R_WA
         self.r_att_B = np.asarray(v.cable_attachment, dtype=float)

@@ -119,16 +119,18 @@ def _observe(est: StateEstimate) -> FloatArray:
 def initial_state(plan: Trajectory, scenario: Scenario) -> tuple[RigidBodyState, FloatArray]:
     """The plan's first state (cable taut) and rotor speeds [rad/s] (flatness, 6.6.1).
 
-    An elastic cable holds the plan's start tension stretched by f_L l/EA: the attachment
-    point starts that much farther from the anchor along the cable, so that the plant's
-    cable pulls with the planned tension from the first step.
+    An elastic cable holds the plan's start tension T stretched by T l/EA: the attachment
+    point starts at l (1 + T/EA) from the anchor along the planned link (the plan's link is
+    l + s long, s the stretch at the landed hover's f_L: docs/theory.md section 4.2), so
+    that the plant's cable pulls with the planned tension from the first step.
     """
     nom = plan.nominal(0.0)
     r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
     t = scenario.tether
     stretch = cable_stretch(float(nom.tension), t.length, t.effective_axial_stiffness)
     p_A = LandingGeometry.from_scenario(scenario).p_A
-    p_att = p_A + (nom.p_W - p_A) * (1.0 + stretch / t.length)
+    link = nom.p_W - p_A  # nom.p_W: the planned attachment point
+    p_att = p_A + link * ((t.length + stretch) / float(np.linalg.norm(link)))
     x0 = RigidBodyState(p_att - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
                         nom.omega_B)  # fmt: skip
     return x0, RotorModel.from_config(scenario.vehicle).speed(nom.rotor_thrusts)

@@ -174,7 +174,7 @@ class MissionSupervisor:
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
         self._contact_rule = ContactRule(scenario)
-        self._slow = SlowApproach(cfg, self._contact_rule.geometry, scenario.tether.length)
+        self._slow = SlowApproach(cfg, self._contact_rule.geometry, self.geo.link_length)
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)

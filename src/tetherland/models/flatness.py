@@ -298,7 +298,7 @@ class FlatnessMap:
         geo = geometry or LandingGeometry.from_scenario(scenario)
         return cls(
             mass=v.mass,
-            length=scenario.tether.length,
+            length=geo.link_length,
             inertia=np.diag(v.inertia),
             allocation=RotorLayout.from_config(v).allocation,
             R_WA=geo.R_WA,

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike
 
 from tetherland import GRAVITY
 from tetherland.errors import ConfigError
-from tetherland.geometry import FloatArray
+from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.models.integrators import rk4
 from tetherland.models.quadrotor import RotorLayout
 
@@ -161,10 +161,13 @@ class PlanarParams:
 
     @classmethod
     def from_scenario(cls, scenario: Scenario, heading: float = 0.0) -> PlanarParams:
+        """The scenario's vehicle on its taut link of length l + s: the cable stretched by
+        the landed hover's tension (:attr:`LandingGeometry.link_length`, docs/theory.md
+        section 4.2; l for an inextensible cable)."""
         v = scenario.vehicle
         return cls.from_matrices(
             v.mass,
-            scenario.tether.length,
+            LandingGeometry.from_scenario(scenario).link_length,
             v.inertia,
             RotorLayout.from_config(v).allocation,
             heading,

@@ -63,7 +63,7 @@ def simulate_tethered(
     """Run ``controller`` on the analytic model from ``x0`` for ``duration`` seconds."""
     v = scenario.vehicle
     geo = LandingGeometry.from_scenario(scenario)
-    length = scenario.tether.length
+    length = geo.link_length  # the rigid link of the stretched cable, l + s (theory 4.2)
     J = np.asarray(v.inertia, dtype=float)
     every = round(control_dt / dt)
     n = round(duration / dt)
