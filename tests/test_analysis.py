@@ -197,7 +197,8 @@ def test_flat_ground_both_methods_feasible():
 
 
 def test_tethered_slope_limit_with_the_cable_at_the_centre_of_mass():
-    a = analyze(load_scenario("slope50", ["vehicle.cable_attachment=[0, 0, 0]"]))
+    centred = ["vehicle.cable_attachment=[0, 0, 0]"]
+    a = analyze(load_scenario("slope50", [*centred, 'tether.material="ideal"']))
     lim = a.limits
     gamma = a.geometry.gamma
     # no cable torque: equal rotor thrusts, f_R(beta) = m g cos(beta - gamma)/cos(gamma)
@@ -205,6 +206,20 @@ def test_tethered_slope_limit_with_the_cable_at_the_centre_of_mass():
     expected = gamma + math.acos(lim.min_controllable_thrust * math.cos(gamma) / (lim.mass * g))
     assert a.tethered.max_slope_rad == pytest.approx(expected, abs=1e-8)
     np.testing.assert_allclose(a.tethered.hover_rotor_thrusts, a.tethered.hover_thrust / 4)
+    # An elastic cable's gamma is that of l + s at the limit slope's own f_L: the limit is
+    # the fixed point beta = gamma'(beta) + acos(n f cos(gamma'(beta))/(m g)). The stretch
+    # lowers gamma, and f_R = m g (cos(beta) + sin(beta) tan(gamma)) with it, so the rotor
+    # floor binds at a lower slope than for the rigid cable.
+    for material in ("dyneema", "nylon"):
+        e = analyze(load_scenario("slope50", [*centred, f'tether.material="{material}"']))
+        beta = e.tethered.max_slope_rad
+        gamma_e = math.asin(e.geometry.cosine_at(beta, lim.mass))
+        assert gamma_e < gamma
+        fixed = gamma_e + math.acos(
+            lim.min_controllable_thrust * math.cos(gamma_e) / (lim.mass * g)
+        )
+        assert beta == pytest.approx(fixed, abs=1e-8)
+        assert beta < expected
 
 
 def test_cable_offset_torque_lowers_the_slope_limit(slope50):

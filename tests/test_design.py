@@ -28,6 +28,17 @@ from tetherland.geometry import LandingGeometry
 from tetherland.planning import Planner, PlanStatus
 
 RELAXED = ("mission.hook_overshoot=0.05", "tether.capture_radius=0.05")
+EA = load_scenario("slope50").tether.effective_axial_stiffness  # the default Dyneema [N]
+
+
+def _gamma(h: float, length: float, beta: float, mass: float = 1.0) -> float:
+    """gamma of the landed link of the elastic cable: sin(gamma) = h/(l + s) with the
+    stretch s = f_L l/EA of f_L = m g sin(beta)/cos(gamma) (6.10), by plain iteration."""
+    s = 0.0
+    for _ in range(100):
+        gamma = math.asin(h / (length + s))
+        s = mass * g * math.sin(beta) / math.cos(gamma) * length / EA
+    return math.asin(h / (length + s))
 """Hooking settings with which walls are reachable (see test_wall_needs_a_short_overshoot)."""
 
 
@@ -96,15 +107,16 @@ def test_wall_designs_are_verified_by_the_planner_and_the_analysis(wall):
 
 def test_overhang_design_is_verified_by_the_planner_and_the_analysis(planner):
     """93 deg (overhang93's slope): the best design, re-planned and re-analysed; its landed
-    hover is the force balance f_R = m g cos(beta - gamma)/cos(gamma), sin(gamma) = h_att/l."""
+    hover is the force balance f_R = m g cos(beta - gamma)/cos(gamma), sin(gamma) =
+    h_att/(l + s) with the stretch s of the elastic cable."""
     over = search_designs(load_scenario("slope50", RELAXED), 93.0, planner=planner)
     assert over.feasible
     d = over.chosen
     _check_design(d, RELAXED)
     p = d.point
-    gamma = math.asin((0.1 + p.attachment[2] - p.h_A) / p.length)
-    a = analyze(load_scenario("slope50", [*RELAXED, *d.overrides])).tethered
     beta = math.radians(93.0)
+    gamma = _gamma(0.1 + p.attachment[2] - p.h_A, p.length, beta)
+    a = analyze(load_scenario("slope50", [*RELAXED, *d.overrides])).tethered
     assert a.hover_thrust == pytest.approx(g * math.cos(beta - gamma) / math.cos(gamma), rel=1e-9)
 
 
@@ -133,11 +145,12 @@ def test_plan_margin_counts_the_cable_offset_torque_at_the_landed_hover(planner)
 
 def test_wall_design_is_the_inclined_hover_force_balance(wall):
     """On a wall the landed hover needs f_R = m g tan(gamma), f_L = m g / cos(gamma),
-    sin(gamma) = (h_R + r_z - h_A)/l; with the cable at the CoM the four rotors share f_R."""
+    sin(gamma) = (h_R + r_z - h_A)/(l + s), s the stretch at f_L; with the cable at the CoM
+    the four rotors share f_R."""
     assert wall.feasible
     for d in wall.designs:
         p = d.point
-        gamma = math.asin((0.1 + p.attachment[2] - p.h_A) / p.length)
+        gamma = _gamma(0.1 + p.attachment[2] - p.h_A, p.length, math.pi / 2)
         sc = load_scenario("slope50", [*RELAXED, *d.overrides])
         a = analyze(sc).tethered
         assert a.hover_thrust == pytest.approx(g * math.tan(gamma), rel=1e-9)
@@ -282,12 +295,17 @@ def test_feasibility_map_cells_are_the_searches(planner, tmp_path):
 
 
 def test_steepest_slope_is_feasible_and_the_next_step_is_not(planner):
-    """l = 1 m: the analysis bound is the closed form of the rotor floor, cable at the CoM
-    (gamma = asin(0.1)); the verified steepest slope reaches it (hooking is not binding)."""
+    """l = 1 m: the analysis bound is the closed form of the rotor floor, cable at the CoM,
+    beta = gamma + acos(n f cos(gamma)/(m g)) with the stretched cable's gamma(beta)
+    (sin(gamma) = 0.1/(l + s), a fixed point in beta); the verified steepest slope reaches
+    it (hooking is not binding)."""
     sc = load_scenario("slope50")
     s = steepest_slope(sc, 1.0, planner=planner)
-    gamma = math.asin(0.1)
-    closed = math.degrees(gamma + math.acos(4 * 0.45 * math.cos(gamma) / g))
+    beta = math.radians(85.0)
+    for _ in range(100):
+        gamma = _gamma(0.1, 1.0, beta)
+        beta = gamma + math.acos(4 * 0.45 * math.cos(gamma) / g)
+    closed = math.degrees(beta)
     assert s.landed_slope_deg >= closed - 1e-6
     assert s.slope_deg is not None and s.slope_deg <= s.landed_slope_deg
     space = replace(DesignSpace(), lengths=(1.0,), max_designs=1, shortlist=3)

@@ -275,16 +275,26 @@ def test_attachment_offset_moves_the_anchor(slope50):
     from tetherland.config import load_scenario
     from tetherland.geometry import LandingGeometry
 
+    rigid = 'tether.material="ideal"'  # the inextensible cable: the link is l = 1 m
     centred = LandingGeometry.from_scenario(
-        load_scenario("slope50", ["vehicle.cable_attachment=[0, 0, 0]"])
+        load_scenario("slope50", ["vehicle.cable_attachment=[0, 0, 0]", rigid])
     )
-    offset = LandingGeometry.from_scenario(slope50)
+    offset = LandingGeometry.from_scenario(load_scenario("slope50", [rigid]))
     assert centred.c == pytest.approx(0.1)
     assert offset.h_att == pytest.approx(0.07)
     assert offset.c == pytest.approx(0.07)
     # with the offset, the attachment point (not the CoM) is at cable length from the anchor
     assert np.linalg.norm(offset.p_att_landed - offset.p_A) == pytest.approx(1.0, abs=1e-12)
     assert np.linalg.norm(offset.p_R_landed - offset.p_A) != pytest.approx(1.0, abs=1e-4)
+    # the default elastic cable: the same at l + s, s = f_L l/EA at f_L of (6.10)
+    elastic = LandingGeometry.from_scenario(slope50)
+    EA = slope50.tether.effective_axial_stiffness
+    f_L = slope50.vehicle.mass * 9.81 * math.sin(elastic.surface.slope) / math.cos(elastic.gamma)
+    assert elastic.stretch == pytest.approx(f_L / EA, rel=1e-12)
+    assert elastic.c == pytest.approx(0.07 / (1.0 + elastic.stretch), rel=1e-12)
+    assert np.linalg.norm(elastic.p_att_landed - elastic.p_A) == pytest.approx(
+        1.0 + elastic.stretch, abs=1e-12
+    )
 
 
 def test_pipe_geometry_uses_sag(pipe60):

@@ -40,6 +40,7 @@ from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_multiply, rotmat_to_quat, rotvec_to_quat
+from tetherland.runs import run_mission
 from tetherland.sim.cable import ChainCable, ElasticCable, chain_nodes, joint_quaternions
 from tetherland.sim.mjcf import (
     ChainSpec,
@@ -55,6 +56,7 @@ from tetherland.state import RigidBodyState, link_kernel
 AT_COM = "vehicle.cable_attachment=[0,0,0]"
 """Cable at the centre of mass: the vehicle is a point mass on the cable (no torque)."""
 NYLON = 'tether.material="nylon"'
+IDEAL = 'tether.material="ideal"'
 
 
 # -- configuration ------------------------------------------------------------------------
@@ -435,14 +437,16 @@ def test_massive_cable_drapes_when_slack_and_is_taken_up():
 
 def test_stretched_landing_solves_the_stretch_at_the_landed_hover_tension():
     sc = load_scenario("slope50", [NYLON])
-    geo = LandingGeometry.from_scenario(sc)
-    sl = StretchedLanding.from_scenario(sc)
+    geo = LandingGeometry.from_scenario(load_scenario("slope50", [IDEAL]))  # rigid, length l
+    assert geo.stretch == 0.0 and geo.axial_stiffness is None
     EA = sc.tether.effective_axial_stiffness
     l, m = sc.tether.length, sc.vehicle.mass
+    sl = stretched_landing(geo, m, EA)  # the elastic cable on the rigid geometry's anchor
     _, f_L = landing_hover(geo.surface.slope, sl.geometry.c, m)  # the analysis module's (6.14)
     assert sl.tension == pytest.approx(f_L, rel=1e-12)
     assert sl.stretch == pytest.approx(f_L * l / EA, rel=1e-12)
-    assert sl.geometry.length == pytest.approx(l + sl.stretch)
+    assert sl.geometry.length == l
+    assert sl.geometry.link_length == pytest.approx(l + sl.stretch)
     np.testing.assert_allclose(sl.geometry.p_A, geo.p_A)
     # the touchdown point moves along the surface, downhill, by s/cos(gamma) to first
     # order (exactly sqrt((l + s)^2 - h^2) - sqrt(l^2 - h^2)): s along the cable
@@ -458,6 +462,13 @@ def test_stretched_landing_solves_the_stretch_at_the_landed_hover_tension():
     np.testing.assert_allclose(moved.p_L, geo.p_L, atol=1e-12)
     ideal = stretched_landing(geo, m, None)
     assert ideal.stretch == 0.0 and np.allclose(ideal.geometry.p_L, geo.p_L)
+    # the scenario's own geometry is that compensated one: anchor moved, touchdown on p*_L
+    own = LandingGeometry.from_scenario(sc)
+    assert own.stretch == pytest.approx(sl.stretch, rel=1e-12)
+    np.testing.assert_allclose(own.p_A, sl.anchor_for_p_L, atol=1e-12)
+    np.testing.assert_allclose(own.p_L, geo.p_L, atol=1e-12)
+    assert own.phi_star == pytest.approx(sl.geometry.phi_star, abs=1e-15)
+    np.testing.assert_allclose(StretchedLanding.from_scenario(sc).shift_W, 0.0, atol=1e-12)
 
 
 def test_plant_rests_at_the_stretched_landing_point():
@@ -472,7 +483,11 @@ def test_plant_rests_at_the_stretched_landing_point():
     assert expected == pytest.approx(sl.tension, rel=1e-9)  # rest and hover: the same f_L
     assert plant.tension == pytest.approx(expected, rel=2e-3)
     np.testing.assert_allclose(plant.attachment_point(), sl.geometry.p_att_landed, atol=3e-4)
-    rigid = plant.layout.geometry.p_att_landed
+    np.testing.assert_allclose(plant.layout.geometry.p_att_landed, sl.geometry.p_att_landed)
+    # the inextensible cable's link end on the same anchor is s (along d~) short of it
+    geo = sl.geometry
+    rigid = landing_geometry(geo.surface, length=geo.length, h_R=geo.h_R, h_A=geo.h_A,
+                             h_att=geo.h_att, anchor=geo.p_A).p_att_landed  # fmt: skip
     assert np.linalg.norm(plant.attachment_point() - rigid) > 0.8 * sl.stretch
 
 
@@ -539,7 +554,12 @@ def test_nylon_tethered_landing_with_the_ukf_in_the_loop():
 
     nom = traj.nominal(0.0)
     r_att = np.asarray(sc.vehicle.cable_attachment)
-    x0 = RigidBodyState(nom.p_W - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
+    # the plan's link is l + s (s at the landed f_L); start the cable at the plan's start
+    # tension T instead, l (1 + T/EA) along the planned link, so that it pulls T at once
+    p_A = LandingGeometry.from_scenario(sc).p_A
+    link = nom.p_W - p_A
+    p_att = p_A + link / np.linalg.norm(link) * (sc.tether.length + sc.tether.stretch(nom.tension))
+    x0 = RigidBodyState(p_att - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
                         nom.omega_B)  # fmt: skip
     w0 = RotorModel.from_config(sc.vehicle).speed(nom.rotor_thrusts)
     est = UkfEstimator(sc, x0, 0.0, rotor_speeds0=w0)
@@ -564,3 +584,20 @@ def test_nylon_tethered_landing_with_the_ukf_in_the_loop():
     sl = StretchedLanding.from_scenario(sc)
     p_att_end = plant.attachment_point()
     assert np.linalg.norm(p_att_end - sl.geometry.p_att_landed) < 3e-3
+
+
+@pytest.mark.slow
+def test_nylon_mission_lands_on_the_desired_point_despite_the_stretch():
+    """The full closed loop (MuJoCo, sensors, UKF, planner, supervisor) on nylon: the
+    landing geometry, the plan and the feed-forward are those of the landed link l + s
+    (docs/theory.md section 13.2), so the touchdown lands on p*_L to 2 mm, far less than
+    the stretch s = f_L l/EA (6.3 mm, which the unstretched geometry landed beyond p*_L)."""
+    sc = load_scenario("slope50", [NYLON])
+    geo = LandingGeometry.from_scenario(sc)
+    f_L = sc.vehicle.mass * GRAVITY * math.sin(geo.surface.slope) / math.cos(geo.gamma)
+    s = f_L * sc.tether.length / sc.tether.effective_axial_stiffness
+    assert geo.stretch == pytest.approx(s, rel=1e-12) and s > 5e-3
+    summary = run_mission(sc, seed=0).summary
+    assert summary["success"], summary
+    err = summary["landing"]["position_error_m"]
+    assert err < 2e-3 and err < s / 3
