@@ -251,6 +251,12 @@ def test_mocap_jam_and_snap_rules(slope50):
                tension=2.0 * cfg.jam_tension)  # fmt: skip
     assert jam is not None and jam.kind is FaultKind.JAM
     assert jam.t - 10.0 == pytest.approx(cfg.jam_dwell, abs=0.003)
+    # nor while the cable could be slack (closer to the anchor than l - jam_slack): a gust
+    assert _run(FaultMonitor(slope50, geo), slope50, Phase.RETURN, 1.0, zero,
+                d_len=l - 1.5 * cfg.jam_slack, tension=2.0 * cfg.jam_tension) is None  # fmt: skip
+    jam = _run(FaultMonitor(slope50, geo), slope50, Phase.RETURN, 1.0, zero,
+               d_len=l - 0.5 * cfg.jam_slack, tension=2.0 * cfg.jam_tension)  # fmt: skip
+    assert jam is not None and jam.kind is FaultKind.JAM
     # the same tension in a tethered phase is the plan, not a jam
     assert _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_TAKEOFF, 1.0, zero,
                 d_len=l, tension=2.0 * cfg.jam_tension) is None  # fmt: skip

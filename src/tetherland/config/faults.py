@@ -125,10 +125,17 @@ class FaultDetectionConfig(Section):
     snap_dwell: float = Field(0.04, ge=0, le=10)
     """... for this long (much shorter than the slack rule: without the cable, inclined
     hovering accelerates the vehicle at f_L/m), in [0, 10] [s]."""
-    jam_tension: float = Field(1.0, gt=0, le=1000)
-    """Hook jam: estimated tension above this after the unhooking pass, in (0, 1000] [N]."""
+    jam_tension: float = Field(2.5, gt=0, le=1000)
+    """Hook jam: estimated tension above this after the unhooking pass, in (0, 1000] [N].
+    Well above the free-flight estimate's bias under belief errors (mass and thrust
+    coefficient 5 % off: about 1 N, as measured in the 70 deg campaign); a jammed hook
+    pulls with the position controller's full authority once the cable is taut."""
     jam_dwell: float = Field(0.2, ge=0, le=10)
     """... for this long, in [0, 10] [s]."""
+    jam_slack: float = Field(0.1, ge=0, le=10)
+    """... and only while the estimated attachment point is at least the cable length less
+    this from the believed anchor (a cable that could be slack cannot be pulling: an
+    estimated tension there is a disturbance, e.g. a gust), in [0, 10] [m]."""
     away_distance: float = Field(0.3, ge=0, le=5)
     """Snapped cable: the safe hover is this far from the surface along z_S beyond where
     the fault was detected, in [0, 5] [m]."""

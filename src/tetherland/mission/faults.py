@@ -247,7 +247,12 @@ class FaultMonitor:
         if phase not in JAM_PHASES:
             self._jam.reset()
             return None
-        if self._jam.update(t, est.tension or 0.0):
+        tension = est.tension or 0.0
+        if tension > self.cfg.jam_tension and (
+            self._geometry(est)[3] < self._length - self.cfg.jam_slack
+        ):  # the cable could be slack: it cannot be what pulls
+            tension = 0.0
+        if self._jam.update(t, tension):
             return FaultDetection(
                 FaultKind.JAM, t,
                 f"fault: hook did not release (estimated tension {est.tension:.2f} N > "
