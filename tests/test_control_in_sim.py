@@ -15,8 +15,9 @@ from tetherland.interfaces import Reference
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.tracking import TrajectoryTrack
-from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.rotations import quat_to_rotmat
 from tetherland.sim import Plant, Runner
+from tetherland.sim.start import plan_start_state
 from tetherland.state import RigidBodyState
 
 pytestmark = pytest.mark.slow
@@ -54,10 +55,7 @@ def tethered_landing(slope50):
         def reference(self, t, est):
             return track.reference(t)
 
-    nom = traj.nominal(0.0)
-    r_att = np.asarray(slope50.vehicle.cable_attachment)
-    x0 = RigidBodyState(nom.p_W - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB), nom.omega_B)
-    w0 = RotorModel.from_config(slope50.vehicle).speed(nom.rotor_thrusts)
+    x0, w0 = plan_start_state(traj, slope50)  # taut at the plan's start tension
     est = UkfEstimator(slope50, x0, 0.0, rotor_speeds0=w0)
     log = Runner(slope50, SwitchingController(slope50), estimator=est, reference=Track(), seed=4,
                  plant=Plant(slope50)).run(traj.duration + 0.5, initial_state=x0, rotor_speeds=w0,

@@ -123,7 +123,7 @@ def test_singular_reference_is_reported_not_divided(scenario, plans):
     traj = plans["landing"]
     x0 = start_state(traj)
     geo = LandingGeometry.from_scenario(scenario)
-    est = estimate_of(x0, 0.0, geo, scenario.tether.length)
+    est = estimate_of(x0, 0.0, geo, geo.link_length)
     out = np.zeros((5, 4))
     out[0] = [x0[0], 0.0, math.pi / 2 - x0[0], 0.0]  # thrust axis along the link
     ref = Reference(
@@ -144,7 +144,7 @@ def test_offset_torque_is_compensated():
     traj = Planner().plan(load_scenario("slope50", CENTRED), "landing").require()
     geo = LandingGeometry.from_scenario(sc)
     x = start_state(traj)
-    est = estimate_of(x, 0.0, geo, sc.tether.length)
+    est = estimate_of(x, 0.0, geo, geo.link_length)
     tension = 2.0
     est = type(est)(t=0.0, body=est.body, link=est.link, tension=tension)
     ref = TrajectoryTrack(traj, 0.0, 500.0).reference(0.0)
@@ -167,7 +167,8 @@ def test_every_controller_implements_the_role(scenario, plans, factory):
     assert isinstance(ctrl, Controller)
     traj = plans["landing"]
     x0 = start_state(traj)
-    est = estimate_of(x0, 0.0, LandingGeometry.from_scenario(scenario), scenario.tether.length)
+    geo = LandingGeometry.from_scenario(scenario)
+    est = estimate_of(x0, 0.0, geo, geo.link_length)
     ref = TrajectoryTrack(traj, 0.0, 500.0).reference(0.0)
     if factory is FreeFlightController:
         ref = Reference(t=0.0, p_W=np.array([est.body.p_W, np.zeros(3), np.zeros(3)]))
@@ -199,7 +200,7 @@ def test_dfl_restarts_from_motors_off_at_the_nominal_thrust(scenario, plans):
     (where the decoupling matrix is singular)."""
     traj = plans["takeoff"]
     geo = LandingGeometry.from_scenario(scenario)
-    est = estimate_of(start_state(traj), 0.0, geo, scenario.tether.length)
+    est = estimate_of(start_state(traj), 0.0, geo, geo.link_length)
     ctrl = SwitchingController(scenario, "dfl")
     off = ctrl.update(0.0, est, Reference(t=0.0, mode=ControlMode.MOTORS_OFF))
     assert off.thrust == 0.0
@@ -217,7 +218,7 @@ def test_tethered_to_free_flight_continues_the_commanded_force(scenario, plans):
     what the tethered law held (here the plan's 2 N start tension)."""
     traj = plans["landing"]
     geo = LandingGeometry.from_scenario(scenario)
-    est = estimate_of(start_state(traj), 0.0, geo, scenario.tether.length)
+    est = estimate_of(start_state(traj), 0.0, geo, geo.link_length)
     # a clamp of 0.5 m g per axis holds the start tension's 2.3 N along x_W
     wide = load_scenario("slope50", [*CENTRED, "controller.free_flight.integral_force_max=0.5"])
     ctrl = SwitchingController(wide)
@@ -233,7 +234,8 @@ def test_tethered_to_free_flight_continues_the_commanded_force(scenario, plans):
     m = scenario.vehicle.mass
     F_0 = m * (GRAVITY * np.array([0.0, 0.0, 1.0]) - pos.k_v * est.body.v_W)
     np.testing.assert_allclose(pos.integral_force + F_0, F_last, atol=1e-9)
-    # a plain reset (from motors off) would start at F_0: more than 2 N off (the pull)
-    assert np.linalg.norm(F_last - F_0) > 2.0
+    # a plain reset (from motors off) would start at F_0: off by the cable's pull, the
+    # plan's start tension (the plan starts at rest in inclined hovering: F - m g z_W = T d)
+    assert np.linalg.norm(F_last - F_0) == pytest.approx(scenario.planner.start_tension, rel=1e-9)
     ctrl.free_flight.reset()
     np.testing.assert_array_equal(pos.integral_force, 0.0)

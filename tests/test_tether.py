@@ -39,7 +39,7 @@ from tetherland.geometry import (
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.tracking import TrajectoryTrack
-from tetherland.rotations import quat_multiply, rotmat_to_quat, rotvec_to_quat
+from tetherland.rotations import quat_multiply, quat_to_rotmat, rotvec_to_quat
 from tetherland.runs import run_mission
 from tetherland.sim.cable import ChainCable, ElasticCable, chain_nodes, joint_quaternions
 from tetherland.sim.mjcf import (
@@ -51,6 +51,7 @@ from tetherland.sim.mjcf import (
 )
 from tetherland.sim.plant import Plant
 from tetherland.sim.runner import Runner
+from tetherland.sim.start import plan_start_state
 from tetherland.state import RigidBodyState, link_kernel
 
 AT_COM = "vehicle.cable_attachment=[0,0,0]"
@@ -552,16 +553,9 @@ def test_nylon_tethered_landing_with_the_ukf_in_the_loop():
         def reference(self, t, est):
             return track.reference(t)
 
-    nom = traj.nominal(0.0)
-    r_att = np.asarray(sc.vehicle.cable_attachment)
-    # the plan's link is l + s (s at the landed f_L); start the cable at the plan's start
-    # tension T instead, l (1 + T/EA) along the planned link, so that it pulls T at once
-    p_A = LandingGeometry.from_scenario(sc).p_A
-    link = nom.p_W - p_A
-    p_att = p_A + link / np.linalg.norm(link) * (sc.tether.length + sc.tether.stretch(nom.tension))
-    x0 = RigidBodyState(p_att - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
-                        nom.omega_B)  # fmt: skip
-    w0 = RotorModel.from_config(sc.vehicle).speed(nom.rotor_thrusts)
+    # the plan's link is l + s (s at the landed f_L); the cable starts at the plan's start
+    # tension T instead, l (1 + T/EA) along the planned link
+    x0, w0 = plan_start_state(traj, sc)
     est = UkfEstimator(sc, x0, 0.0, rotor_speeds0=w0)
     plant = Plant(sc)
     rows = []
@@ -601,3 +595,30 @@ def test_nylon_mission_lands_on_the_desired_point_despite_the_stretch():
     assert summary["success"], summary
     err = summary["landing"]["position_error_m"]
     assert err < 2e-3 and err < s / 3
+
+
+def test_plan_start_state_holds_the_planned_start_tension():
+    """The plant starts on the planned link direction, l (1 + T/EA) from the anchor for the
+    plan's start tension T (the plan's link is l + s, s at the landed f_L > T): the
+    elastic cable pulls T at once, for Dyneema and nylon alike."""
+    for material in ("dyneema", "nylon"):
+        sc = load_scenario("slope50", [f'tether.material="{material}"'])
+        traj = Planner().plan(sc, "landing").require()
+        nom = traj.nominal(0.0)
+        x0, w0 = plan_start_state(traj, sc)
+        geo = LandingGeometry.from_scenario(sc)
+        p_att = x0.p_W + quat_to_rotmat(x0.q_WB) @ np.asarray(sc.vehicle.cable_attachment)
+        D = np.linalg.norm(p_att - geo.p_A)
+        T = float(nom.tension)
+        assert T == pytest.approx(sc.planner.start_tension, rel=1e-6)
+        EA = sc.tether.effective_axial_stiffness
+        assert D == pytest.approx(sc.tether.length * (1.0 + T / EA), abs=1e-12)
+        assert geo.link_length - D > 0.5 * geo.stretch  # shorter than the landed link
+        direction = (nom.p_W - geo.p_A) / np.linalg.norm(nom.p_W - geo.p_A)
+        np.testing.assert_allclose((p_att - geo.p_A) / D, direction, atol=1e-12)
+        thrusts = RotorModel.from_config(sc.vehicle).thrust(w0)
+        np.testing.assert_allclose(thrusts, nom.rotor_thrusts, rtol=1e-9)
+        plant = Plant(sc)
+        plant.reset(x0, cable_engaged=True)
+        plant.step(1)
+        assert plant.tension == pytest.approx(T, rel=2e-2)

@@ -51,7 +51,6 @@ from tetherland.estimation import UkfEstimator
 from tetherland.geometry import (
     FloatArray,
     LandingGeometry,
-    cable_stretch,
     link_angles,
     theta_A_from_z_B,
 )
@@ -60,9 +59,10 @@ from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.maneuver import Maneuver
 from tetherland.planning.trajectory import Trajectory
-from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.rotations import quat_to_rotmat
 from tetherland.sim import Plant, Runner
 from tetherland.sim.baselines import ConstantSpeedController
+from tetherland.sim.start import plan_start_state
 from tetherland.state import LinkState, RigidBodyState
 from tetherland.verdict import tolerances_of
 
@@ -117,23 +117,9 @@ def _observe(est: StateEstimate) -> FloatArray:
 
 
 def initial_state(plan: Trajectory, scenario: Scenario) -> tuple[RigidBodyState, FloatArray]:
-    """The plan's first state (cable taut) and rotor speeds [rad/s] (flatness, 6.6.1).
-
-    An elastic cable holds the plan's start tension T stretched by T l/EA: the attachment
-    point starts at l (1 + T/EA) from the anchor along the planned link (the plan's link is
-    l + s long, s the stretch at the landed hover's f_L: docs/theory.md section 4.2), so
-    that the plant's cable pulls with the planned tension from the first step.
-    """
-    nom = plan.nominal(0.0)
-    r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
-    t = scenario.tether
-    stretch = cable_stretch(float(nom.tension), t.length, t.effective_axial_stiffness)
-    p_A = LandingGeometry.from_scenario(scenario).p_A
-    link = nom.p_W - p_A  # nom.p_W: the planned attachment point
-    p_att = p_A + link * ((t.length + stretch) / float(np.linalg.norm(link)))
-    x0 = RigidBodyState(p_att - nom.R_WB @ r_att, nom.v_W, rotmat_to_quat(nom.R_WB),
-                        nom.omega_B)  # fmt: skip
-    return x0, RotorModel.from_config(scenario.vehicle).speed(nom.rotor_thrusts)
+    """The plan's first state (cable taut at the plan's start tension) and rotor speeds
+    [rad/s]: :func:`tetherland.sim.start.plan_start_state`."""
+    return plan_start_state(plan, scenario)
 
 
 class TetheredEnv(gymnasium.Env):
