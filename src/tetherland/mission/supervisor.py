@@ -185,6 +185,8 @@ class MissionSupervisor:
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
         self._release_pull: tuple[float, float, np.ndarray] | None = None  # t0, T, a_W
+        self._t_free = 0.0  # last tick of the free-flight reference [s]
+        self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
             Phase.TAKEOFF: self._takeoff,
             Phase.APPROACH: self._approach,
@@ -221,7 +223,20 @@ class MissionSupervisor:
         self._phase_start = t
 
     def _free(self, t: float) -> Reference:
-        rows = self._path.sample(t)
+        dt, self._t_free = t - self._t_free, t
+        det = self.cfg.detection
+        if (
+            self.phase in _NEAR_MECHANISM
+            and self.monitor.torque_residual > det.rotor_suspect * det.rotor_torque
+            and self._suspect_held < det.rotor_suspect_max
+            and dt > 0.0
+        ):  # a rotor fault is suspected close to the mechanism: the pass holds still
+            self._path.delay(dt)
+            self._suspect_held += dt
+            rows = self._path.sample(t).copy()
+            rows[1:] = 0.0
+        else:
+            rows = self._path.sample(t)
         if self._release_pull is not None:
             t0, duration, a_W = self._release_pull
             rows = rows.copy()  # the path's rows are shared and read-only
