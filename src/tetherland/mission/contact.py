@@ -223,7 +223,7 @@ class ContactRule:
         clearance = geo.clearance(p_W, R_WB)
         lag = link.phi - phi_d
         near = clearance < cfg.contact_clearance and link.phi - geo.phi_star < self._gate
-        stalled = lag > self._error and abs(link.phi_dot) < self._stall
+        stalled = lag > self._error and link.phi_dot > -self._stall
         force: float | None = None
         pressed = True
         if est.external_force_B is not None:
