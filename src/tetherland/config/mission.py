@@ -66,8 +66,12 @@ class MissionConfig(Section):
     """Contact signal "link stall": the estimated link elevation stays this far above the
     descending reference (the surface stops the vehicle) [deg]."""
     contact_stall_rate_deg: float = Field(0.5, gt=0, le=45)
-    """... while the estimated link elevation rate stays below this (a link that still
-    moves lags its reference; a stopped one is held) [deg/s]."""
+    """... while the estimated link elevation descends slower than this (a link that still
+    descends lags its reference; a stopped one is held) [deg/s]."""
+    contact_creep_rate_deg: float = Field(1.5, gt=0, le=45)
+    """... and rises slower than this: a vehicle pressed on a wall creeps up it slowly
+    while the reference descends (the surface holds it); a bounce or a gust moves the
+    link faster [deg/s]."""
     contact_clearance: float = Field(0.015, gt=0, le=1)
     """Contact signal "clearance": the lowest lander tip of the estimated pose is less than
     this above the believed surface [m]."""
