@@ -184,13 +184,13 @@ def _balanced(scenario):
     return lambda est: -mon.cable_torque_B(est)
 
 
-def _run(monitor, scenario, phase, seconds, torque_of, **kw):
+def _run(monitor, scenario, phase, seconds, torque_of, nominal=None, **kw):
     dt = 1.0 / scenario.controller.rate_hz
     for k in range(round(seconds / dt)):
         t = 10.0 + k * dt
         est = _hover_estimate(scenario, t, **kw)
         monitor.command_sent(t, Command(np.zeros(4), torque_B=torque_of(est)))
-        found = monitor.check(t, est, phase, airborne=True)
+        found = monitor.check(t, est, phase, airborne=True, nominal_tension=nominal)
         if found is not None:
             return found
     return None
@@ -251,6 +251,12 @@ def test_mocap_jam_and_snap_rules(slope50):
                tension=2.0 * cfg.jam_tension)  # fmt: skip
     assert jam is not None and jam.kind is FaultKind.JAM
     assert jam.t - 10.0 == pytest.approx(cfg.jam_dwell, abs=0.003)
+    # nor while the cable could be slack (closer to the anchor than l - jam_slack): a gust
+    assert _run(FaultMonitor(slope50, geo), slope50, Phase.RETURN, 1.0, zero,
+                d_len=l - 1.5 * cfg.jam_slack, tension=2.0 * cfg.jam_tension) is None  # fmt: skip
+    jam = _run(FaultMonitor(slope50, geo), slope50, Phase.RETURN, 1.0, zero,
+               d_len=l - 0.5 * cfg.jam_slack, tension=2.0 * cfg.jam_tension)  # fmt: skip
+    assert jam is not None and jam.kind is FaultKind.JAM
     # the same tension in a tethered phase is the plan, not a jam
     assert _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_TAKEOFF, 1.0, zero,
                 d_len=l, tension=2.0 * cfg.jam_tension) is None  # fmt: skip
@@ -258,6 +264,18 @@ def test_mocap_jam_and_snap_rules(slope50):
                 d_len=l, tension=0.0)  # fmt: skip
     assert snap is not None and snap.kind is FaultKind.SNAP
     assert snap.t - 10.0 == pytest.approx(cfg.snap_dwell, abs=0.003)
+    # under a known plan the limit is snap_fraction of the planned tension: an estimate
+    # just below it (above snap_tension: a lost cable's noisy, biased estimate) is a snap,
+    # just above it is not
+    plan = 6.0
+    limit = cfg.snap_fraction * plan
+    assert limit > 3.0 * cfg.snap_tension
+    snap = _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_LANDING, 1.0, zero,
+                nominal=plan, d_len=l, tension=0.9 * limit)  # fmt: skip
+    assert snap is not None and snap.kind is FaultKind.SNAP
+    assert snap.t - 10.0 == pytest.approx(cfg.snap_dwell, abs=0.003)
+    assert _run(FaultMonitor(slope50, geo), slope50, Phase.TETHERED_LANDING, 1.0, zero,
+                nominal=plan, d_len=l, tension=1.1 * limit) is None  # fmt: skip
 
 
 # ---------------------------------------------------------------------- campaign

@@ -73,6 +73,25 @@ def test_cable_snap_in_tethered_landing_hovers_away_from_the_slope():
     assert clearance > 0.2
 
 
+@pytest.mark.parametrize(("t_snap", "phase"), [(35.0, "motors_off"), (36.6, "spin_up")])
+def test_cable_snap_while_landed_starts_the_motors_and_hovers_away(t_snap, phase):
+    """On 50 deg (steeper than the landers' friction angle, atan 0.6 = 31 deg) only the
+    cable holds the landed vehicle: when it breaks the vehicle slides or falls off. The
+    supervisor sees the landed vehicle move, starts (or keeps) the motors and hovers away
+    from the slope in free flight: a safe stop, not a crash."""
+    r = fly(f"faults.cable_snap_time={t_snap}")
+    assert phase_of(r, t_snap) == phase
+    event = check_safe_stop(r, "hover", "cable lost while landed")
+    cfg = r.belief_scenario.mission.detection
+    assert t_snap < event["t"] < t_snap + 0.3
+    # moving faster than landed_speed when it was seen (the reason names the speed)
+    speed = float(event["message"].split("moves at ")[1].split(" m/s")[0])
+    assert speed > cfg.landed_speed
+    z_S = r.plan.geometry.surface.z_S
+    clearance = (r.log["p_W"][-1] - r.plan.geometry.surface.origin) @ z_S
+    assert clearance > 0.2
+
+
 def test_mocap_outage_is_detected_and_the_hover_held_on_the_estimate():
     r = fly("faults.mocap_outage_start=8.0", "faults.mocap_outage_duration=3.0")
     event = check_safe_stop(r, "hover", "motion capture lost")

@@ -60,6 +60,15 @@ class MissionConfig(Section):
     ``touchdown_approach_gain`` times the estimated lander clearance (0: no slowing) [m/s]."""
     touchdown_approach_gain: float = Field(2.0, ge=0, le=100)
     """... the allowed approach speed grows by this per metre of clearance [1/s]."""
+    touchdown_hold_rate: float = Field(0.15, ge=0, le=50)
+    """Rate hold: within ``touchdown_hold_clearance`` of the believed surface the planned
+    landing's clock stops while the estimated roll-pitch rate |(omega_x, omega_y)| is above
+    this, so the landers do not meet the surface while the frame still rotates, e.g. from
+    a gust (condition (3); 0: no hold) [rad/s]."""
+    touchdown_hold_clearance: float = Field(0.03, ge=0, le=1)
+    """Rate hold: the estimated lander clearance below which it acts [m]."""
+    touchdown_hold_max: float = Field(1.5, ge=0, le=60)
+    """Rate hold: the longest total time the landing's clock may stand still [s]."""
     touchdown_search_deg: float = Field(6.0, gt=0, le=45)
     """Guarded touchdown: how far beyond the planned phi* the search goes [deg]."""
     contact_error_deg: float = Field(0.8, gt=0, le=45)

@@ -304,6 +304,11 @@ class SlowApproach:
     still follows the planned path. The k-th derivative rows scale by alpha^k, as do the
     feed-forward's rates (d alpha/dt is neglected: alpha changes slowly).
 
+    Rate hold: within ``touchdown_hold_clearance`` the clock stands still (alpha = 0)
+    while the estimated roll-pitch rate exceeds ``touchdown_hold_rate``, for at most
+    ``touchdown_hold_max`` in total, so that a gust's roll or pitch swing decays before
+    the landers meet the surface (condition (3)).
+
     Parameters
     ----------
     cfg : MissionConfig
@@ -328,6 +333,8 @@ class SlowApproach:
         self.tau = t0
         self._t = t0
         self.alpha = 1.0
+        self.held = 0.0
+        """Total time the clock stood still for the rate hold [s]."""
 
     def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
         """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
@@ -338,15 +345,31 @@ class SlowApproach:
         alpha = 1.0
         v0, gain = cfg.touchdown_approach_speed, cfg.touchdown_approach_gain
         speed = self.length * abs(rate_at)
-        if v0 > 0.0 and speed > v0:
+        slow = v0 > 0.0 and speed > v0
+        hold = cfg.touchdown_hold_rate > 0.0 and self.held < cfg.touchdown_hold_max
+        if slow or hold:
             px, py, pz = est.body.p_W.tolist()
             (zx, zy, zz), (ox, oy, oz) = self._z, self._o
+            # a lower bound of the lander clearance, whatever the attitude
             low = (px - ox) * zx + (py - oy) * zy + (pz - oz) * zz - self._reach
-            if gain == 0.0 or low < (speed - v0) / gain:  # within reach: the exact clearance
+            reach = max(
+                (speed - v0) / gain if slow and gain > 0.0 else (math.inf if slow else 0.0),
+                cfg.touchdown_hold_clearance if hold else 0.0,
+            )
+            if low < reach:  # within reach: the exact clearance
                 clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
-                cap = v0 + gain * max(clearance, 0.0)
-                if speed > cap:
-                    alpha = cap / speed
+                wx, wy, _ = est.body.omega_B.tolist()
+                if (
+                    hold
+                    and clearance < cfg.touchdown_hold_clearance
+                    and wx * wx + wy * wy > cfg.touchdown_hold_rate**2
+                ):
+                    alpha = 0.0
+                    self.held += max(dt, 0.0)
+                elif slow:
+                    cap = v0 + gain * max(clearance, 0.0)
+                    if speed > cap:
+                        alpha = cap / speed
         self.alpha = alpha
         self.tau += alpha * max(dt, 0.0)
         return self.tau

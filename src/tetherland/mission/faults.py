@@ -45,6 +45,8 @@ ANCHOR_PHASES = frozenset({Phase.STRETCH, Phase.TETHERED_LANDING, Phase.TETHERED
 """Phases in which a taut cable's length is checked."""
 SNAP_PHASES = frozenset({Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF})
 """Tethered flight: the cable carries the vehicle (the takeoff from ``airborne`` on)."""
+LANDED_PHASES = frozenset({Phase.MOTORS_OFF, Phase.SPIN_UP})
+"""Landed on the cable: a moving vehicle means the cable no longer holds it."""
 SNAP_PLAN_FACTOR = 3.0
 """The snap rule watches where the planned tension is at least this many snap_tension."""
 JAM_PHASES = frozenset({Phase.RETURN, Phase.LAND})
@@ -97,6 +99,7 @@ class FaultMonitor:
         self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
         self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
         self._snap = ThresholdDwell(-cfg.snap_tension, cfg.snap_dwell)
+        self._landed = ThresholdDwell(cfg.landed_speed, cfg.landed_dwell)
         self.torque_residual = 0.0
         """Last low-passed roll/pitch torque residual [N m]."""
         self.length_error = math.nan
@@ -182,11 +185,16 @@ class FaultMonitor:
             needs = nominal_tension is None or (
                 nominal_tension >= SNAP_PLAN_FACTOR * self.cfg.snap_tension
             )
-            found = self._snap_rule(t, est, phase, airborne and needs)
+            limit = self.cfg.snap_tension
+            if nominal_tension is not None:
+                limit = max(limit, self.cfg.snap_fraction * nominal_tension)
+            found = self._snap_rule(t, est, phase, airborne and needs, limit)
         if found is None:
             found = self._anchor_rule(t, est, phase)
         if found is None:
             found = self._jam_rule(t, est, phase)
+        if found is None:
+            found = self._landed_rule(t, est, phase)
         return found
 
     def _rotor_rule(
@@ -212,17 +220,18 @@ class FaultMonitor:
         return None
 
     def _snap_rule(
-        self, t: float, est: StateEstimate, phase: Phase, airborne: bool
+        self, t: float, est: StateEstimate, phase: Phase, airborne: bool, limit: float
     ) -> FaultDetection | None:
         if not (airborne and phase in SNAP_PHASES):
             self._snap.reset()
             return None
         tension = est.tension or 0.0
-        if self._snap.update(t, -tension):
+        # the dwell's threshold is -snap_tension: the margin below the current limit
+        if self._snap.update(t, limit - self.cfg.snap_tension - tension):
             return FaultDetection(
                 FaultKind.SNAP, t,
                 f"fault: cable lost in tethered flight (estimated tension {tension:.2f} N < "
-                f"{self.cfg.snap_tension:g} N for {self.cfg.snap_dwell:g} s)",
+                f"{limit:.2f} N for {self.cfg.snap_dwell:g} s)",
             )  # fmt: skip
         return None
 
@@ -243,11 +252,30 @@ class FaultMonitor:
             )  # fmt: skip
         return None
 
+    def _landed_rule(self, t: float, est: StateEstimate, phase: Phase) -> FaultDetection | None:
+        if phase not in LANDED_PHASES:
+            self._landed.reset()
+            return None
+        vx, vy, vz = est.body.v_W.tolist()
+        speed = math.sqrt(vx * vx + vy * vy + vz * vz)
+        if self._landed.update(t, speed):
+            return FaultDetection(
+                FaultKind.SNAP, t,
+                f"fault: cable lost while landed (the vehicle moves at {speed:.2f} m/s > "
+                f"{self.cfg.landed_speed:g} m/s for {self.cfg.landed_dwell:g} s)",
+            )  # fmt: skip
+        return None
+
     def _jam_rule(self, t: float, est: StateEstimate, phase: Phase) -> FaultDetection | None:
         if phase not in JAM_PHASES:
             self._jam.reset()
             return None
-        if self._jam.update(t, est.tension or 0.0):
+        tension = est.tension or 0.0
+        if tension > self.cfg.jam_tension and (
+            self._geometry(est)[3] < self._length - self.cfg.jam_slack
+        ):  # the cable could be slack: it cannot be what pulls
+            tension = 0.0
+        if self._jam.update(t, tension):
             return FaultDetection(
                 FaultKind.JAM, t,
                 f"fault: hook did not release (estimated tension {est.tension:.2f} N > "
@@ -259,6 +287,7 @@ class FaultMonitor:
 __all__ = [
     "ANCHOR_PHASES",
     "JAM_PHASES",
+    "LANDED_PHASES",
     "ROTOR_PHASES",
     "SNAP_PHASES",
     "FaultDetection",

@@ -69,7 +69,7 @@ TRANSITIONS: Mapping[Phase, frozenset[Phase]] = MappingProxyType({
     _P.RETRY: frozenset({_P.HOOKING, _P.SAFE_HOVER}),
     _P.TETHERED_LANDING: frozenset({_P.TOUCHDOWN, _P.SAFE_HOVER}),
     _P.TOUCHDOWN: frozenset({_P.MOTORS_OFF, _P.SAFE_HOVER}),
-    _P.MOTORS_OFF: frozenset({_P.SPIN_UP, _P.ABORTED}),
+    _P.MOTORS_OFF: frozenset({_P.SPIN_UP, _P.ABORTED, _P.SAFE_HOVER}),
     _P.SPIN_UP: frozenset({_P.TETHERED_TAKEOFF, _P.SAFE_HOVER}),
     _P.TETHERED_TAKEOFF: frozenset({_P.RELEASE, _P.SAFE_HOVER}),
     _P.RELEASE: frozenset({_P.UNHOOK, _P.SAFE_HOVER}),
@@ -81,7 +81,8 @@ TRANSITIONS: Mapping[Phase, frozenset[Phase]] = MappingProxyType({
     _P.ABORTED: frozenset(),
 })  # fmt: skip
 """Every phase and the phases it may move to. An abort moves to SAFE_HOVER (hover in
-free flight), or to ABORTED directly when the motors are off on the surface."""
+free flight), or to ABORTED directly when the motors are off on the surface (unless the
+cable was lost there: then the motors come on and the vehicle hovers away)."""
 
 
 _UNHOOKED = frozenset({_P.TAKEOFF, _P.APPROACH, _P.RETRY, _P.RETURN})
@@ -260,13 +261,15 @@ class MissionSupervisor:
 
         Hover where the vehicle is (at the pull point in a tethered phase, ``away`` from
         the surface by ``mission.detection.away_distance``), or at ``hover_at``; or, with
-        ``land``, fly back to the start pad and land (free flight).
+        ``land``, fly back to the start pad and land (free flight). Landed with the motors
+        off, the motors stay off, unless ``away``: the vehicle is moving without its cable,
+        so the motors come on and it hovers away from the surface.
         """
         if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
             return
         self.abort_reason = reason
         self._event(t, "abort", reason)
-        if self.phase == Phase.MOTORS_OFF:
+        if self.phase == Phase.MOTORS_OFF and not away:
             self._enter(Phase.ABORTED, t, f"abort while landed, motors stay off: {reason}")
             self.safe_state = "motors_off"
             self._terminate_at = t
