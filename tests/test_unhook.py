@@ -126,5 +126,5 @@ def test_the_unhooking_pass_keeps_the_belief_errors_clearance_on_a_wall():
 
 
 def test_unhook_depth_is_validated():
-    with pytest.raises(ConfigError, match="mission.unhook_depth"):
+    with pytest.raises(ConfigError, match=r"mission\.unhook_depth"):
         load_scenario("wall90", ["mission.unhook_depth=0"])
