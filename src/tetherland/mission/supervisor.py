@@ -52,6 +52,7 @@ from tetherland.mission.contact import (
     guarded_descent,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
+from tetherland.mission.hooking import unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan
@@ -566,10 +567,12 @@ class MissionSupervisor:
     def _release(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
-            self._path = (
-                self._new_path(t, self._path.end, cfg.hook_speed)
-                .to(wp.hook_end).to(wp.hook_start, pause=cfg.settle_time)
-            )  # fmt: skip
+            # the reverse pass, no deeper than mission.unhook_depth (mission.hooking)
+            *corners, last = unhooking_path(self._path.end, wp.unhook_entry, wp.hook_start)
+            self._path = self._new_path(t, self._path.end, cfg.hook_speed)
+            for p in corners:
+                self._path.to(p)
+            self._path.to(last, pause=cfg.settle_time)
             self._release_pull = None
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t)
