@@ -127,6 +127,22 @@ def test_contact_needs_the_stall_the_clearance_and_the_surface_force(scenario, g
     assert cfg.contact_dwell <= t <= t_force + cfg.contact_dwell + 2.0 / RATE
 
 
+def test_a_link_creeping_up_is_held_but_a_descending_one_lags(scenario, geo):
+    """Pressed landers on a wall let the vehicle creep up (the link rises slowly against
+    the descending reference): stalled while it rises slower than contact_creep_rate_deg
+    (contact after the dwell); rising faster (a bounce, a gust) or descending faster than
+    contact_stall_rate_deg (still moving toward the reference) is not contact."""
+    cfg = scenario.mission
+    assert cfg.contact_stall_rate_deg < cfg.contact_creep_rate_deg  # the premise
+    rule = ContactRule(scenario)
+    creep = 0.7 * cfg.contact_creep_rate_deg
+    t = feed(rule, geo, scenario, 2.0, lag_deg=1.0, rate_deg=creep, normal=0.5)
+    assert t is not None and t >= cfg.contact_dwell
+    for rate in (1.2 * cfg.contact_creep_rate_deg, -1.2 * cfg.contact_stall_rate_deg):
+        rule.reset()
+        assert feed(rule, geo, scenario, 2.0, lag_deg=1.0, rate_deg=rate, normal=0.5) is None
+
+
 def test_an_impact_counts_as_the_force_signal_for_the_dwell(scenario, geo):
     """A single 5 N sample (touchdown impact) with no lasting push: contact when the stall
     lasts the dwell after it (the impact is remembered for twice the dwell)."""
@@ -288,6 +304,7 @@ def test_contact_settings_are_validated():
 
     base = load_scenario("slope50")
     for bad in ("mission.contact_clearance=0", "mission.contact_stall_rate_deg=-1",
+                "mission.contact_creep_rate_deg=0",
                 "mission.contact_press_deg=20", "mission.contact_impact_force=0"):  # fmt: skip
         with pytest.raises(ConfigError, match=bad.split("=")[0].split(".")[1]):
             with_overrides(base, [bad])

@@ -5,6 +5,7 @@ fault draws and table."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -366,3 +367,26 @@ def test_scalar_cable_torque_agrees_with_the_reference(slope50):
         D = np.linalg.norm(est.body.p_W + R @ np.asarray(slope50.vehicle.cable_attachment)
                            - mon._p_A)  # fmt: skip
         assert mon._geometry(est)[3] == pytest.approx(D, abs=1e-12)
+
+
+def test_landed_rule_sees_the_vehicle_leave_its_landed_pose(slope50):
+    """Motors off or spinning up: a snap when the estimated position moved more than
+    landed_distance from where it was at the first landed tick (settling less is fine);
+    leaving the landed phases forgets the reference pose."""
+    geo = LandingGeometry.from_scenario(slope50)
+    l, cfg = slope50.tether.length, slope50.mission.detection
+    mon = FaultMonitor(slope50, geo)
+    down = np.array([0.6, 0.0, -0.8])  # down the slope's fall line, unit
+
+    def at(t, shift, phase):
+        est = _hover_estimate(slope50, t, d_len=l, tension=5.0)
+        est = replace(est, body=replace(est.body, p_W=est.body.p_W + shift * down))
+        return mon.check(t, est, phase, airborne=False)
+
+    assert at(10.0, 0.0, Phase.MOTORS_OFF) is None
+    assert at(10.1, 0.9 * cfg.landed_distance, Phase.MOTORS_OFF) is None  # settling
+    assert at(10.2, 0.9 * cfg.landed_distance, Phase.SPIN_UP) is None
+    found = at(10.3, 1.1 * cfg.landed_distance, Phase.SPIN_UP)
+    assert found is not None and found.kind is FaultKind.SNAP and found.t == 10.3
+    assert at(10.4, 0.0, Phase.TETHERED_TAKEOFF) is None  # not a landed phase: reset
+    assert at(10.5, 1.1 * cfg.landed_distance, Phase.MOTORS_OFF) is None  # new reference

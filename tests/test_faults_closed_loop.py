@@ -84,9 +84,9 @@ def test_cable_snap_while_landed_starts_the_motors_and_hovers_away(t_snap, phase
     event = check_safe_stop(r, "hover", "cable lost while landed")
     cfg = r.belief_scenario.mission.detection
     assert t_snap < event["t"] < t_snap + 0.3
-    # moving faster than landed_speed when it was seen (the reason names the speed)
-    speed = float(event["message"].split("moves at ")[1].split(" m/s")[0])
-    assert speed > cfg.landed_speed
+    # moved farther than landed_distance when it was seen (the reason names the distance)
+    moved = float(event["message"].split("moved ")[1].split(" cm")[0])
+    assert 100 * cfg.landed_distance - 0.05 <= moved < 100 * cfg.landed_distance + 2.0
     z_S = r.plan.geometry.surface.z_S
     clearance = (r.log["p_W"][-1] - r.plan.geometry.surface.origin) @ z_S
     assert clearance > 0.2
@@ -121,3 +121,39 @@ def test_hook_jam_is_detected_on_the_return_and_the_vehicle_hovers_hooked():
     assert r.summary["landing"]["all_conditions"]  # the landing itself was fine
     assert max(p["end"] for p in r.summary["phases"] if p["name"] == "unhook") < event["t"]
 
+
+
+def fault_campaign_job(run_id: str):
+    """The job of the fault campaign (slope50, 20 runs per kind, seed 15) named ``run_id``."""
+    from tetherland.campaign.faults import FAULT_KINDS
+    from tetherland.campaign.jobs import Job
+    from tetherland.campaign.spec import CampaignSpec
+
+    spec = CampaignSpec(scenario=load_scenario("slope50").model_dump(mode="json"), runs=20,
+                        faults=FAULT_KINDS, seed=15)  # fmt: skip
+    (run,) = [r for r in spec.expand() if r.run_id == run_id]
+    return Job(scenario=spec.scenario, run=run)
+
+
+@pytest.mark.parametrize(
+    ("run_id", "phase", "reason"),
+    [("rotor-00004", "hooking", "rotor thrust lost"),
+     ("snap-00008", "tethered_landing", "cable lost in tethered flight"),
+     ("snap-00009", "motors_off", "cable lost while landed"),
+     ("snap-00010", "spin_up", "cable lost while landed")],
+)  # fmt: skip
+def test_fault_campaign_crashes_now_end_in_a_safe_stop(run_id, phase, reason):
+    """Runs of the fault campaign that crashed: a 40 % weak rotor low in the hooking pass
+    (the pass now holds still while the fault is suspected), a snap early in the tethered
+    landing (the snap limit is relative to the plan's tension: the lost cable's estimate
+    hovered around the 0.1 N absolute limit for 0.86 s) and snaps with the landers on the
+    slope (the moving landed vehicle starts its motors and hovers away)."""
+    from tetherland.campaign.jobs import execute
+
+    record = execute(fault_campaign_job(run_id))
+    assert record["status"] == "ok", record["error"]
+    assert record["fault"]["phase"] == phase
+    verdict = record["verdict"]
+    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
+    assert not verdict["crashed"] and verdict["safe_stop"]["reached"]
+    assert verdict["abort_reason"].startswith("fault: " + reason)

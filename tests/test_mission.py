@@ -193,3 +193,51 @@ def test_flat_mission_lands_although_the_cable_slackens_on_the_ground():
     landing = result.summary["landing"]
     assert landing["min_tension_N"] < 5 * load_scenario("flat").mission.detection.snap_tension
     assert not any("fault" in p["exit_reason"] for p in result.summary["phases"])
+
+
+def _wall90_campaign_run(seed: int):
+    """The wall90 campaign's run with per-run ``seed`` (base seed 2026), flown exactly as
+    the campaign flies it (perturbed plant and belief, wind gusts), with its full log."""
+    from tetherland.campaign.jobs import worker_planners
+    from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
+    from tetherland.sim.disturbances import WindGusts
+
+    truth = load_scenario("wall90")
+    p = sample_perturbation(truth, np.random.default_rng(seed))
+    plant, belief = apply_perturbation(truth, p)
+    period = 1.0 / plant.controller.rate_hz
+    wind: list[WindGusts] = []
+    result = run_mission(
+        plant, belief, method="tethered", controller="hierarchical", seed=seed,
+        planners=worker_planners(), observers=wind,
+        plant_setup=lambda q: wind.append(WindGusts(q, p.gusts, period)),
+    )  # fmt: skip
+    return p, result
+
+
+def test_the_unhooking_pass_keeps_off_the_wall():
+    """wall90 campaign run 735627880 (tethered-base-00005; the believed wall 0.9 deg off
+    and the anchor 6 mm): after a good landing the old reverse pass, 3.5 cm from the
+    believed wall at the end of the hooking pass, swung the rotor guards into the wall
+    (23 N at t = 32.5 s). Backing off to mission.unhook_depth first, the frame does not
+    touch it at all and the mission ends on the pad."""
+    p, result = _wall90_campaign_run(735627880)
+    assert abs(p.slope_error_deg) > 0.9  # the premise
+    check_success(result)
+    log = result.log
+    unhook = log["phase"] == int(Phase.UNHOOK)
+    assert unhook.any()
+    assert float(np.max(np.nan_to_num(log["frame_force"])[unhook])) == 0.0
+
+
+def test_the_landers_pressed_on_a_wall_are_taken_for_contact():
+    """wall90 campaign run 375278728 (tethered-base-00056): the landers pressed on the wall
+    while the vehicle crept up it at 0.5-1.1 deg/s of link elevation, so the link never
+    'stalled' (|rate| < 0.5 deg/s) and the search ended in a safe stop. The creeping link
+    counts as held (mission.contact_creep_rate_deg): contact is confirmed in the guarded
+    descent and the landing meets conditions 1-5."""
+    _, result = _wall90_campaign_run(375278728)
+    check_success(result)
+    events = result.log.metadata["events"]
+    touchdown = [e for e in events if e.get("kind") == "touchdown"]
+    assert touchdown and "guarded descent" in touchdown[0]["message"]

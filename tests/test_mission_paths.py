@@ -71,3 +71,17 @@ def test_scalar_smoothstep_closed_forms_match_the_polynomial(tau, order):
         order = min(order, 4)
     expected = smoothstep9(np.array([tau]), order)[:, 0]
     np.testing.assert_allclose(smoothstep9_scalar(tau, order), expected, rtol=1e-12, atol=1e-9)
+
+
+def test_a_delayed_path_is_the_same_path_later():
+    """delay(dt): every sample at t + dt equals the undelayed sample at t (and t_end moves
+    by dt), so a held pass resumes exactly where it stopped."""
+    def make():
+        return Path(1.0, [0.0, 0.0, 1.0], 0.5, 1.0).to([0.3, 0.0, 1.0], pause=0.5).to([0, 0, 0])
+
+    ref, held = make(), make()
+    held.sample(1.2)  # the search cursor has moved on before the delay
+    held.delay(0.7)
+    assert abs(held.t_end - (ref.t_end + 0.7)) < 1e-12
+    for t in np.linspace(0.5, ref.t_end + 1.0, 57):
+        np.testing.assert_allclose(held.sample(t + 0.7), ref.sample(t), rtol=0, atol=1e-9)

@@ -102,6 +102,14 @@ class FaultDetectionConfig(Section):
     estimated cable torque, in (0, 10] [N m]."""
     rotor_filter_time: float = Field(0.3, gt=0, le=10)
     """Time constant of that low-pass, in (0, 10] [s]."""
+    rotor_suspect: float = Field(0.7, ge=0, le=1)
+    """Near the anchoring mechanism (hooking, release, unhooking) the pass holds still
+    while the low-passed torque is above this fraction of ``rotor_torque``, before the
+    fault is confirmed (a weak rotor sinks and drifts the vehicle by centimetres in the
+    0.3 s the rule needs; the pass keeps only ``mission.hooking_clearance``); 1: never,
+    in [0, 1] [-]."""
+    rotor_suspect_max: float = Field(2.0, ge=0, le=60)
+    """... for at most this long in total over the mission, in [0, 60] [s]."""
     rotor_dwell: float = Field(0.15, ge=0, le=10)
     """How long the torque must stay beyond ``rotor_torque``, in [0, 10] [s]."""
     airborne_delay: float = Field(1.5, ge=0, le=60)
@@ -141,12 +149,13 @@ class FaultDetectionConfig(Section):
     """... and only while the estimated attachment point is at least the cable length less
     this from the believed anchor (a cable that could be slack cannot be pulling: an
     estimated tension there is a disturbance, e.g. a gust), in [0, 10] [m]."""
-    landed_speed: float = Field(0.15, gt=0, le=10)
-    """Cable lost while landed: the estimated speed of the landed vehicle (motors off or
-    spinning up) above this, in (0, 10] [m/s]. On a slope steeper than the landers'
-    friction angle only the cable holds it: without it the vehicle slides or falls off."""
-    landed_dwell: float = Field(0.03, ge=0, le=10)
-    """... for this long, in [0, 10] [s]."""
+    landed_distance: float = Field(0.04, gt=0, le=10)
+    """Cable lost while landed: the estimated position of the landed vehicle (motors off
+    or spinning up) moved this far from where it was when the motors went off, in
+    (0, 10] [m]. On a slope steeper than the landers' friction angle only the cable holds
+    the vehicle: without it the vehicle slides or falls off (from rest it falls 4 cm in
+    0.09 s). When the motors go off the vehicle settles by up to about 2 cm onto its
+    cable and landers (walls), which this must exceed."""
     away_distance: float = Field(0.3, ge=0, le=5)
     """Snapped cable: the safe hover is this far from the surface along z_S beyond where
     the fault was detected, in [0, 5] [m]."""

@@ -29,6 +29,13 @@ class MissionConfig(Section):
     """Hook-point distance before the capture disk where the straight hooking pass starts [m]."""
     hook_overshoot: float = Field(0.12, gt=0, le=5)
     """Hook-point distance beyond the capture disk where the hooking pass ends [m]."""
+    unhook_depth: float = Field(0.025, gt=0, le=5)
+    """Hook-point distance beyond the capture disk where the reverse (unhooking) pass
+    begins, at most ``hook_overshoot``: the vehicle backs off to this depth along the
+    approach direction before it crosses the disk back, so the frame keeps
+    ``hook_overshoot - unhook_depth`` more clearance from the surface than at the end of
+    the hooking pass (belief errors, release transient); more than the anchor's belief
+    error along the approach direction, so the hook is still beyond the true disk [m]."""
     stretch_speed: float = Field(0.15, gt=0, le=5)
     """Peak speed of the final pull that takes up the cable (gentle, no snap) [m/s]."""
     stretch_margin: float = Field(0.1, ge=0, le=5)
@@ -68,8 +75,12 @@ class MissionConfig(Section):
     """Contact signal "link stall": the estimated link elevation stays this far above the
     descending reference (the surface stops the vehicle) [deg]."""
     contact_stall_rate_deg: float = Field(0.5, gt=0, le=45)
-    """... while the estimated link elevation rate stays below this (a link that still
-    moves lags its reference; a stopped one is held) [deg/s]."""
+    """... while the estimated link elevation descends slower than this (a link that still
+    descends lags its reference; a stopped one is held) [deg/s]."""
+    contact_creep_rate_deg: float = Field(1.5, gt=0, le=45)
+    """... and rises slower than this: a vehicle pressed on a wall creeps up it slowly
+    while the reference descends (the surface holds it); a bounce or a gust moves the
+    link faster [deg/s]."""
     contact_clearance: float = Field(0.015, gt=0, le=1)
     """Contact signal "clearance": the lowest lander tip of the estimated pose is less than
     this above the believed surface [m]."""

@@ -10,8 +10,11 @@ contact with the surface is believed only when every signal agrees for
    ``contact_gate_deg`` of the believed phi*), so a lagging link far above the surface is
    a tracking error;
 2. **link stall**: the estimated link stays ``contact_error_deg`` above the descending
-   reference *and* its rate is below ``contact_stall_rate_deg``: the surface stops it (a
-   link that still moves lags, it is not stopped);
+   reference *and* it descends slower than ``contact_stall_rate_deg`` and rises slower
+   than ``contact_creep_rate_deg``: the surface stops it (a link that still descends lags,
+   it is not stopped). On a wall the landers pressed by the descending reference let the
+   vehicle creep up the surface at up to about 1 deg/s (the weight does not hold it
+   there); a bounce or a gust moves the link faster;
 3. **contact force** (when the estimate carries the external force, i.e. the IMU's
    specific force and the rotors' thrust): the external force on the vehicle without its
    component along the cable, projected on the believed surface normal, low-passed, is
@@ -191,6 +194,7 @@ class ContactRule:
         self.geometry = ContactGeometry.from_scenario(scenario)
         self._error = math.radians(cfg.contact_error_deg)
         self._stall = math.radians(cfg.contact_stall_rate_deg)
+        self._creep = math.radians(cfg.contact_creep_rate_deg)
         self._gate = math.radians(cfg.contact_gate_deg)
         self.reset()
 
@@ -223,7 +227,7 @@ class ContactRule:
         clearance = geo.clearance(p_W, R_WB)
         lag = link.phi - phi_d
         near = clearance < cfg.contact_clearance and link.phi - geo.phi_star < self._gate
-        stalled = lag > self._error and abs(link.phi_dot) < self._stall
+        stalled = lag > self._error and -self._stall < link.phi_dot < self._creep
         force: float | None = None
         pressed = True
         if est.external_force_B is not None:

@@ -99,7 +99,7 @@ class FaultMonitor:
         self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
         self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
         self._snap = ThresholdDwell(-cfg.snap_tension, cfg.snap_dwell)
-        self._landed = ThresholdDwell(cfg.landed_speed, cfg.landed_dwell)
+        self._landed_p: tuple[float, float, float] | None = None  # where the motors went off
         self.torque_residual = 0.0
         """Last low-passed roll/pitch torque residual [N m]."""
         self.length_error = math.nan
@@ -254,15 +254,19 @@ class FaultMonitor:
 
     def _landed_rule(self, t: float, est: StateEstimate, phase: Phase) -> FaultDetection | None:
         if phase not in LANDED_PHASES:
-            self._landed.reset()
+            self._landed_p = None
             return None
-        vx, vy, vz = est.body.v_W.tolist()
-        speed = math.sqrt(vx * vx + vy * vy + vz * vz)
-        if self._landed.update(t, speed):
+        px, py, pz = est.body.p_W.tolist()
+        if self._landed_p is None:
+            self._landed_p = (px, py, pz)
+            return None
+        x0, y0, z0 = self._landed_p
+        moved = math.sqrt((px - x0) ** 2 + (py - y0) ** 2 + (pz - z0) ** 2)
+        if moved > self.cfg.landed_distance:
             return FaultDetection(
                 FaultKind.SNAP, t,
-                f"fault: cable lost while landed (the vehicle moves at {speed:.2f} m/s > "
-                f"{self.cfg.landed_speed:g} m/s for {self.cfg.landed_dwell:g} s)",
+                f"fault: cable lost while landed (the vehicle moved {100 * moved:.1f} cm > "
+                f"{100 * self.cfg.landed_distance:g} cm since the motors went off)",
             )  # fmt: skip
         return None
 

@@ -15,6 +15,17 @@ the vehicle hook an anchor on a wall or an overhang from the side or from below.
 
 The clearance is that of the plant's collision shape, computed by
 :func:`tetherland.analysis.clearance.hooking_clearance`.
+
+The unhooking pass (:func:`unhooking_path`) is the hooking pass in reverse, but no deeper
+than it needs: the cable is released when the hook point crosses the capture plane back
+(along -n, within the capture radius), so the pass begins on its axis with the hook point
+only ``mission.unhook_depth`` beyond the plane (:meth:`HookingPass.entry`), not at the
+pass's end ``hook_overshoot`` beyond it. From the release point the vehicle first backs
+off along -n to that depth (away from the surface: the approach runs toward it), then
+moves across to the axis at that depth and out along -n. The frame so stays
+``hook_overshoot - unhook_depth`` farther from the surface than at the end of the hooking
+pass, a margin for the belief errors (slope, anchor) and the release transient that the
+pass's planned clearance alone does not cover.
 """
 
 from __future__ import annotations
@@ -54,6 +65,12 @@ class HookingPass:
     p_end_W: FloatArray
     n_W: FloatArray
     yaw: float
+
+    def entry(self, depth: float, overshoot: float) -> FloatArray:
+        """Centre of mass on the pass axis with the hook point ``depth`` beyond the capture
+        plane, for a pass that ends ``overshoot`` beyond it (``depth`` is clipped to
+        ``overshoot``: never beyond the pass's end) [m]."""
+        return self.p_end_W - (overshoot - min(depth, overshoot)) * self.n_W
 
     def points(self, count: int) -> FloatArray:
         """``count`` centre-of-mass points evenly along the pass, (count, 3) [m]."""
@@ -113,6 +130,29 @@ def hooking_pass_for(
         n_W=n_W,
         yaw=yaw,
     )
+
+
+def unhooking_path(
+    p_from_W: ArrayLike, entry_W: ArrayLike, hook_start_W: ArrayLike
+) -> list[FloatArray]:
+    """Centre-of-mass corners of the unhooking pass from ``p_from_W`` (the release point),
+    F_W [m].
+
+    ``entry_W`` is the axis point where the reverse pass begins (:meth:`HookingPass.entry`),
+    ``hook_start_W`` the start of the hooking pass; the axis runs from ``hook_start_W`` to
+    ``entry_W`` along the approach direction n. If the release point lies deeper along n
+    than the entry, the first corner is the release point backed off along -n to the
+    entry's depth; then the entry and the hooking start. No point of the path lies deeper
+    along n than the deeper of the release point and the entry.
+    """
+    p0 = np.asarray(p_from_W, dtype=float)
+    entry = np.asarray(entry_W, dtype=float)
+    start = np.asarray(hook_start_W, dtype=float)
+    axis = entry - start
+    n_W = axis / np.linalg.norm(axis)
+    excess = float(n_W @ (p0 - entry))
+    corners = [p0 - excess * n_W] if excess > 0.0 else []
+    return [*corners, entry.copy(), start.copy()]
 
 
 def check_pass(

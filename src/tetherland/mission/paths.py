@@ -8,7 +8,7 @@ at both ends), so every chain is C^4 and starts and ends at rest.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -89,6 +89,11 @@ class Path:
         if pause > 0.0:
             self._append(Segment(self.t_end, pause, p.copy(), p.copy()))
         return self
+
+    def delay(self, dt: float) -> None:
+        """Hold the path for ``dt`` [s]: every segment starts that much later."""
+        self.t0 += dt
+        self.segments = [replace(seg, t0=seg.t0 + dt) for seg in self.segments]
 
     def _append(self, seg: Segment) -> None:
         self.segments.append(seg)

@@ -18,7 +18,7 @@ from tetherland.analysis.clearance import HookingClearance, level_vehicle_distan
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.geometry import FloatArray, LandingGeometry, Surface, link_direction
-from tetherland.mission.hooking import check_pass, hooking_pass
+from tetherland.mission.hooking import check_pass, hooking_pass, unhooking_path
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import rotation_from_z_and_yaw
@@ -48,6 +48,10 @@ class Waypoints:
     hook_start, hook_end : (3,) array
         Ends of the straight hooking pass: the hook point ``approach_distance`` before and
         ``hook_overshoot`` beyond the anchor along the approach direction, in level flight.
+    unhook_entry : (3,) array
+        On the pass axis with the hook point ``mission.unhook_depth`` beyond the anchor:
+        where the reverse (unhooking) pass begins
+        (:func:`tetherland.mission.hooking.unhooking_path`).
     slack_out : (3,) array
         Inside the cable length (``mission.slack_out_distance``, or less where the frame
         needs it to clear the surface), on the line of the planned start elevation.
@@ -68,6 +72,7 @@ class Waypoints:
     start: FloatArray
     hook_start: FloatArray
     hook_end: FloatArray
+    unhook_entry: FloatArray
     slack_out: FloatArray
     stretch: FloatArray
     release_distance: float
@@ -248,6 +253,7 @@ def plan_mission(
         start=_frozen(p_start),
         hook_start=_frozen(hook_start),
         hook_end=_frozen(hook_end),
+        unhook_entry=_frozen(hooking.entry(cfg.unhook_depth, cfg.hook_overshoot)),
         slack_out=_frozen(p_A + r_slack * d0 - attachment_W),
         stretch=_frozen(p_A + (length + pull) * d0 - attachment_W),
         release_distance=r_release,
@@ -269,7 +275,9 @@ def free_flight_legs(
     hooking pass (its own check) and the tethered phases (the plans), F_W [m].
 
     The release leg starts at its slack point, on the planned takeoff end direction
-    ``d_T_W`` (the supervisor uses the estimated direction there). The paths are those of
+    ``d_T_W`` (the supervisor uses the estimated direction there), and is the unhooking
+    pass from there (its last stretch, the reverse hooking pass, is also checked as part
+    of the hooking pass). The paths are those of
     :mod:`tetherland.mission.supervisor`.
     """
     cfg = scenario.mission
@@ -279,7 +287,7 @@ def free_flight_legs(
     return {
         "approach": [top, np.array([*top[:2], wp.z_safe]), over_hook, wp.hook_start],
         "stretch": [wp.hook_end, wp.slack_out, wp.stretch],
-        "release": [release, wp.hook_end],
+        "release": unhooking_path(release, wp.unhook_entry, wp.hook_start),
         "return": [wp.hook_start, over_hook, np.array([*wp.start[:2], wp.z_safe]), top],
     }
 

@@ -52,6 +52,7 @@ from tetherland.mission.contact import (
     guarded_descent,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
+from tetherland.mission.hooking import unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan
@@ -185,6 +186,8 @@ class MissionSupervisor:
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
         self._release_pull: tuple[float, float, np.ndarray] | None = None  # t0, T, a_W
+        self._t_free = 0.0  # last tick of the free-flight reference [s]
+        self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
             Phase.TAKEOFF: self._takeoff,
             Phase.APPROACH: self._approach,
@@ -221,7 +224,20 @@ class MissionSupervisor:
         self._phase_start = t
 
     def _free(self, t: float) -> Reference:
-        rows = self._path.sample(t)
+        dt, self._t_free = t - self._t_free, t
+        det = self.cfg.detection
+        if (
+            self.phase in _NEAR_MECHANISM
+            and self.monitor.torque_residual > det.rotor_suspect * det.rotor_torque
+            and self._suspect_held < det.rotor_suspect_max
+            and dt > 0.0
+        ):  # a rotor fault is suspected close to the mechanism: the pass holds still
+            self._path.delay(dt)
+            self._suspect_held += dt
+            rows = self._path.sample(t).copy()
+            rows[1:] = 0.0
+        else:
+            rows = self._path.sample(t)
         if self._release_pull is not None:
             t0, duration, a_W = self._release_pull
             rows = rows.copy()  # the path's rows are shared and read-only
@@ -551,10 +567,12 @@ class MissionSupervisor:
     def _release(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
-            self._path = (
-                self._new_path(t, self._path.end, cfg.hook_speed)
-                .to(wp.hook_end).to(wp.hook_start, pause=cfg.settle_time)
-            )  # fmt: skip
+            # the reverse pass, no deeper than mission.unhook_depth (mission.hooking)
+            *corners, last = unhooking_path(self._path.end, wp.unhook_entry, wp.hook_start)
+            self._path = self._new_path(t, self._path.end, cfg.hook_speed)
+            for p in corners:
+                self._path.to(p)
+            self._path.to(last, pause=cfg.settle_time)
             self._release_pull = None
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t)
