@@ -128,3 +128,27 @@ def test_the_unhooking_pass_keeps_the_belief_errors_clearance_on_a_wall():
 def test_unhook_depth_is_validated():
     with pytest.raises(ConfigError, match=r"mission\.unhook_depth"):
         load_scenario("wall90", ["mission.unhook_depth=0"])
+
+
+def test_the_back_off_keeps_the_hooked_cable_slack():
+    """A vertical pass (n = -z_W) and a release point beside the anchor, 0.5 m deeper than
+    the entry: backing off straight up by the full 0.5 m would put the centre of mass
+    beyond the ball (c, R); with ``reach`` the corner is the point of the vertical line
+    on the sphere |p - c| = R (solved here by hand), and the segment to the entry stays
+    inside (a convex ball)."""
+    c, R = np.array([0.0, 0.0, 0.0]), 1.0
+    n = np.array([0.0, 0.0, -1.0])
+    start = np.array([0.0, 0.0, 0.9])
+    entry = start + 0.1 * n  # 0.8 m above the anchor
+    p0 = np.array([0.7, 0.0, 0.3])  # 0.76 m from c, 0.5 m deeper than the entry
+    free = unhooking_path(p0, entry, start)
+    assert np.linalg.norm(free[0] - c) > R  # the unlimited back-off leaves the ball
+    corner, e, _ = unhooking_path(p0, entry, start, (c, R))
+    z = math.sqrt(R * R - 0.7 * 0.7)  # on the vertical through p0, on the sphere
+    np.testing.assert_allclose(corner, [0.7, 0.0, z], atol=1e-12)
+    np.testing.assert_array_equal(e, entry)
+    for lam in np.linspace(0.0, 1.0, 11):
+        assert np.linalg.norm((1 - lam) * corner + lam * entry - c) <= R + 1e-12
+    # far inside the ball the full back-off is kept: the corner at the entry's depth
+    (corner, _, _) = unhooking_path(p0, entry, start, (c, 10.0))
+    assert n @ corner == pytest.approx(n @ entry)

@@ -43,8 +43,9 @@ ROTOR_PHASES = frozenset({
 """Airborne phases in which the torque rule runs (not on the pad or the surface)."""
 ANCHOR_PHASES = frozenset({Phase.STRETCH, Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF})
 """Phases in which a taut cable's length is checked."""
-SNAP_PHASES = frozenset({Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF})
-"""Tethered flight: the cable carries the vehicle (the takeoff from ``airborne`` on)."""
+SNAP_PHASES = frozenset({Phase.TETHERED_LANDING, Phase.SPIN_UP, Phase.TETHERED_TAKEOFF})
+"""The cable carries the vehicle: tethered flight, and the spin-up before the takeoff (the
+motors reach the landed hover's thrust with the landers still down)."""
 LANDED_PHASES = frozenset({Phase.MOTORS_OFF, Phase.SPIN_UP})
 """Landed on the cable: a moving vehicle means the cable no longer holds it."""
 SNAP_PLAN_FACTOR = 3.0
@@ -188,7 +189,7 @@ class FaultMonitor:
             limit = self.cfg.snap_tension
             if nominal_tension is not None:
                 limit = max(limit, self.cfg.snap_fraction * nominal_tension)
-            found = self._snap_rule(t, est, phase, airborne and needs, limit)
+            found = self._snap_rule(t, est, phase, needs, limit)
         if found is None:
             found = self._anchor_rule(t, est, phase)
         if found is None:
@@ -220,9 +221,9 @@ class FaultMonitor:
         return None
 
     def _snap_rule(
-        self, t: float, est: StateEstimate, phase: Phase, airborne: bool, limit: float
+        self, t: float, est: StateEstimate, phase: Phase, armed: bool, limit: float
     ) -> FaultDetection | None:
-        if not (airborne and phase in SNAP_PHASES):
+        if not (armed and phase in SNAP_PHASES):
             self._snap.reset()
             return None
         tension = est.tension or 0.0
@@ -230,7 +231,7 @@ class FaultMonitor:
         if self._snap.update(t, limit - self.cfg.snap_tension - tension):
             return FaultDetection(
                 FaultKind.SNAP, t,
-                f"fault: cable lost in tethered flight (estimated tension {tension:.2f} N < "
+                f"fault: cable lost, tension gone (estimated {tension:.2f} N < "
                 f"{limit:.2f} N for {self.cfg.snap_dwell:g} s)",
             )  # fmt: skip
         return None

@@ -133,7 +133,10 @@ def hooking_pass_for(
 
 
 def unhooking_path(
-    p_from_W: ArrayLike, entry_W: ArrayLike, hook_start_W: ArrayLike
+    p_from_W: ArrayLike,
+    entry_W: ArrayLike,
+    hook_start_W: ArrayLike,
+    reach: tuple[ArrayLike, float] | None = None,
 ) -> list[FloatArray]:
     """Centre-of-mass corners of the unhooking pass from ``p_from_W`` (the release point),
     F_W [m].
@@ -141,9 +144,15 @@ def unhooking_path(
     ``entry_W`` is the axis point where the reverse pass begins (:meth:`HookingPass.entry`),
     ``hook_start_W`` the start of the hooking pass; the axis runs from ``hook_start_W`` to
     ``entry_W`` along the approach direction n. If the release point lies deeper along n
-    than the entry, the first corner is the release point backed off along -n to the
+    than the entry, the first corner is the release point backed off along -n towards the
     entry's depth; then the entry and the hooking start. No point of the path lies deeper
     along n than the deeper of the release point and the entry.
+
+    ``reach`` = (c, R): the back-off stops where the centre of mass would leave the ball of
+    radius R about c (the cable still hooked must stay slack: c is the anchor less the
+    attachment offset, R the cable length less a margin). Along a vertical pass, backing
+    off straight up from a release point beside the anchor would pull the cable taut; the
+    segment from the corner to the entry stays in the ball when both ends are in it.
     """
     p0 = np.asarray(p_from_W, dtype=float)
     entry = np.asarray(entry_W, dtype=float)
@@ -151,6 +160,14 @@ def unhooking_path(
     axis = entry - start
     n_W = axis / np.linalg.norm(axis)
     excess = float(n_W @ (p0 - entry))
+    if excess > 0.0 and reach is not None:
+        c, R = np.asarray(reach[0], dtype=float), float(reach[1])
+        # largest s in [0, excess] with |p0 - s n - c| <= R: s^2 - 2 b s + (|w|^2 - R^2) <= 0
+        w = p0 - c
+        b = float(n_W @ w)
+        disc = b * b - (float(w @ w) - R * R)
+        s_max = b + math.sqrt(disc) if disc >= 0.0 else 0.0
+        excess = min(excess, max(s_max, 0.0))
     corners = [p0 - excess * n_W] if excess > 0.0 else []
     return [*corners, entry.copy(), start.copy()]
 

@@ -268,6 +268,15 @@ def plan_mission(
     )  # fmt: skip
 
 
+def unhook_reach(
+    scenario: Scenario, geo: LandingGeometry, wp: Waypoints
+) -> tuple[FloatArray, float]:
+    """Where the centre of mass may go while the cable is still hooked and must stay slack:
+    the ball about the anchor less the attachment offset, of radius l less ``SLACK_MIN``
+    (the ``reach`` of :func:`tetherland.mission.hooking.unhooking_path`) [m]."""
+    return geo.p_A - wp.attachment_W, scenario.tether.length - SLACK_MIN
+
+
 def free_flight_legs(
     scenario: Scenario, geo: LandingGeometry, wp: Waypoints, d_T_W: FloatArray
 ) -> dict[str, list[FloatArray]]:
@@ -287,7 +296,9 @@ def free_flight_legs(
     return {
         "approach": [top, np.array([*top[:2], wp.z_safe]), over_hook, wp.hook_start],
         "stretch": [wp.hook_end, wp.slack_out, wp.stretch],
-        "release": unhooking_path(release, wp.unhook_entry, wp.hook_start),
+        "release": unhooking_path(
+            release, wp.unhook_entry, wp.hook_start, unhook_reach(scenario, geo, wp)
+        ),
         "return": [wp.hook_start, over_hook, np.array([*wp.start[:2], wp.z_safe]), top],
     }
 

@@ -55,7 +55,7 @@ from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
-from tetherland.mission.plan import Z_W, MissionPlan
+from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
 from tetherland.planning.spline import smoothstep9_scalar
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
@@ -157,6 +157,7 @@ class MissionSupervisor:
         self.takeoff_traj = plan.takeoff_trajectory
         wp = plan.waypoints
         self.wp = wp
+        self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self.yaw = wp.yaw
         # state
         self.phase = Phase.TAKEOFF
@@ -337,7 +338,7 @@ class MissionSupervisor:
             self.phase == Phase.TETHERED_TAKEOFF and t < self._phase_start + det.airborne_delay
         )
         planned = None
-        if self.phase in (Phase.TETHERED_LANDING, Phase.TETHERED_TAKEOFF):
+        if self.phase in (Phase.TETHERED_LANDING, Phase.SPIN_UP, Phase.TETHERED_TAKEOFF):
             ff = ref.feedforward
             planned = ff.tension if ff is not None else 0.0  # off the plan: not needed
         found = self.monitor.check(t, est, self.phase, airborne, planned)
@@ -568,7 +569,9 @@ class MissionSupervisor:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
             # the reverse pass, no deeper than mission.unhook_depth (mission.hooking)
-            *corners, last = unhooking_path(self._path.end, wp.unhook_entry, wp.hook_start)
+            *corners, last = unhooking_path(
+                self._path.end, wp.unhook_entry, wp.hook_start, self._unhook_reach
+            )
             self._path = self._new_path(t, self._path.end, cfg.hook_speed)
             for p in corners:
                 self._path.to(p)
