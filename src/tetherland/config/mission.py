@@ -29,13 +29,17 @@ class MissionConfig(Section):
     """Hook-point distance before the capture disk where the straight hooking pass starts [m]."""
     hook_overshoot: float = Field(0.12, gt=0, le=5)
     """Hook-point distance beyond the capture disk where the hooking pass ends [m]."""
-    unhook_depth: float = Field(0.025, gt=0, le=5)
+    unhook_depth: float = Field(0.04, gt=0, le=5)
     """Hook-point distance beyond the capture disk where the reverse (unhooking) pass
     begins, at most ``hook_overshoot``: the vehicle backs off to this depth along the
     approach direction before it crosses the disk back, so the frame keeps
     ``hook_overshoot - unhook_depth`` more clearance from the surface than at the end of
     the hooking pass (belief errors, release transient); more than the anchor's belief
-    error along the approach direction, so the hook is still beyond the true disk [m]."""
+    error along the approach direction, so the hook is still beyond the true disk; and more
+    than the position loop's lag after the release (wall90 campaign: up to 4.6 cm outwards
+    with 2.5 cm, and the hook crossed the plane off its disk and never released; 5 cm, the
+    hooking pass's end, let two runs touch the wall; 4 cm kept all replayed runs clear)
+    [m]."""
     stretch_speed: float = Field(0.15, gt=0, le=5)
     """Peak speed of the final pull that takes up the cable (gentle, no snap) [m/s]."""
     stretch_margin: float = Field(0.1, ge=0, le=5)
