@@ -6,8 +6,11 @@ Run: .venv/bin/python docs/scripts/tether_study.py RUNS_DIR [--png docs/tether_s
 RUNS_DIR holds one campaign directory per point, named MATERIAL_offR (R the offset in m,
 e.g. ``nylon_off0.06``), each written by ``tetherland campaign slope50 --set
 tether.length=1.2 --set tether.hook_drop=1.0 --set tether.material='"MATERIAL"' --set
-"vehicle.cable_attachment=[0,0,-R]" --methods tethered --runs 25 --sweep
-surface.slope_deg=50,70 --seed 2026 --out RUNS_DIR/MATERIAL_offR``.
+"vehicle.cable_attachment=[0,0,-R]" --methods tethered --runs 100 --sweep
+surface.slope_deg=50,70 --seed 2026 --out RUNS_DIR/MATERIAL_offR``. The default cable and
+offset (Dyneema, 3 cm) are those of the 1000-run slope study, whose directory (same
+command and seeds) may stand in for ``dyneema_off0.03``: only its tethered runs at 50 and
+70 deg are read.
 """
 
 from __future__ import annotations
