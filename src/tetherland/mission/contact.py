@@ -352,10 +352,9 @@ class SlowApproach:
             (zx, zy, zz), (ox, oy, oz) = self._z, self._o
             # a lower bound of the lander clearance, whatever the attitude
             low = (px - ox) * zx + (py - oy) * zy + (pz - oz) * zz - self._reach
-            reach = max(
-                (speed - v0) / gain if slow and gain > 0.0 else (math.inf if slow else 0.0),
-                cfg.touchdown_hold_clearance if hold else 0.0,
-            )
+            reach = cfg.touchdown_hold_clearance if hold else 0.0
+            if slow:  # the slowing starts where the capped speed falls below the plan's
+                reach = max(reach, (speed - v0) / gain if gain > 0.0 else math.inf)
             if low < reach:  # within reach: the exact clearance
                 clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
                 wx, wy, _ = est.body.omega_B.tolist()

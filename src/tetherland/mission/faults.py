@@ -99,7 +99,7 @@ class FaultMonitor:
         self._rotor = ThresholdDwell(cfg.rotor_torque, cfg.rotor_dwell)
         self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
         self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
-        self._snap = ThresholdDwell(-cfg.snap_tension, cfg.snap_dwell)
+        self._snap = ThresholdDwell(0.0, cfg.snap_dwell)  # fed limit - tension
         self._landed_p: tuple[float, float, float] | None = None  # where the motors went off
         self.torque_residual = 0.0
         """Last low-passed roll/pitch torque residual [N m]."""
@@ -227,8 +227,7 @@ class FaultMonitor:
             self._snap.reset()
             return None
         tension = est.tension or 0.0
-        # the dwell's threshold is -snap_tension: the margin below the current limit
-        if self._snap.update(t, limit - self.cfg.snap_tension - tension):
+        if self._snap.update(t, limit - tension):  # below the limit for the dwell
             return FaultDetection(
                 FaultKind.SNAP, t,
                 f"fault: cable lost, tension gone (estimated {tension:.2f} N < "
