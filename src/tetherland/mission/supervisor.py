@@ -13,8 +13,10 @@ transition with its reason). It sees only the estimate, never the plant's truth:
 - switches are bumpless (6.6.3): a tethered reference starts at the current output and
   blends onto the plan; the release after the takeoff starts at the current position with
   the cable pull as a force feed-forward (the reference acceleration f_L d/m) that fades
-  out along the release leg; a safe hover from tethered flight starts where the position
-  error reproduces the pull (p + f_L d / (m k_x)), as in stretching;
+  out along the release leg and then, inside the slack point, takes the tension estimate
+  (the force-model error along the cable the hand-over left out); a safe hover from
+  tethered flight starts where the position error reproduces the pull
+  (p + f_L d / (m k_x)), as in stretching;
 - an operator abort (``mission.abort_time``) or a fault (slack cable or large tracking error
   in a tethered phase, a non-finite estimate, or one of the measured-signal rules of
   :class:`~tetherland.mission.faults.FaultMonitor`: rotor, anchor belief, motion capture,
@@ -33,6 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
@@ -132,6 +135,25 @@ class BlendedTrack:
         )  # fmt: skip
 
 
+@dataclass(slots=True)
+class _ReleasePull:
+    """The cable's pull handed over to free flight at the release (mutable run state)."""
+
+    t0: float
+    """Release time [s]."""
+    fade: float
+    """Duration of the timed fade of the pull: the leg to the slack point [s]."""
+    tension: float
+    """The tension estimate at the release [N]."""
+    d0: np.ndarray
+    """Cable direction at the release (anchor to vehicle) [-]."""
+    bias: float = 0.0
+    """The tension estimate read inside the slack point: B.d, the force-model error
+    along the cable [N]."""
+    frozen: np.ndarray | None = None
+    """The feed-forward frozen when the unhooking pass starts [m/s^2] (None: not yet)."""
+
+
 class MissionSupervisor:
     """Executes a :class:`~tetherland.mission.plan.MissionPlan` (section 6.6).
 
@@ -186,7 +208,8 @@ class MissionSupervisor:
         )
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
-        self._release_pull: tuple[float, float, np.ndarray] | None = None  # t0, T, a_W
+        self._release_pull: _ReleasePull | None = None
+        self._est: StateEstimate | None = None  # the estimate of the current tick
         self._t_free = 0.0  # last tick of the free-flight reference [s]
         self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
@@ -239,13 +262,41 @@ class MissionSupervisor:
             rows[1:] = 0.0
         else:
             rows = self._path.sample(t)
-        if self._release_pull is not None:
-            t0, duration, a_W = self._release_pull
+        if self._release_pull is not None and self._est is not None:
             rows = rows.copy()  # the path's rows are shared and read-only
-            rows[2] += (1.0 - smoothstep9_scalar((t - t0) / duration, 0)[0]) * a_W
+            rows[2] += self._pull_feedforward(t, self._est, rows[0])
         return Reference(
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
+
+    def _pull_feedforward(self, t: float, est: StateEstimate, p_d: np.ndarray) -> np.ndarray:
+        """The released cable's pull as an acceleration feed-forward [m/s^2] (reference
+        position ``p_d``).
+
+        The estimated pull at the release, along the cable, fades out while the reference
+        moves to the slack point. At the hand-over, though, the position integral starts
+        with the thrust that held the cable less the estimated pull, and so lacks the part
+        of the force-model error B (mass, thrust coefficient) along the cable: taut, the
+        pull and B.d look alike, and the tension estimate reads T + B.d. Once the fade is
+        over and the vehicle is inside the slack point (the cable slack for sure), the
+        estimate reads B.d alone; taken as the feed-forward along the cable it supplies
+        the missing part, and it is frozen when the unhooking pass starts (the pass turns
+        d). Without it the missing part became a steady error -(B.d) d/(m k_x), up to
+        5 cm towards a wall during the unhooking pass. B.d < 0 (an error away from the
+        anchor, which the cable stops) is left to the integral.
+        """
+        pull = self._release_pull
+        assert pull is not None
+        if pull.frozen is not None:
+            return pull.frozen
+        s = (t - pull.t0) / pull.fade if pull.fade > 0.0 else 1.0
+        if s < 1.0:
+            return ((1.0 - smoothstep9_scalar(s, 0)[0]) * pull.tension / self.mass) * pull.d0
+        d = est.body.p_W - self.geo.p_A
+        d /= max(float(np.linalg.norm(d)), 1e-9)
+        if float((est.body.p_W - p_d) @ d) <= 0.0:  # inside the slack point: B.d
+            pull.bias = min(max(est.tension or 0.0, 0.0), pull.tension)
+        return (pull.bias / self.mass) * d
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
         return Path(t, start, speed or self.cfg.cruise_speed, self.cfg.cruise_accel)
@@ -373,6 +424,7 @@ class MissionSupervisor:
     # ------------------------------------------------------------------ ReferenceSource
     def reference(self, t: float, estimate: StateEstimate) -> Reference:
         """Advance the state machine and return the reference for time ``t``."""
+        self._est = estimate
         if self._terminate_at is not None and t >= self._terminate_at:
             if self._final_mode == ControlMode.FREE_FLIGHT:
                 ref = self._free(t)
@@ -547,17 +599,20 @@ class MissionSupervisor:
         if t >= self._track.track.t_end + cfg.settle_time:
             self.times["t_released"] = t
             # The pull is handed over as a force feed-forward that fades out while the
-            # reference moves inside the cable length. (As a position offset, as in
-            # stretching, the free-flight position integral would wind up on it and keep
-            # the cable taut when the release leg is short: short cables near walls.)
+            # reference moves inside the cable length, then supplies the force-model
+            # error the hand-over left out (_pull_feedforward). (As a position offset, as
+            # in stretching, the free-flight position integral would wind up on it and
+            # keep the cable taut when the release leg is short: short cables near walls.)
             d = est.body.p_W - self.geo.p_A
             d /= np.linalg.norm(d)
             slack = self.geo.p_A + self.wp.release_distance * d - self.wp.attachment_W
             self._path = self._new_path(t, est.body.p_W, cfg.hook_speed).to(
                 slack, pause=cfg.settle_time
             )
-            pull = max(est.tension or 0.0, 0.0) / self.mass * d
-            self._release_pull = (t, self._path.segments[0].duration, pull)
+            self._release_pull = _ReleasePull(
+                t0=t, fade=self._path.segments[0].duration,
+                tension=max(est.tension or 0.0, 0.0), d0=d.copy(),
+            )  # fmt: skip
             self._track = None
             self._enter(
                 Phase.RELEASE, t, "takeoff trajectory completed: free flight, releasing tension"
@@ -576,7 +631,8 @@ class MissionSupervisor:
             for p in corners:
                 self._path.to(p)
             self._path.to(last, pause=cfg.settle_time)
-            self._release_pull = None
+            if self._release_pull is not None:  # the pass turns d: freeze the pull
+                self._release_pull.frozen = self._pull_feedforward(t, est, self._path.end)
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t)
 
