@@ -216,10 +216,11 @@ def test_the_slow_approach_caps_the_reference_speed_near_the_surface(scenario, g
     assert (f.f_R, f.tension) == (9.0, 2.0) and f.f_R_ddot == pytest.approx(alpha**2)
 
 
-def test_the_rate_hold_stops_the_clock_while_the_frame_rotates_near_the_surface(scenario, geo):
+def test_the_rate_hold_backs_the_clock_while_the_frame_rotates_near_the_surface(scenario, geo):
     """Within touchdown_hold_clearance and above touchdown_hold_rate (roll-pitch only) the
-    clock stands still, for at most touchdown_hold_max in total; a yaw rate, a rotation
-    far from the surface, or a slow one leave the slowed clock of the previous test."""
+    clock runs backwards at touchdown_hold_retreat, never before the plan's start, for at
+    most touchdown_hold_max in total; a yaw rate, a rotation far from the surface, or a
+    slow one leave the slowed clock of the previous test."""
     from dataclasses import replace
 
     cfg = scenario.mission
@@ -234,21 +235,32 @@ def test_the_rate_hold_stops_the_clock_while_the_frame_rotates_near_the_surface(
         return replace(est, body=replace(est.body, omega_B=np.asarray(omega_B, dtype=float)))
 
     w = 1.5 * cfg.touchdown_hold_rate
-    slow.start(10.0)
+    back = cfg.touchdown_hold_retreat
+    assert back > 0.0
+    slow.start(9.0)
     dt = 0.01
+    slow.advance(10.0, spinning(1.0, [0.0, 0.0, 0.0], 10.0), rate)  # far: tau = t = 10
     tau = slow.advance(10.0 + dt, spinning(c, [0.6 * w, 0.8 * w, 0.0], 10.0), rate)
-    assert tau == 10.0 and slow.alpha == 0.0 and slow.held == pytest.approx(dt)
+    assert slow.alpha == -back and tau == pytest.approx(10.0 - back * dt)
+    assert slow.held == pytest.approx(dt)
+    tau = slow.advance(10.0 + 2 * dt, spinning(c, [0.6 * w, 0.8 * w, 0.0], 10.0), rate)
+    assert tau == pytest.approx(10.0 - 2 * back * dt)
+    tau = 10.0 - 2 * back * dt
     # a yaw rate does not hold, nor a roll rate below the threshold
-    tau = slow.advance(10.0 + 2 * dt, spinning(c, [0.0, 0.0, 10.0 * w], 10.0), rate)
-    assert slow.alpha == pytest.approx(alpha) and tau == pytest.approx(10.0 + dt * alpha)
-    tau = slow.advance(10.0 + 3 * dt, spinning(c, [0.9 * cfg.touchdown_hold_rate, 0, 0], 10), rate)
-    assert tau == pytest.approx(10.0 + 2 * dt * alpha)
+    tau2 = slow.advance(10.0 + 3 * dt, spinning(c, [0.0, 0.0, 10.0 * w], 10.0), rate)
+    assert slow.alpha == pytest.approx(alpha) and tau2 == pytest.approx(tau + dt * alpha)
+    tau3 = slow.advance(10.0 + 4 * dt, spinning(c, [0.9 * cfg.touchdown_hold_rate, 0, 0], 10), rate)
+    assert tau3 == pytest.approx(tau2 + dt * alpha)
     # far from the surface: the plan's own clock
     far = 2.0 * cfg.touchdown_hold_clearance + 0.5
-    tau2 = slow.advance(10.0 + 4 * dt, spinning(far, [w, 0.0, 0.0], 10.0), rate)
-    assert slow.alpha == 1.0 and tau2 == pytest.approx(tau + dt)
+    tau4 = slow.advance(10.0 + 5 * dt, spinning(far, [w, 0.0, 0.0], 10.0), rate)
+    assert slow.alpha == 1.0 and tau4 == pytest.approx(tau3 + dt)
+    # never before the plan's start
+    early = SlowApproach(cfg, ContactRule(scenario).geometry, scenario.tether.length)
+    early.start(10.0)
+    assert early.advance(10.0 + dt, spinning(c, [w, 0.0, 0.0], 10.0), rate) == 10.0
     # the hold ends after touchdown_hold_max in total
-    t = 10.0 + 4 * dt
+    t = 10.0 + 5 * dt
     steps = math.ceil(cfg.touchdown_hold_max / dt) + 2
     for _ in range(steps):
         t += dt

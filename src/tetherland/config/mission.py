@@ -73,6 +73,11 @@ class MissionConfig(Section):
     """Rate hold: the estimated lander clearance below which it acts [m]."""
     touchdown_hold_max: float = Field(1.5, ge=0, le=60)
     """Rate hold: the longest total time the landing's clock may stand still [s]."""
+    touchdown_hold_retreat: float = Field(1.0, ge=0, le=5)
+    """Rate hold: while held, the landing's clock runs backwards at this rate, so the
+    reference backs away from the surface along the plan instead of only stopping (a
+    vehicle approaching at a few cm/s does not stop within the last centimetre; 0: the
+    clock stands still) [-]."""
     touchdown_search_deg: float = Field(6.0, gt=0, le=45)
     """Guarded touchdown: how far beyond the planned phi* the search goes [deg]."""
     contact_error_deg: float = Field(0.8, gt=0, le=45)

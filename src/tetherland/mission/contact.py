@@ -304,10 +304,13 @@ class SlowApproach:
     still follows the planned path. The k-th derivative rows scale by alpha^k, as do the
     feed-forward's rates (d alpha/dt is neglected: alpha changes slowly).
 
-    Rate hold: within ``touchdown_hold_clearance`` the clock stands still (alpha = 0)
-    while the estimated roll-pitch rate exceeds ``touchdown_hold_rate``, for at most
-    ``touchdown_hold_max`` in total, so that a gust's roll or pitch swing decays before
-    the landers meet the surface (condition (3)).
+    Rate hold: within ``touchdown_hold_clearance`` the clock runs backwards (alpha =
+    -``touchdown_hold_retreat``, never before the plan's start) while the estimated
+    roll-pitch rate exceeds ``touchdown_hold_rate``, for at most ``touchdown_hold_max`` in
+    total, so the reference backs away and a gust's roll or pitch swing decays before the
+    landers meet the surface (condition (3)). Backing away along the plan moves the link
+    elevation only: the hierarchical law's thrust direction in the link plane is set by
+    theta_A, so the retreat itself does not tilt the frame.
 
     Parameters
     ----------
@@ -332,9 +335,10 @@ class SlowApproach:
         """The plan starts at mission time ``t0`` (clock tau = t)."""
         self.tau = t0
         self._t = t0
+        self._t0 = t0
         self.alpha = 1.0
         self.held = 0.0
-        """Total time the clock stood still for the rate hold [s]."""
+        """Total time the rate hold has held the clock (backing away) [s]."""
 
     def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
         """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
@@ -363,14 +367,14 @@ class SlowApproach:
                     and clearance < cfg.touchdown_hold_clearance
                     and wx * wx + wy * wy > cfg.touchdown_hold_rate**2
                 ):
-                    alpha = 0.0
+                    alpha = -cfg.touchdown_hold_retreat
                     self.held += max(dt, 0.0)
                 elif slow:
                     cap = v0 + gain * max(clearance, 0.0)
                     if speed > cap:
                         alpha = cap / speed
         self.alpha = alpha
-        self.tau += alpha * max(dt, 0.0)
+        self.tau = max(self.tau + alpha * max(dt, 0.0), self._t0)
         return self.tau
 
     def scale(self, ref: Reference, t: float) -> Reference:
