@@ -239,3 +239,43 @@ def test_tethered_to_free_flight_continues_the_commanded_force(scenario, plans):
     assert np.linalg.norm(F_last - F_0) == pytest.approx(scenario.planner.start_tension, rel=1e-9)
     ctrl.free_flight.reset()
     np.testing.assert_array_equal(pos.integral_force, 0.0)
+
+
+def test_lateral_free_leaves_the_link_azimuth_to_gravity(scenario, plans):
+    """Reference.lateral_free: at rest 3 deg off the plumb plane (delta = 0.05 rad,
+    delta' = 0) and with a delta integral built up, the desired thrust axis lies in the
+    link plane (u_y = m l k_d delta' = 0), whatever the reference's delta; tracked, the
+    same state asks for the sideways force m g sin(phi) sin(delta) - m l v_delta, a
+    tilt of its ratio to the thrust out of the plane."""
+    from dataclasses import replace
+
+    from tetherland.geometry import link_frame
+
+    traj = plans["landing"]
+    geo = LandingGeometry.from_scenario(scenario)
+    x0 = start_state(traj)
+    x0[1] = 0.05  # delta [rad]
+    est = estimate_of(x0, 0.0, geo, geo.link_length)
+    out = np.zeros((5, 4))
+    theta = theta_A_from_z_B(geo.R_WA.T @ quat_to_rotmat(x0[4:8])[:, 2], x0[0], 0.0)
+    out[0] = [x0[0], 0.0, theta, 0.0]  # the reference at the plumb plane, delta_d = 0
+    ff = Feedforward(np.zeros(3), np.zeros(3), 9.81)
+    ref = Reference(t=0.0, mode=ControlMode.TETHERED, output=out, feedforward=ff)
+
+    def out_of_plane(lateral_free: bool) -> float:
+        ctrl = HierarchicalController(scenario)
+        ctrl._state[1] = 0.05  # a delta integral [rad s]
+        ctrl._state[2] = 0.0
+        ctrl.update(0.0, est, replace(ref, lateral_free=lateral_free))
+        R_d = ctrl._state[5:14].reshape(3, 3)
+        y_L = link_frame(x0[0], x0[1])[:, 1]
+        return float((geo.R_WA.T @ R_d[:, 2]) @ y_L)
+
+    assert abs(out_of_plane(True)) < 1e-9
+    v = scenario.vehicle
+    k_p = scenario.controller.tethered.link_frequency**2
+    k_i = scenario.controller.tethered.link_integral
+    u_y = v.mass * GRAVITY * math.sin(x0[0]) * math.sin(0.05) - v.mass * geo.link_length * (
+        k_p * (0.0 - 0.05) + k_i * 0.05
+    )
+    assert abs(out_of_plane(False)) > 0.5 * abs(u_y) / (v.mass * GRAVITY)

@@ -170,6 +170,11 @@ class Reference:
         Nominal angular velocity, thrust and tension of a planned tethered trajectory.
     terminate : bool
         True when the supervisor has finished; the runner stops after this tick.
+    lateral_free : bool
+        Tethered: leave the link azimuth delta to gravity, with no sideways force but the
+        damping of delta' (the supervisor's lateral release in the last centimetres,
+        ``mission.touchdown_lateral_clearance``). The hierarchical controller honours it;
+        the DFL controller tracks ``output`` as given.
     """
 
     t: float
@@ -181,6 +186,7 @@ class Reference:
     thrust_ff: float | None = None
     feedforward: Feedforward | None = None
     terminate: bool = False
+    lateral_free: bool = False
 
 
 @dataclass(frozen=True, slots=True)

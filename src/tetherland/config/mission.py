@@ -78,6 +78,17 @@ class MissionConfig(Section):
     reference backs away from the surface along the plan instead of only stopping (a
     vehicle approaching at a few cm/s does not stop within the last centimetre; 0: the
     clock stands still) [-]."""
+    touchdown_lateral_clearance: float = Field(0.05, ge=0, le=1)
+    """Lateral release: within this estimated lander clearance of the believed surface, and
+    through the guarded descent, the link azimuth is let hang where gravity puts it: the
+    reference follows the estimate with delta_d'' = g sin(phi) sin(delta)/l (less the
+    centripetal term), so the hierarchical law's sideways force is its damping and its
+    integral alone. Held at the believed delta = 0 instead, a vehicle whose true plumb
+    plane is delta off (an anchor belief error sideways, an azimuth error) needs a
+    sideways thrust m g sin(phi) sin(delta): a tilt of about 3.7 delta on a wall, where
+    the rotors carry only a quarter of the weight, 2.5 delta at 70 deg (condition (2));
+    hanging free it also lands nearer the true landing point, which lies in the true
+    plumb plane (0: off) [m]."""
     touchdown_search_deg: float = Field(6.0, gt=0, le=45)
     """Guarded touchdown: how far beyond the planned phi* the search goes [deg]."""
     contact_error_deg: float = Field(0.8, gt=0, le=45)

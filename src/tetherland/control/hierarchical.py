@@ -37,6 +37,7 @@ from tetherland.control.mixer import Mixer, command_from
 from tetherland.errors import SingularityError
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, Reference, StateEstimate
+from tetherland.state import LinkState
 
 _ZERO3 = np.zeros(3)
 
@@ -89,12 +90,32 @@ class HierarchicalController:
         self._state[:] = kernels.hierarchical_state(self.mass, self.g)
         self._state[3] = last_thrust
 
+    def _delta_free(self, Y: np.ndarray, link: LinkState) -> np.ndarray:
+        """``Y`` with the delta rows that leave the link azimuth to gravity
+        (``Reference.lateral_free``): delta_d = delta, delta_d' = 0 and
+        delta_d'' = g sin(phi) sin(delta)/l - sin(2 delta) phi'^2/2 - k_i int(e_delta), so
+        that in u_y the gravity, centripetal and integral terms cancel and the sideways
+        force is the damping m l k_d delta' alone (the integral is kept, not updated:
+        its error is 0)."""
+        out = np.zeros((max(Y.shape[0], 3), 4))
+        out[: Y.shape[0]] = Y
+        out[0, 1] = link.delta
+        out[1:, 1] = 0.0
+        out[2, 1] = (
+            self.g * math.sin(link.phi) * math.sin(link.delta) / self.length
+            - 0.5 * math.sin(2.0 * link.delta) * link.phi_dot**2
+            - self.k_i * self._state[1]
+        )
+        return out
+
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         """Rotor commands tracking ``reference.output`` (rows y_d, y_d', y_d'', ...)."""
         link = estimate.link
         Y = reference.output
         if link is None or Y is None:
             raise ValueError("the tethered controller needs estimate.link and reference.output")
+        if reference.lateral_free:
+            Y = self._delta_free(Y, link)
         ff = reference.feedforward
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
         body = estimate.body

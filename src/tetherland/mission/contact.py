@@ -282,14 +282,15 @@ def contact_hold(
     cfg: MissionConfig, t: float, est: StateEstimate, ref: Reference, phase: int
 ) -> Reference:
     """The reference held from contact until the motors go off: the plan's delta,
-    theta_A, psi and the estimated link elevation less ``contact_press_deg``, at rest."""
+    theta_A, psi and the estimated link elevation less ``contact_press_deg``, at rest
+    (the link azimuth still left to gravity if it was, ``Reference.lateral_free``)."""
     assert est.link is not None and ref.output is not None
     out = np.zeros((5, 4))
     out[0] = ref.output[0]
     out[0, 0] = est.link.phi - math.radians(cfg.contact_press_deg)
     return Reference(
         t=t, mode=ControlMode.TETHERED, phase=phase, output=out,
-        thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
+        thrust_ff=ref.thrust_ff, feedforward=ref.feedforward, lateral_free=ref.lateral_free,
     )  # fmt: skip
 
 
@@ -339,6 +340,9 @@ class SlowApproach:
         self.alpha = 1.0
         self.held = 0.0
         """Total time the rate hold has held the clock (backing away) [s]."""
+        self.clearance = math.inf
+        """Estimated lander clearance at the last tick where it was needed (within reach
+        of the slowing, the rate hold or the lateral release; inf farther) [m]."""
 
     def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
         """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
@@ -351,16 +355,19 @@ class SlowApproach:
         speed = self.length * abs(rate_at)
         slow = v0 > 0.0 and speed > v0
         hold = cfg.touchdown_hold_rate > 0.0 and self.held < cfg.touchdown_hold_max
-        if slow or hold:
+        lateral = cfg.touchdown_lateral_clearance
+        self.clearance = math.inf
+        if slow or hold or lateral > 0.0:
             px, py, pz = est.body.p_W.tolist()
             (zx, zy, zz), (ox, oy, oz) = self._z, self._o
             # a lower bound of the lander clearance, whatever the attitude
             low = (px - ox) * zx + (py - oy) * zy + (pz - oz) * zz - self._reach
-            reach = cfg.touchdown_hold_clearance if hold else 0.0
+            reach = max(cfg.touchdown_hold_clearance if hold else 0.0, lateral)
             if slow:  # the slowing starts where the capped speed falls below the plan's
                 reach = max(reach, (speed - v0) / gain if gain > 0.0 else math.inf)
             if low < reach:  # within reach: the exact clearance
                 clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
+                self.clearance = clearance
                 wx, wy, _ = est.body.omega_B.tolist()
                 if (
                     hold

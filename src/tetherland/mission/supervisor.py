@@ -33,6 +33,7 @@ the explicit table :data:`TRANSITIONS`, and every threshold is a ``[mission]`` f
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -531,6 +532,8 @@ class MissionSupervisor:
         planned = self._track.reference(tau, self.phase)
         self._landing_rate = abs(float(planned.output[1, 0]))
         ref = self._slow.scale(planned, t)
+        if self._slow.clearance < self.cfg.touchdown_lateral_clearance:
+            ref = dataclasses.replace(ref, lateral_free=True)
         if early_contact_armed(self.cfg, tau, track.t0, track.duration):
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             if decision.confirmed:
@@ -555,6 +558,8 @@ class MissionSupervisor:
         cfg = self.cfg
         if self._hold is None:  # searching for the surface
             ref = self._search_reference(t)
+            if cfg.touchdown_lateral_clearance > 0.0:
+                ref = dataclasses.replace(ref, lateral_free=True)
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             if decision.confirmed:
                 return self._contact(t, est, ref, decision, "during the guarded descent")
@@ -570,6 +575,7 @@ class MissionSupervisor:
         return Reference(
             t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=self._hold.output,
             thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
+            lateral_free=self._hold.lateral_free,
         )  # fmt: skip
 
     def _motors_off(self, t: float, est: StateEstimate) -> Reference:
