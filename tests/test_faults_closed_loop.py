@@ -141,22 +141,24 @@ def fault_campaign_job(run_id: str):
 
 @pytest.mark.parametrize(
     ("run_id", "phase", "reason"),
-    [("rotor-00004", "hooking", "rotor thrust lost"),
-     ("snap-00008", "tethered_landing", "cable lost, tension gone"),
-     ("snap-00009", "motors_off", "cable lost while landed"),
-     ("snap-00010", "spin_up", "cable lost")],
+    [("rotor-00004", ("hooking",), "rotor thrust lost"),
+     ("snap-00008", ("tethered_landing",), "cable lost, tension gone"),
+     ("snap-00009", ("motors_off",), "cable lost while landed"),
+     ("snap-00010", ("spin_up", "motors_off"), "cable lost")],
 )  # fmt: skip
 def test_fault_campaign_crashes_now_end_in_a_safe_stop(run_id, phase, reason):
     """Runs of the fault campaign that crashed: a 40 % weak rotor low in the hooking pass
     (the pass now holds still while the fault is suspected), a snap early in the tethered
     landing (the snap limit is relative to the plan's tension: the lost cable's estimate
     hovered around the 0.1 N absolute limit for 0.86 s) and snaps with the landers on the
-    slope (the moving landed vehicle starts its motors and hovers away)."""
+    slope (the moving landed vehicle starts its motors and hovers away). The fault time is
+    fixed and the landing's timing is not: snap-00010 broke the cable in the spin-up when
+    it crashed and now, with the landing timed differently (lateral release), just before it."""
     from tetherland.campaign.jobs import execute
 
     record = execute(fault_campaign_job(run_id))
     assert record["status"] == "ok", record["error"]
-    assert record["fault"]["phase"] == phase
+    assert record["fault"]["phase"] in phase
     verdict = record["verdict"]
     assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
     assert not verdict["crashed"] and verdict["safe_stop"]["reached"]
