@@ -36,10 +36,10 @@ class MissionConfig(Section):
     ``hook_overshoot - unhook_depth`` more clearance from the surface than at the end of
     the hooking pass (belief errors, release transient); more than the anchor's belief
     error along the approach direction, so the hook is still beyond the true disk; and more
-    than the position loop's lag after the release (wall90 campaign: up to 4.6 cm outwards
-    with 2.5 cm, and the hook crossed the plane off its disk and never released; 5 cm, the
-    hooking pass's end, let two runs touch the wall; 4 cm kept all replayed runs clear)
-    [m]."""
+    than the position error after the release (chosen when the release's hand-over still
+    left up to 5 cm of it, since removed: 2.5 cm and hooks that lagged outwards crossed
+    the plane off the disk and never released; 5 cm, the hooking pass's end, and two
+    runs touched the wall) [m]."""
     stretch_speed: float = Field(0.15, gt=0, le=5)
     """Peak speed of the final pull that takes up the cable (gentle, no snap) [m/s]."""
     stretch_margin: float = Field(0.1, ge=0, le=5)

@@ -629,16 +629,17 @@ class MissionSupervisor:
     def _release(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
+            slack = self._path.end
+            if self._release_pull is not None:  # the pass turns d: freeze the pull
+                self._release_pull.frozen = self._pull_feedforward(t, est, slack)
             # the reverse pass, no deeper than mission.unhook_depth (mission.hooking)
             *corners, last = unhooking_path(
-                self._path.end, wp.unhook_entry, wp.hook_start, self._unhook_reach
+                slack, wp.unhook_entry, wp.hook_start, self._unhook_reach
             )
-            self._path = self._new_path(t, self._path.end, cfg.hook_speed)
+            self._path = self._new_path(t, slack, cfg.hook_speed)
             for p in corners:
                 self._path.to(p)
             self._path.to(last, pause=cfg.settle_time)
-            if self._release_pull is not None:  # the pass turns d: freeze the pull
-                self._release_pull.frozen = self._pull_feedforward(t, est, self._path.end)
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t)
 
