@@ -279,3 +279,34 @@ def test_lateral_free_leaves_the_link_azimuth_to_gravity(scenario, plans):
         k_p * (0.0 - 0.05) + k_i * 0.05
     )
     assert abs(out_of_plane(False)) > 0.5 * abs(u_y) / (v.mass * GRAVITY)
+
+
+def test_lateral_free_keeps_a_fraction_of_the_link_damping(scenario, plans):
+    """Left to gravity, the only sideways force is the damping c m l k_d delta' with c =
+    ``controller.tethered.lateral_damping``: the out-of-plane tilt of the desired thrust
+    axis scales with c (half the damping, half the tilt; none without it)."""
+    from tetherland.config import with_overrides
+    from tetherland.geometry import link_frame
+
+    traj = plans["landing"]
+    geo = LandingGeometry.from_scenario(scenario)
+    x0 = start_state(traj)
+    x0[1], x0[3] = 0.05, 0.1  # delta [rad], delta' [rad/s]
+    est = estimate_of(x0, 0.0, geo, geo.link_length)
+    out = np.zeros((5, 4))
+    theta = theta_A_from_z_B(geo.R_WA.T @ quat_to_rotmat(x0[4:8])[:, 2], x0[0], 0.0)
+    out[0] = [x0[0], 0.0, theta, 0.0]
+    ref = Reference(t=0.0, mode=ControlMode.TETHERED, output=out, lateral_free=True,
+                    feedforward=Feedforward(np.zeros(3), np.zeros(3), 9.81))  # fmt: skip
+
+    def out_of_plane(c: float) -> float:
+        sc = with_overrides(scenario, [f"controller.tethered.lateral_damping={c}"])
+        ctrl = HierarchicalController(sc)
+        ctrl.update(0.0, est, ref)
+        R_d = ctrl._state[5:14].reshape(3, 3)
+        return float((geo.R_WA.T @ R_d[:, 2]) @ link_frame(x0[0], x0[1])[:, 1])
+
+    full, half = out_of_plane(1.0), out_of_plane(0.5)
+    assert abs(full) > 1e-3  # the premise: damping 0.1 rad/s tilts the axis
+    assert half == pytest.approx(0.5 * full, rel=0.02)
+    assert abs(out_of_plane(0.0)) < 1e-9

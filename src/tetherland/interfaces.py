@@ -171,8 +171,8 @@ class Reference:
     terminate : bool
         True when the supervisor has finished; the runner stops after this tick.
     lateral_free : bool
-        Tethered: leave the link azimuth delta to gravity, with no sideways force but the
-        damping of delta' (the supervisor's lateral release in the last centimetres,
+        Tethered: leave the link azimuth delta to gravity, with no sideways force but a
+        fraction of the damping of delta' (the supervisor's lateral release in the last centimetres,
         ``mission.touchdown_lateral_clearance``). The hierarchical controller honours it;
         the DFL controller tracks ``output`` as given.
     """

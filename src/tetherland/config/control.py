@@ -66,6 +66,12 @@ class TetheredGains(Section):
     (s + p)^(r+1), so model errors (thrust, offset torque) leave no steady tracking error."""
     dfl_integral_max: float = Field(0.3, ge=0, le=10)
     """DFL: clamp of each error integral (anti-windup) [rad s]."""
+    lateral_damping: float = Field(0.5, ge=0, le=1)
+    """Hierarchical, with the link azimuth left to gravity (``Reference.lateral_free``, the
+    last centimetres of a landing): the fraction of the link damping k_d kept on delta'.
+    The sideways force is then only this damping, and it tilts the thrust axis by
+    k_d v/(f_R/m) for a sideways speed v: a gust's push met at full damping turns the
+    frame at 0.3 rad/s within 0.15 s at 70 deg [-]."""
     offset_compensation: bool = True
     """Cancel the torque of the cable attachment offset with the estimated tension (6.6.5)."""
 

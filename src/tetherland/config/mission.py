@@ -80,10 +80,9 @@ class MissionConfig(Section):
     clock stands still) [-]."""
     touchdown_lateral_clearance: float = Field(0.05, ge=0, le=1)
     """Lateral release: within this estimated lander clearance of the believed surface, and
-    through the guarded descent, the link azimuth is let hang where gravity puts it: the
-    reference follows the estimate with delta_d'' = g sin(phi) sin(delta)/l (less the
-    centripetal term), so the hierarchical law's sideways force is its damping and its
-    integral alone. Held at the believed delta = 0 instead, a vehicle whose true plumb
+    through the guarded descent, the link azimuth is let hang where gravity puts it
+    (``Reference.lateral_free``): the hierarchical law's sideways force is then a fraction
+    of its damping alone (``controller.tethered.lateral_damping``). Held at the believed delta = 0 instead, a vehicle whose true plumb
     plane is delta off (an anchor belief error sideways, an azimuth error) needs a
     sideways thrust m g sin(phi) sin(delta): a tilt of about 3.7 delta on a wall, where
     the rotors carry only a quarter of the weight, 2.5 delta at 70 deg (condition (2));

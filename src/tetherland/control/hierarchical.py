@@ -69,6 +69,7 @@ class HierarchicalController:
         self.k_p = wn * wn
         self.k_d = 2.0 * zeta * wn
         self.k_i = gains.link_integral
+        self.lateral_damping = gains.lateral_damping
         self.integral_max = gains.link_integral_max
         self.attitude = AttitudeController(v.inertia, AttitudeGains.from_config(gains))
         self.mixer = Mixer(v)
@@ -92,15 +93,16 @@ class HierarchicalController:
 
     def _delta_free(self, Y: np.ndarray, link: LinkState) -> np.ndarray:
         """``Y`` with the delta rows that leave the link azimuth to gravity
-        (``Reference.lateral_free``): delta_d = delta, delta_d' = 0 and
+        (``Reference.lateral_free``): delta_d = delta, delta_d' = (1 - c) delta' and
         delta_d'' = g sin(phi) sin(delta)/l - sin(2 delta) phi'^2/2 - k_i int(e_delta), so
         that in u_y the gravity, centripetal and integral terms cancel and the sideways
-        force is the damping m l k_d delta' alone (the integral is kept, not updated:
-        its error is 0)."""
+        force is the damping c m l k_d delta' alone, c = ``lateral_damping`` (the integral
+        is kept, not updated: its error is 0)."""
         out = np.zeros((max(Y.shape[0], 3), 4))
         out[: Y.shape[0]] = Y
         out[0, 1] = link.delta
         out[1:, 1] = 0.0
+        out[1, 1] = (1.0 - self.lateral_damping) * link.delta_dot
         out[2, 1] = (
             self.g * math.sin(link.phi) * math.sin(link.delta) / self.length
             - 0.5 * math.sin(2.0 * link.delta) * link.phi_dot**2
