@@ -82,7 +82,8 @@ class MissionConfig(Section):
     """Lateral release: within this estimated lander clearance of the believed surface, and
     through the guarded descent, the link azimuth is let hang where gravity puts it
     (``Reference.lateral_free``): the hierarchical law's sideways force is then a fraction
-    of its damping alone (``controller.tethered.lateral_damping``). Held at the believed delta = 0 instead, a vehicle whose true plumb
+    of its damping alone (``controller.tethered.lateral_damping``). Held at the believed
+    delta = 0 instead, a vehicle whose true plumb
     plane is delta off (an anchor belief error sideways, an azimuth error) needs a
     sideways thrust m g sin(phi) sin(delta): a tilt of about 3.7 delta on a wall, where
     the rotors carry only a quarter of the weight, 2.5 delta at 70 deg (condition (2));

@@ -210,7 +210,6 @@ class MissionSupervisor:
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
         self._release_pull: _ReleasePull | None = None
-        self._est: StateEstimate | None = None  # the estimate of the current tick
         self._t_free = 0.0  # last tick of the free-flight reference [s]
         self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
@@ -248,7 +247,7 @@ class MissionSupervisor:
         self.phase = phase
         self._phase_start = t
 
-    def _free(self, t: float) -> Reference:
+    def _free(self, t: float, est: StateEstimate) -> Reference:
         dt, self._t_free = t - self._t_free, t
         det = self.cfg.detection
         if (
@@ -263,9 +262,9 @@ class MissionSupervisor:
             rows[1:] = 0.0
         else:
             rows = self._path.sample(t)
-        if self._release_pull is not None and self._est is not None:
+        if self._release_pull is not None:
             rows = rows.copy()  # the path's rows are shared and read-only
-            rows[2] += self._pull_feedforward(t, self._est, rows[0])
+            rows[2] += self._pull_feedforward(t, est, rows[0])
         return Reference(
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
@@ -425,10 +424,9 @@ class MissionSupervisor:
     # ------------------------------------------------------------------ ReferenceSource
     def reference(self, t: float, estimate: StateEstimate) -> Reference:
         """Advance the state machine and return the reference for time ``t``."""
-        self._est = estimate
         if self._terminate_at is not None and t >= self._terminate_at:
             if self._final_mode == ControlMode.FREE_FLIGHT:
-                ref = self._free(t)
+                ref = self._free(t, estimate)
                 return Reference(
                     t=t, mode=ref.mode, phase=ref.phase, p_W=ref.p_W, yaw=ref.yaw, terminate=True
                 )
@@ -460,7 +458,7 @@ class MissionSupervisor:
             self._enter(Phase.APPROACH, t, "takeoff height reached")
         elif t > self._path.t_end + cfg.phase_timeout:
             self.abort(t, est, "fault: takeoff height not reached")
-        return self._free(t)
+        return self._free(t, est)
 
     def _approach(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
@@ -472,7 +470,7 @@ class MissionSupervisor:
             self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
         elif t > self._path.t_end + cfg.phase_timeout:
             self.abort(t, est, "fault: hooking start not reached")
-        return self._free(t)
+        return self._free(t, est)
 
     def _hooking(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
@@ -484,7 +482,7 @@ class MissionSupervisor:
             )
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
-        return self._free(t)
+        return self._free(t, est)
 
     def _stretch(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
@@ -504,13 +502,13 @@ class MissionSupervisor:
             self._event(t, "hook", f"missed hook (attempt {self.hook_attempts}): no tension")
             if self.hook_attempts >= cfg.max_hook_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
-                return self._free(t)
+                return self._free(t, est)
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
                 self._new_path(t, est.body.p_W).to(above).to(wp.hook_start, pause=cfg.settle_time)
             )
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
-        return self._free(t)
+        return self._free(t, est)
 
     def _contact(
         self, t: float, est: StateEstimate, ref: Reference, decision: ContactDecision, when: str
@@ -566,7 +564,7 @@ class MissionSupervisor:
             limit = cfg.touchdown_search_deg / cfg.touchdown_rate_deg + cfg.touchdown_search_grace
             if t > self._search_start + limit:
                 self.abort(t, est, "fault: no contact within touchdown_search_deg beyond phi*")
-                return self._free(t)
+                return self._free(t, est)
             return ref
         if t >= self.times["t_L"] + cfg.settle_time:
             self.times["t_G"] = t
@@ -623,7 +621,7 @@ class MissionSupervisor:
             self._enter(
                 Phase.RELEASE, t, "takeoff trajectory completed: free flight, releasing tension"
             )
-            return self._free(t)
+            return self._free(t, est)
         return self._track.reference(t, self.phase)
 
     def _release(self, t: float, est: StateEstimate) -> Reference:
@@ -641,7 +639,7 @@ class MissionSupervisor:
                 self._path.to(p)
             self._path.to(last, pause=cfg.settle_time)
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
-        return self._free(t)
+        return self._free(t, est)
 
     def _unhook(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
@@ -656,7 +654,7 @@ class MissionSupervisor:
                 .to(home, pause=cfg.settle_time)
             )
             self._enter(Phase.RETURN, t, "hook released: returning")
-        return self._free(t)
+        return self._free(t, est)
 
     def _return(self, t: float, est: StateEstimate) -> Reference:
         cfg = self.cfg
@@ -665,7 +663,7 @@ class MissionSupervisor:
                 self.wp.start - cfg.pad_press_depth * Z_W, pause=cfg.settle_time
             )
             self._enter(Phase.LAND, t, "above the start pad")
-        return self._free(t)
+        return self._free(t, est)
 
     def _land(self, t: float, est: StateEstimate) -> Reference:
         if t >= self._path.t_end:
@@ -673,7 +671,7 @@ class MissionSupervisor:
             self._enter(Phase.DONE, t, "landed on the start pad: motors off")
             self._terminate_at = t + self.cfg.done_hold_time
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
-        return self._free(t)
+        return self._free(t, est)
 
     def _safe_hover(self, t: float, est: StateEstimate) -> Reference:
         if t >= self._path.t_end:
@@ -686,7 +684,7 @@ class MissionSupervisor:
             self.safe_state = "hover"
             self._final_mode = ControlMode.FREE_FLIGHT
             self._terminate_at = t
-        return self._free(t)
+        return self._free(t, est)
 
     def _motors_off_hold(self, t: float, est: StateEstimate) -> Reference:
         return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
