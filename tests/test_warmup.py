@@ -6,7 +6,8 @@ import numpy as np
 
 from tetherland import state, warmup
 from tetherland.config import load_scenario, with_overrides
-from tetherland.control import DflController, HierarchicalController, dfl_kernels, kernels
+from tetherland.control import DflController, HierarchicalController
+from tetherland.control.kernels import dfl, free_flight, hierarchical
 from tetherland.estimation import UkfEstimator, ukf_kernels
 from tetherland.estimation import kernels as estimation_kernels
 from tetherland.geometry import LandingGeometry
@@ -19,9 +20,9 @@ from tetherland.runs import run_mission
 from tetherland.sim.analytic import estimate_of
 
 KERNELS = (
-    kernels.free_flight_into,
-    kernels.hierarchical_into,
-    dfl_kernels.dfl_into,
+    free_flight.free_flight_into,
+    hierarchical.hierarchical_into,
+    dfl.dfl_into,
     ukf_kernels.predict_into,
     ukf_kernels.update_pose_into,
     estimation_kernels.estimate_into,
