@@ -257,8 +257,8 @@ def test_a_pass_beside_the_capture_disk_misses_along_any_direction(directed_plan
 
 
 def test_hook_point_leads_the_attachment_along_n():
-    """The plant's hook model is mission.hooking's: hook = attachment + hook_drop n."""
-    from tetherland.mission.hooking import hook_offset
+    """The plant's hook model is the one of models.hook: hook = attachment + hook_drop n."""
+    from tetherland.models.hook import hook_offset
 
     n = np.array([-3.0, 0.0, 4.0])  # not unit: the model normalises it
     hook = Hook([1.0, 2.0, 3.0], n, capture_radius=0.05, hook_drop=0.3)

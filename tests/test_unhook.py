@@ -12,10 +12,11 @@ import pytest
 from tetherland.analysis.clearance import level_vehicle_distance
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
-from tetherland.geometry import LandingGeometry, link_direction, surface_frame_from_slope
+from tetherland.geometry import LandingGeometry, link_direction
 from tetherland.mission.hooking import hooking_pass, unhooking_path
 from tetherland.mission.plan import free_flight_legs, plan_mission
 from tetherland.sim.plant import Plant
+from tetherland.surface import surface_frame_from_slope
 
 NAMES = ("wall90", "overhang93", "slope50", "pipe60")
 

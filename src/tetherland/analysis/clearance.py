@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
-from tetherland.geometry import FloatArray, Surface
+from tetherland.geometry import FloatArray
 from tetherland.models.airframe import (
     HUB_HALF_SIZE,
     PROP_HALF_THICKNESS,
@@ -30,6 +30,7 @@ from tetherland.models.airframe import (
 )
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import rotation_from_z_and_yaw
+from tetherland.surface import Surface
 
 _N_RIM = 72
 _RIM = np.column_stack(

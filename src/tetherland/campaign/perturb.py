@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from tetherland.config import Scenario, scenario_from_dict
-from tetherland.geometry import LandingGeometry, normal_from_slope, surface_frame
+from tetherland.geometry import LandingGeometry
+from tetherland.surface import normal_from_slope, surface_frame
 
 
 @dataclass(frozen=True)

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 from pydantic import Field, model_validator
 
-from tetherland import geometry as geo
+from tetherland import surface as geo
 from tetherland.config.base import Section
 from tetherland.config.control import ControllerConfig
 from tetherland.config.faults import FaultsConfig
@@ -66,7 +69,11 @@ class Scenario(Section):
                 f"tether.length = {l} m must be > |h_att - anchor.h_A| = {abs(h_att - a.h_A):g} m, "
                 "h_att = h_R + cable_attachment z (inclined hovering needs |c| < 1, eq. 6.9)"
             )
-        surface = geo.surface_from_config(self)
+        surface = geo.Surface(
+            origin=np.asarray(s.origin, dtype=float),
+            R_WS=geo.surface_frame_of(s.normal, math.radians(s.slope_deg),
+                                      math.radians(s.azimuth_deg)),
+        )  # fmt: skip
         if a.position is not None:
             off = surface.height(a.position) - a.h_A
             if abs(off) > ON_SURFACE_TOL:

@@ -44,7 +44,6 @@ from tetherland.design.space import DesignPoint, DesignSpace
 from tetherland.errors import ConfigError
 from tetherland.geometry import (
     LandingGeometry,
-    Surface,
     attachment_in_plane,
     effective_h_R,
     landing_geometry,
@@ -52,6 +51,7 @@ from tetherland.geometry import (
 )
 from tetherland.mission.hooking import hooking_pass_for, pass_clearance
 from tetherland.planning import Maneuver, Planner, PlanResult
+from tetherland.surface import Surface
 
 _TOL = 1e-9
 

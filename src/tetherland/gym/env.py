@@ -58,11 +58,11 @@ from tetherland.interfaces import Command, StateEstimate
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.maneuver import Maneuver
+from tetherland.planning.start import plan_start_state
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import quat_to_rotmat
 from tetherland.sim import Plant, Runner
 from tetherland.sim.baselines import ConstantSpeedController
-from tetherland.sim.start import plan_start_state
 from tetherland.state import LinkState, RigidBodyState
 from tetherland.verdict import tolerances_of
 
@@ -118,7 +118,7 @@ def _observe(est: StateEstimate) -> FloatArray:
 
 def initial_state(plan: Trajectory, scenario: Scenario) -> tuple[RigidBodyState, FloatArray]:
     """The plan's first state (cable taut at the plan's start tension) and rotor speeds
-    [rad/s]: :func:`tetherland.sim.start.plan_start_state`."""
+    [rad/s]: :func:`tetherland.planning.start.plan_start_state`."""
     return plan_start_state(plan, scenario)
 
 

@@ -6,12 +6,8 @@ the hook point moving straight along the approach direction n from ``approach_di
 before the anchor to ``hook_overshoot`` beyond it (``mission`` section).
 
 Hook model assumed here: the hook point is the cable attachment point moved by
-``hook_drop`` along n, leading the vehicle in the direction it moves. For the default
-approach n = -z_W this is the hook hanging under the vehicle; for other directions the
-hook is held out along the approach direction (a hook on a short stiff arm), which lets
-the vehicle hook an anchor on a wall or an overhang from the side or from below.
-:func:`hook_offset` is the one place that states it; the plant's hook model
-(:mod:`tetherland.sim.hook`) uses the same offset.
+``hook_drop`` along n (:func:`tetherland.models.hook.hook_offset`, the one statement of it,
+which the plant's hook model :mod:`tetherland.sim.hook` uses too).
 
 The clearance is that of the plant's collision shape, computed by
 :func:`tetherland.analysis.clearance.hooking_clearance`.
@@ -39,6 +35,7 @@ from numpy.typing import ArrayLike
 from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.models.hook import hook_offset
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
@@ -76,11 +73,6 @@ class HookingPass:
         """``count`` centre-of-mass points evenly along the pass, (count, 3) [m]."""
         s = np.linspace(0.0, 1.0, count)[:, None]
         return (1.0 - s) * self.p_start_W + s * self.p_end_W
-
-
-def hook_offset(n_W: FloatArray, hook_drop: float) -> FloatArray:
-    """Hook point minus attachment point, hook_drop n [m] (the assumed hook model)."""
-    return hook_drop * n_W
 
 
 def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) -> HookingPass:

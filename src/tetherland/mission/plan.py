@@ -17,12 +17,13 @@ import numpy as np
 from tetherland.analysis.clearance import HookingClearance, level_vehicle_distance
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
-from tetherland.geometry import FloatArray, LandingGeometry, Surface, link_direction
+from tetherland.geometry import FloatArray, LandingGeometry, link_direction
 from tetherland.mission.hooking import check_pass, hooking_pass, unhooking_path
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import rotation_from_z_and_yaw
 from tetherland.state import RigidBodyState
+from tetherland.surface import Surface
 
 Z_W = np.array([0.0, 0.0, 1.0])
 Z_W.setflags(write=False)
