@@ -75,6 +75,32 @@ def test_lander_tips_form_the_landers_plane(plant, scenario):
     np.testing.assert_allclose(np.abs(tips[:, :2]), v.lander_half_width, atol=1e-12)
 
 
+def test_the_plant_and_the_robot_place_the_landers_where_the_airframe_says(plant, scenario):
+    """One statement of the lander tips (models.airframe), in one order, for the plant's
+    geoms and touch zones, the robot's contact rule and the contact-free method."""
+    from tetherland.methods.contact_free import LanderGeometry
+    from tetherland.mission.contact import ContactGeometry
+    from tetherland.models.airframe import lander_centres_B, lander_tips_B
+
+    v = scenario.vehicle
+    w, r = v.lander_half_width, v.lander_radius
+    tips = lander_tips_B(w, v.h_R)
+    # lander 0 front left (+x, +y), then counter-clockwise seen from above, 90 deg apart
+    azimuths = np.degrees(np.unwrap(np.arctan2(tips[:, 1], tips[:, 0])))
+    np.testing.assert_allclose(azimuths, [45.0, 135.0, 225.0, 315.0], atol=1e-12)
+    np.testing.assert_allclose(np.hypot(tips[:, 0], tips[:, 1]), math.sqrt(2) * w, rtol=1e-15)
+    np.testing.assert_array_equal(tips[:, 2], -v.h_R)
+    np.testing.assert_allclose(lander_centres_B(w, v.h_R, r) - tips, [[0.0, 0.0, r]] * 4,
+                               atol=1e-15)  # fmt: skip
+    for i, tip in enumerate(tips):
+        centre = plant.model.geom(f"lander{i}").pos
+        np.testing.assert_allclose(centre - [0.0, 0.0, r], tip, atol=1e-12)
+        np.testing.assert_array_equal(plant.model.site(f"lander{i}_zone").pos, centre)
+    np.testing.assert_array_equal(ContactGeometry.from_scenario(scenario).tips_B, tips)
+    lander_geometry = LanderGeometry.create(w, v.h_R, [0.0, 0.0, 1.0], [0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(lander_geometry.tips_B, tips)
+
+
 def test_hover_speeds_keep_the_vehicle_still(plant, scenario):
     """Rotor speeds for m g, lag settled: no drift over 2 s (the plant has no disturbances)."""
     start = in_air(plant)

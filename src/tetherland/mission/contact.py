@@ -40,6 +40,7 @@ from tetherland.config import Scenario
 from tetherland.config.mission import MissionConfig
 from tetherland.geometry import FloatArray, LandingGeometry, effective_h_R
 from tetherland.interfaces import ControlMode, Feedforward, Reference, StateEstimate
+from tetherland.models.airframe import lander_tips_B
 from tetherland.rotations import quat_to_rotmat
 
 
@@ -140,12 +141,10 @@ class ContactGeometry:
     def from_scenario(cls, scenario: Scenario) -> ContactGeometry:
         geo = LandingGeometry.from_scenario(scenario)
         v = scenario.vehicle
-        w = v.lander_half_width
-        tips = np.array([[sx * w, sy * w, -v.h_R] for sx in (1, -1) for sy in (1, -1)])
         return cls(
             z_S=geo.surface.z_S.copy(),
             surface_point=geo.p_L.copy(),
-            tips_B=tips,
+            tips_B=lander_tips_B(v.lander_half_width, v.h_R),
             sag=v.h_R - effective_h_R(scenario),
             p_A=geo.p_A.copy(),
             r_att_B=np.asarray(v.cable_attachment, dtype=float),
