@@ -153,7 +153,7 @@ def test_compiled_attitude_feedforward_reports_the_same_singularities():
 
 # ------------------------------------------------------------------ packed layouts
 
-LAYOUTS = [(mixer, "MIX"), (mixer, "OUT"), (so3, "ATT"), (free_flight, "PAR"),
+LAYOUTS = [(mixer, "MIX"), (mixer, "OUT"), (so3, "ATT"), (so3, "CABLE"), (free_flight, "PAR"),
            (free_flight, "OUT"), (hierarchical, "PAR"), (hierarchical, "STATE"),
            (hierarchical, "OUT"), (dfl, "PAR"), (dfl, "STATE"), (dfl, "OUT"),
            (dfl_model, "YAB")]  # fmt: skip
@@ -200,14 +200,17 @@ def test_packers_write_every_field_under_its_name():
     R_WA = exp_so3(rng.normal(0, 1, 3))
     hc = hierarchical.pack_hierarchical(1.2, 1.05, 9.8, 9.0, 6.0, 0.5, 0.3, True,
                                         [0.0, 0.0, -0.05], R_WA, J, k_R, k_w)  # fmt: skip
-    assert (hc[hierarchical.PAR_LENGTH], hc[hierarchical.PAR_COMPENSATE]) == (1.05, 1.0)
-    np.testing.assert_array_equal(hc[hierarchical.PAR_R_WA].reshape(3, 3), R_WA)
+    cable = hc[hierarchical.PAR_CABLE]
+    assert (hc[hierarchical.PAR_LENGTH], cable[so3.CABLE_COMPENSATE]) == (1.05, 1.0)
+    np.testing.assert_array_equal(cable[so3.CABLE_R_WA].reshape(3, 3), R_WA)
+    np.testing.assert_array_equal(cable[so3.CABLE_R_ATT], [0.0, 0.0, -0.05])
     np.testing.assert_array_equal(hc[hierarchical.PAR_ATTITUDE], att)
     gains = [rng.uniform(1, 9, r) for r in dfl_model.DFL_RELATIVE_DEGREES]
     model = dfl_model.model_parameters(1.2, 1.05, tuple(J))
     d = dfl.pack_dfl(1.2, True, 0.2, False, 2e-3, [0.0, 0.0, -0.05], R_WA, gains,
                      [1.0, 2.0, 3.0, 4.0], np.full(4, 0.25), model)  # fmt: skip
-    assert (d[dfl.PAR_INTEGRAL], d[dfl.PAR_COMPENSATE], d[dfl.PAR_PERIOD]) == (1.0, 0.0, 2e-3)
+    assert (d[dfl.PAR_INTEGRAL], d[dfl.PAR_CABLE][so3.CABLE_COMPENSATE]) == (1.0, 0.0)
+    assert d[dfl.PAR_PERIOD] == 2e-3
     offset = dfl.DFL_OFFSETS[2]  # theta_A's gains follow phi's and delta's
     np.testing.assert_array_equal(d[dfl.PAR_GAINS][offset : offset + 2], gains[2])
     np.testing.assert_array_equal(d[dfl.PAR_MODEL], model)
@@ -235,9 +238,9 @@ def test_compiled_attitude_torque_matches_the_reference(seed, feedforward):
 
 
 @settings(max_examples=100, deadline=None)
-@given(SEEDS)
-def test_compiled_rotation_and_cable_torque_match_the_reference(seed):
-    from tetherland.control.common import cable_torque, rot_x, rot_y, rot_z
+@given(SEEDS, st.booleans(), st.booleans())
+def test_compiled_rotation_and_cable_torque_match_the_reference(seed, compensate, taut):
+    from tetherland.control.common import rot_x, rot_y, rot_z
     from tetherland.geometry import link_frame
 
     rng = np.random.default_rng(seed)
@@ -247,7 +250,14 @@ def test_compiled_rotation_and_cable_torque_match_the_reference(seed):
     R, R_WA = exp_so3(rng.normal(0, 2, 3)), exp_so3(rng.normal(0, 2, 3))
     phi, delta = rng.uniform(-1.5, 1.5, 2)
     x_L = link_frame(phi, delta)[:, 0]
-    tau, r_att, tension = rng.normal(0, 1, 3), rng.normal(0, 0.05, 3), rng.uniform(0, 10)
-    expected = tau - cable_torque(r_att, tension, R.T @ (R_WA @ x_L))
-    got = so3.cancel_cable_torque(*tau, R, R_WA, *x_L, tension, r_att)
+    tau, r_att = rng.normal(0, 1, 3), rng.normal(0, 0.05, 3)
+    tension = rng.uniform(0.1, 10) if taut else 0.0
+    cable = so3.pack_cable(compensate, r_att, R_WA)
+    expected = so3.cancel_cable_torque_reference(tau, R, x_L, tension, cable)
+    got = so3.cancel_cable_torque(*tau, R, *x_L, tension, cable)
     np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-12)
+    # the cable pulls the attachment towards the anchor: its moment r_att x (-f_L d_B) is
+    # what the compensation removes, and only when asked for and pulling
+    d_B = R.T @ R_WA @ x_L
+    moment = np.cross(r_att, -tension * d_B) if compensate and taut else np.zeros(3)
+    np.testing.assert_allclose(np.asarray(got) + moment, tau, atol=1e-12)

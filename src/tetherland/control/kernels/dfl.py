@@ -18,7 +18,6 @@ import math
 import numpy as np
 from numba import njit
 
-from tetherland.control.common import cable_torque
 from tetherland.control.kernels import mixer, so3
 from tetherland.control.kernels.dfl_model import (
     DFL_RELATIVE_DEGREES,
@@ -49,14 +48,10 @@ PAR_INTEGRAL = _par.scalar()
 """1: integral action on the output errors."""
 PAR_INTEGRAL_MAX = _par.scalar()
 """Bound of each error integral [rad s]."""
-PAR_COMPENSATE = _par.scalar()
-"""1: cancel the cable torque at the attachment offset."""
 PAR_PERIOD = _par.scalar()
 """Control period h [s]: the rotors hold each command that long."""
-PAR_R_ATT = _par.vector(3)
-"""Cable attachment r_att, F_B [m]."""
-PAR_R_WA = _par.vector(9)
-"""Anchor frame R_WA, row-major."""
+PAR_CABLE = _par.vector(so3.CABLE_WIDTH)
+"""The cable's geometry (:func:`tetherland.control.kernels.so3.pack_cable`)."""
 PAR_GAINS = _par.vector(sum(DFL_RELATIVE_DEGREES))
 """Gains k_0 .. k_{r-1} of each output, in the order of y (:data:`DFL_OFFSETS`)."""
 PAR_INTEGRAL_GAINS = _par.vector(4)
@@ -112,9 +107,8 @@ def pack_dfl(
     (:func:`tetherland.control.kernels.dfl_model.model_parameters`)."""
     par = np.empty(PAR_WIDTH)
     par[PAR_MASS], par[PAR_INTEGRAL], par[PAR_INTEGRAL_MAX] = mass, float(integral), integral_max
-    par[PAR_COMPENSATE], par[PAR_PERIOD] = float(compensate), control_dt
-    par[PAR_R_ATT] = r_att_B
-    par[PAR_R_WA] = np.asarray(R_WA, dtype=float).reshape(9)
+    par[PAR_PERIOD] = control_dt
+    par[PAR_CABLE] = so3.pack_cable(compensate, r_att_B, R_WA)
     par[PAR_GAINS] = np.concatenate(gains)
     par[PAR_INTEGRAL_GAINS] = integral_gains
     par[PAR_THRUST_SHARE] = thrust_share
@@ -162,7 +156,8 @@ def dfl_reference(
     ``state`` updated in place (its thrust extension must be set). Returns ``out``
     (:data:`OUT_WIDTH`)."""
     lim, h = par[PAR_INTEGRAL_MAX], par[PAR_PERIOD]
-    r_att, R_WA = par[PAR_R_ATT], par[PAR_R_WA].reshape(3, 3)
+    cable = par[PAR_CABLE]
+    R_WA = cable[so3.CABLE_R_WA].reshape(3, 3)
     K, k_int = par[PAR_GAINS], par[PAR_INTEGRAL_GAINS]
     share, p = par[PAR_THRUST_SHARE], par[PAR_MODEL]
     f, fd = state[STATE_THRUST], state[STATE_THRUST_RATE]
@@ -191,10 +186,8 @@ def dfl_reference(
     singular = not ratio >= HADAMARD_MIN
     u = np.array([0.0, *state[STATE_U][1:]]) if singular else np.linalg.solve(A, v - b)
     state[STATE_U] = u
-    tau = u[1:4].copy()
-    if par[PAR_COMPENSATE] and tension > 0.0:
-        d_B = R.T @ (R_WA @ link_frame(link[0], link[1])[:, 0])
-        tau = tau - cable_torque(r_att, tension, d_B)
+    x_L_A = link_frame(link[0], link[1])[:, 0]
+    tau = so3.cancel_cable_torque_reference(u[1:4].copy(), R, x_L_A, tension, cable)
     # the rotors hold the command for one period: the mean of the thrust polynomial over
     # it, f + f' h/2 + f'' h^2/6; the motor lag is led along f_R'
     thrust = f + 0.5 * fd * h + u[0] * h * h / 6.0
@@ -267,7 +260,8 @@ def dfl_into(
         f, fd = f + fd * dt + 0.5 * u0 * dt * dt, fd + u0 * dt
     state[STATE_THRUST], state[STATE_THRUST_RATE], state[STATE_T_LAST] = f, fd, t
     R = so3.quat_rotmat3(q_WB)
-    R_WA = par[PAR_R_WA].reshape(3, 3)
+    cable = par[PAR_CABLE]
+    R_WA = cable[so3.CABLE_R_WA].reshape(3, 3)
     theta_e, roll, psi = _dfl_attitude_compiled(so3.tmul3(R_WA, R))
     x = np.empty(12)
     x[0], x[1], x[2], x[3] = link[0], link[1], link[2], link[3]
@@ -309,14 +303,12 @@ def dfl_into(
             u[i] = last_u[i]
     for i in range(4):
         last_u[i] = u[i]
-    t0, t1, t2 = u[1], u[2], u[3]
-    if par[PAR_COMPENSATE] != 0.0 and tension > 0.0:
-        phi, delta = link[0], link[1]
-        cd = math.cos(delta)
-        t0, t1, t2 = so3.cancel_cable_torque(
-            t0, t1, t2, R, R_WA, cd * math.cos(phi), -math.sin(delta), cd * math.sin(phi),
-            tension, par[PAR_R_ATT],
-        )  # fmt: skip
+    phi, delta = link[0], link[1]
+    cd = math.cos(delta)
+    t0, t1, t2 = so3.cancel_cable_torque(
+        u[1], u[2], u[3], R, cd * math.cos(phi), -math.sin(delta), cd * math.sin(phi),
+        tension, cable,
+    )  # fmt: skip
     h = par[PAR_PERIOD]
     thrust = f + 0.5 * fd * h + u[0] * h * h / 6.0
     lead = fd + 0.5 * u[0] * h

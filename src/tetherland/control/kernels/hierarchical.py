@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from tetherland.control.attitude import attitude_torque
-from tetherland.control.common import attitude_from_thrust_axis, cable_torque, heading_of
+from tetherland.control.common import attitude_from_thrust_axis, heading_of
 from tetherland.control.kernels import mixer, so3
 from tetherland.control.kernels.packing import Fields
 from tetherland.errors import SingularityError
@@ -49,12 +49,8 @@ PAR_K_I = _par.scalar()
 """Link-angle integral gain k_i [1/s^3]."""
 PAR_INTEGRAL_MAX = _par.scalar()
 """Largest k_i int(e) per angle [rad/s^2]."""
-PAR_COMPENSATE = _par.scalar()
-"""1: cancel the cable torque at the attachment offset."""
-PAR_R_ATT = _par.vector(3)
-"""Cable attachment r_att, F_B [m]."""
-PAR_R_WA = _par.vector(9)
-"""Anchor frame R_WA, row-major."""
+PAR_CABLE = _par.vector(so3.CABLE_WIDTH)
+"""The cable's geometry (:func:`tetherland.control.kernels.so3.pack_cable`)."""
 PAR_ATTITUDE = _par.vector(so3.ATT_WIDTH)
 """The attitude law's gains (:func:`tetherland.control.kernels.so3.pack_attitude`)."""
 PAR_WIDTH = _par.width
@@ -108,9 +104,8 @@ def pack_hierarchical(
     par = np.empty(PAR_WIDTH)
     par[PAR_MASS], par[PAR_LENGTH], par[PAR_G] = mass, length, g
     par[PAR_K_P], par[PAR_K_D], par[PAR_K_I] = k_p, k_d, k_i
-    par[PAR_INTEGRAL_MAX], par[PAR_COMPENSATE] = integral_max, float(compensate)
-    par[PAR_R_ATT] = r_att_B
-    par[PAR_R_WA] = np.asarray(R_WA, dtype=float).reshape(9)
+    par[PAR_INTEGRAL_MAX] = integral_max
+    par[PAR_CABLE] = so3.pack_cable(compensate, r_att_B, R_WA)
     par[PAR_ATTITUDE] = so3.pack_attitude(inertia, k_R, k_w)
     return par
 
@@ -144,8 +139,8 @@ def hierarchical_reference(
     place. Returns ``out`` (:data:`OUT_WIDTH`)."""
     m, l, g = par[PAR_MASS], par[PAR_LENGTH], par[PAR_G]
     k_p, k_d, k_i = par[PAR_K_P], par[PAR_K_D], par[PAR_K_I]
-    r_att, R_WA = par[PAR_R_ATT], par[PAR_R_WA].reshape(3, 3)
-    att = par[PAR_ATTITUDE]
+    cable, att = par[PAR_CABLE], par[PAR_ATTITUDE]
+    R_WA = cable[so3.CABLE_R_WA].reshape(3, 3)
     integral = state[STATE_INTEGRAL]
     phi, delta, dphi, ddelta = link
     yd = Y[0]
@@ -181,9 +176,7 @@ def hierarchical_reference(
     w_d, w_dot_d = (ff_omega, ff_omega_dot) if feedforward else (None, None)
     tau = attitude_torque(att[so3.ATT_J], att[so3.ATT_J_K_R], att[so3.ATT_J_K_W], R, omega_B,
                           R_d, w_d, w_dot_d)  # fmt: skip
-    if par[PAR_COMPENSATE] and tension > 0.0:
-        d_B = R.T @ (R_WA @ link_frame(phi, delta)[:, 0])
-        tau = tau - cable_torque(r_att, tension, d_B)
+    tau = so3.cancel_cable_torque_reference(tau, R, link_frame(phi, delta)[:, 0], tension, cable)
     out = np.zeros(OUT_WIDTH)
     wrench = np.concatenate(([max(f_R, 0.0)], tau))
     out[: mixer.OUT_WIDTH] = mixer.mix_reference(wrench, None, layout, rotors)
@@ -217,7 +210,8 @@ def hierarchical_into(
     """Compiled :func:`hierarchical_reference` (``state`` in place, result in ``out``)."""
     m, l, g = par[PAR_MASS], par[PAR_LENGTH], par[PAR_G]
     k_p, k_d, k_i = par[PAR_K_P], par[PAR_K_D], par[PAR_K_I]
-    R_WA = par[PAR_R_WA].reshape(3, 3)
+    cable = par[PAR_CABLE]
+    R_WA = cable[so3.CABLE_R_WA].reshape(3, 3)
     integral = state[STATE_INTEGRAL]
     phi, delta, dphi, ddelta = link[0], link[1], link[2], link[3]
     k = Y.shape[0]
@@ -268,10 +262,7 @@ def hierarchical_into(
             last_R_d[i] = R_d[i // 3, i % 3]
     t0, t1, t2 = so3.attitude_torque(R, omega_B, R_d, ff_omega, ff_omega_dot, feedforward,
                                      par[PAR_ATTITUDE])  # fmt: skip
-    if par[PAR_COMPENSATE] != 0.0 and tension > 0.0:
-        t0, t1, t2 = so3.cancel_cable_torque(
-            t0, t1, t2, R, R_WA, cd * cp, -sd, cd * sp, tension, par[PAR_R_ATT]
-        )
+    t0, t1, t2 = so3.cancel_cable_torque(t0, t1, t2, R, cd * cp, -sd, cd * sp, tension, cable)
     mixer.mix_into(max(f_R, 0.0), t0, t1, t2, omega_B, False, mix, out)
     # diagnostics: theta_A of the actual z_B (geometry.theta_A_from_z_B) and heading psi
     R_AB = so3.tmul3(R_WA, R)

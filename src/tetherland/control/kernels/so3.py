@@ -5,13 +5,14 @@
 - :func:`rot_y_x_z`: ``rot_y(theta_e) @ rot_x(roll) @ rot_z(psi)`` of
   :mod:`tetherland.control.common`;
 - :func:`attitude_torque`: :func:`tetherland.control.attitude.attitude_torque`;
-- :func:`cancel_cable_torque`: ``tau - cable_torque(r_att, f_L, d_B)``
-  (:func:`tetherland.control.common.cable_torque`);
+- :func:`cancel_cable_torque`: :func:`cancel_cable_torque_reference`;
 - :func:`remainder`: :func:`math.remainder`.
 
-The attitude law's gains are one packed field of every law's ``par``:
-:func:`pack_attitude` writes J, J k_R, J k_w at ``ATT_*``; both copies of each law read
-them there. tests/test_kernels_control.py checks every pair to 1e-9 on random inputs.
+Two packed fields are shared by the laws' ``par``: the attitude law's gains
+(:func:`pack_attitude`: J, J k_R, J k_w at ``ATT_*``) and the cable's geometry for the
+offset-torque cancellation (:func:`pack_cable`: on or off, r_att, R_WA at ``CABLE_*``);
+both copies of each law read them there. tests/test_kernels_control.py checks every
+pair to 1e-9 on random inputs.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
+from tetherland.control.common import cable_torque
 from tetherland.control.kernels.packing import Fields
 from tetherland.geometry import FloatArray
 
@@ -33,6 +35,15 @@ ATT_J_K_W = _att.vector(3)
 """J k_w: rate damping per axis [N m s/rad]."""
 ATT_WIDTH = _att.width
 
+_cable = Fields()
+CABLE_COMPENSATE = _cable.scalar()
+"""1: cancel the cable's torque at the attachment offset."""
+CABLE_R_ATT = _cable.vector(3)
+"""Cable attachment r_att, F_B [m]."""
+CABLE_R_WA = _cable.vector(9)
+"""Anchor frame R_WA, row-major."""
+CABLE_WIDTH = _cable.width
+
 
 def pack_attitude(inertia: FloatArray, k_R: FloatArray, k_w: FloatArray) -> FloatArray:
     """The attitude field (:data:`ATT_WIDTH`) of principal inertia [kg m^2] and per-axis
@@ -41,6 +52,16 @@ def pack_attitude(inertia: FloatArray, k_R: FloatArray, k_w: FloatArray) -> Floa
     att = np.empty(ATT_WIDTH)
     att[ATT_J], att[ATT_J_K_R], att[ATT_J_K_W] = J, J * k_R, J * k_w
     return att
+
+
+def pack_cable(compensate: bool, r_att_B: FloatArray, R_WA: FloatArray) -> FloatArray:
+    """The cable field (:data:`CABLE_WIDTH`): whether to cancel the cable's torque, the
+    attachment r_att in F_B [m] and the anchor frame R_WA."""
+    cable = np.empty(CABLE_WIDTH)
+    cable[CABLE_COMPENSATE] = float(compensate)
+    cable[CABLE_R_ATT] = r_att_B
+    cable[CABLE_R_WA] = np.asarray(R_WA, dtype=float).reshape(9)
+    return cable
 
 
 @njit(cache=True)
@@ -129,14 +150,29 @@ def attitude_torque(
     )
 
 
+def cancel_cable_torque_reference(
+    tau: FloatArray, R: FloatArray, x_L_A: FloatArray, tension: float, cable: FloatArray
+) -> FloatArray:
+    """tau - r_att x (-f_L d_B), d_B = R^T R_WA x_L the link direction (anchor -> vehicle,
+    ``x_L_A`` in F_A) in F_B: the torque that cancels the cable's at the attachment offset
+    (docs/theory.md section 7.7; :func:`tetherland.control.common.cable_torque`), when the
+    ``cable`` field asks for it and the tension f_L [N] pulls; else ``tau``."""
+    if not (cable[CABLE_COMPENSATE] and tension > 0.0):
+        return tau
+    d_B = R.T @ (cable[CABLE_R_WA].reshape(3, 3) @ x_L_A)
+    return tau - cable_torque(cable[CABLE_R_ATT], tension, d_B)
+
+
 @njit(cache=True)
 def cancel_cable_torque(
-    t0: float, t1: float, t2: float, R: FloatArray, R_WA: FloatArray,
-    xa0: float, xa1: float, xa2: float, tension: float, r_att: FloatArray,
+    t0: float, t1: float, t2: float, R: FloatArray, xa0: float, xa1: float, xa2: float,
+    tension: float, cable: FloatArray,
 ) -> tuple[float, float, float]:  # fmt: skip
-    """tau - r_att x (-f_L d_B), d_B = R^T R_WA x_L (the link direction x_L in F_A given as
-    (xa0, xa1, xa2), in F_B): the torque that cancels the cable's at the attachment offset
-    ``r_att`` (F_B) (docs/theory.md section 7.7; :func:`tetherland.control.common.cable_torque`)."""
+    """Compiled :func:`cancel_cable_torque_reference` of tau = (t0, t1, t2) and x_L in F_A
+    given as (xa0, xa1, xa2)."""
+    if not (cable[CABLE_COMPENSATE] != 0.0 and tension > 0.0):
+        return t0, t1, t2
+    r_att, R_WA = cable[CABLE_R_ATT], cable[CABLE_R_WA].reshape(3, 3)
     r0, r1, r2 = r_att[0], r_att[1], r_att[2]
     dw = np.empty(3)
     for i in range(3):
