@@ -36,7 +36,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
@@ -47,6 +46,7 @@ from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
 from tetherland.geometry import theta_A_from_z_B
 from tetherland.interfaces import Command, ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.mission.blend import BlendedTrack
 from tetherland.mission.contact import (
     ContactDecision,
     ContactRule,
@@ -60,7 +60,7 @@ from tetherland.mission.hooking import unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
-from tetherland.planning.spline import smoothstep9_scalar
+from tetherland.mission.release import ReleasePull
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
 
@@ -98,61 +98,6 @@ from the surface."""
 
 class TransitionError(TetherlandError):
     """The supervisor tried a phase change that :data:`TRANSITIONS` does not allow."""
-
-
-class BlendedTrack:
-    """A planned tethered track whose start is moved onto the current output (bumpless).
-
-    y_d(t) = y_plan(t) + (1 - s((t - t_b)/T)) (y_now - y_plan(t_b)), s the 9th-order
-    smoothstep: at t_b the reference equals the current output with zero derivatives of
-    the offset, and after t_b + T it is the plan.
-    """
-
-    def __init__(self, track: TrajectoryTrack, y_now: np.ndarray, t_b: float, duration: float):
-        self.track = track
-        self.t_b = t_b
-        self.duration = duration
-        y0 = track.reference(t_b).output[0]
-        delta = np.asarray(y_now, dtype=float) - y0
-        delta[3] = math.remainder(delta[3], 2.0 * math.pi)
-        self.delta = delta
-
-    def reference(self, t: float, phase: Phase) -> Reference:
-        ref = self.track.reference(t)
-        tau = (t - self.t_b) / self.duration
-        if tau >= 1.0:
-            if ref.phase == int(phase):
-                return ref
-            return Reference(
-                t=t, mode=ref.mode, phase=int(phase), output=ref.output,
-                thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-            )  # fmt: skip
-        s = smoothstep9_scalar(tau, 4)
-        scale = np.array([1.0 - s[0]] + [-s[k] / self.duration**k for k in range(1, 5)])
-        out = ref.output + np.outer(scale, self.delta)
-        return Reference(
-            t=t, mode=ControlMode.TETHERED, phase=int(phase), output=out,
-            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-        )  # fmt: skip
-
-
-@dataclass(slots=True)
-class _ReleasePull:
-    """The cable's pull handed over to free flight at the release (mutable run state)."""
-
-    t0: float
-    """Release time [s]."""
-    fade: float
-    """Duration of the timed fade of the pull: the leg to the slack point [s]."""
-    tension: float
-    """The tension estimate at the release [N]."""
-    d0: np.ndarray
-    """Cable direction at the release (anchor to vehicle) [-]."""
-    bias: float = 0.0
-    """The tension estimate read inside the slack point: B.d, the force-model error
-    along the cable [N]."""
-    frozen: np.ndarray | None = None
-    """The feed-forward frozen when the unhooking pass starts [m/s^2] (None: not yet)."""
 
 
 class MissionSupervisor:
@@ -209,7 +154,7 @@ class MissionSupervisor:
         )
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
-        self._release_pull: _ReleasePull | None = None
+        self._release_pull: ReleasePull | None = None
         self._t_free = 0.0  # last tick of the free-flight reference [s]
         self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
@@ -264,39 +209,10 @@ class MissionSupervisor:
             rows = self._path.sample(t)
         if self._release_pull is not None:
             rows = rows.copy()  # the path's rows are shared and read-only
-            rows[2] += self._pull_feedforward(t, est, rows[0])
+            rows[2] += self._release_pull.feedforward(t, est, rows[0])
         return Reference(
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
-
-    def _pull_feedforward(self, t: float, est: StateEstimate, p_d: np.ndarray) -> np.ndarray:
-        """The released cable's pull as an acceleration feed-forward [m/s^2] (reference
-        position ``p_d``).
-
-        The estimated pull at the release, along the cable, fades out while the reference
-        moves to the slack point. At the hand-over, though, the position integral starts
-        with the thrust that held the cable less the estimated pull, and so lacks the part
-        of the force-model error B (mass, thrust coefficient) along the cable: taut, the
-        pull and B.d look alike, and the tension estimate reads T + B.d. Once the fade is
-        over and the vehicle is inside the slack point (the cable slack for sure), the
-        estimate reads B.d alone; taken as the feed-forward along the cable it supplies
-        the missing part, and it is frozen when the unhooking pass starts (the pass turns
-        d). Without it the missing part became a steady error -(B.d) d/(m k_x), up to
-        5 cm towards a wall during the unhooking pass. B.d < 0 (an error away from the
-        anchor, which the cable stops) is left to the integral.
-        """
-        pull = self._release_pull
-        assert pull is not None
-        if pull.frozen is not None:
-            return pull.frozen
-        s = (t - pull.t0) / pull.fade if pull.fade > 0.0 else 1.0
-        if s < 1.0:
-            return ((1.0 - smoothstep9_scalar(s, 0)[0]) * pull.tension / self.mass) * pull.d0
-        d = est.body.p_W - self.geo.p_A
-        d /= max(float(np.linalg.norm(d)), 1e-9)
-        if float((est.body.p_W - p_d) @ d) <= 0.0:  # inside the slack point: B.d
-            pull.bias = min(max(est.tension or 0.0, 0.0), pull.tension)
-        return (pull.bias / self.mass) * d
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
         return Path(t, start, speed or self.cfg.cruise_speed, self.cfg.cruise_accel)
@@ -602,20 +518,17 @@ class MissionSupervisor:
         cfg = self.cfg
         if t >= self._track.track.t_end + cfg.settle_time:
             self.times["t_released"] = t
-            # The pull is handed over as a force feed-forward that fades out while the
-            # reference moves inside the cable length, then supplies the force-model
-            # error the hand-over left out (_pull_feedforward). (As a position offset, as
-            # in stretching, the free-flight position integral would wind up on it and
-            # keep the cable taut when the release leg is short: short cables near walls.)
+            # the pull is handed over as a fading force feed-forward (mission.release)
             d = est.body.p_W - self.geo.p_A
             d /= np.linalg.norm(d)
             slack = self.geo.p_A + self.wp.release_distance * d - self.wp.attachment_W
             self._path = self._new_path(t, est.body.p_W, cfg.hook_speed).to(
                 slack, pause=cfg.settle_time
             )
-            self._release_pull = _ReleasePull(
+            self._release_pull = ReleasePull(
                 t0=t, fade=self._path.segments[0].duration,
-                tension=max(est.tension or 0.0, 0.0), d0=d.copy(),
+                tension=max(est.tension or 0.0, 0.0), d0=d.copy(), mass=self.mass,
+                p_A=self.geo.p_A,
             )  # fmt: skip
             self._track = None
             self._enter(
@@ -629,7 +542,7 @@ class MissionSupervisor:
         if t >= self._path.t_end:
             slack = self._path.end
             if self._release_pull is not None:  # the pass turns d: freeze the pull
-                self._release_pull.frozen = self._pull_feedforward(t, est, slack)
+                self._release_pull.freeze(t, est, slack)
             # the reverse pass, no deeper than mission.unhook_depth (mission.hooking)
             *corners, last = unhooking_path(
                 slack, wp.unhook_entry, wp.hook_start, self._unhook_reach
