@@ -9,10 +9,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import annotated_types as at
 from pydantic import BaseModel, ValidationError
 
 from tetherland.config.scenario import Scenario
+from tetherland.config.schema import allowed_range as _allowed_range
 from tetherland.errors import ConfigError
 
 _BUILTIN_PACKAGE = "tetherland.scenarios"
@@ -117,25 +117,6 @@ def _field_info(model: type[BaseModel], loc: Sequence[Any]):
             return None
         current = info.annotation
     return info
-
-
-def _allowed_range(info: Any) -> str | None:
-    lo = hi = None
-    lo_open = hi_open = False
-    for m in getattr(info, "metadata", []):
-        if isinstance(m, at.Gt):
-            lo, lo_open = m.gt, True
-        elif isinstance(m, at.Ge):
-            lo, lo_open = m.ge, False
-        elif isinstance(m, at.Lt):
-            hi, hi_open = m.lt, True
-        elif isinstance(m, at.Le):
-            hi, hi_open = m.le, False
-    if lo is None and hi is None:
-        return None
-    left = "(" if lo_open or lo is None else "["
-    right = ")" if hi_open or hi is None else "]"
-    return f"{left}{'-inf' if lo is None else lo:g}, {'inf' if hi is None else hi:g}{right}"
 
 
 def format_validation_error(err: ValidationError, model: type[BaseModel] = Scenario) -> str:
