@@ -143,7 +143,7 @@ def test_perturbations_are_seeded_and_within_ranges(slope50):
     assert p1 == sample_perturbation(slope50, np.random.default_rng(3))
     assert p1 != sample_perturbation(slope50, np.random.default_rng(4))
     c = slope50.perturbation
-    assert abs(p1.mass_factor - 1) <= c.mass_rel and abs(p1.slope_error_deg) <= c.slope_deg
+    assert abs(p1.mass_factor - 1) <= c.mass_rel and abs(p1.slope_error_deg) <= c.slope_error_deg
     assert c.noise_scale_min <= p1.noise_scale <= c.noise_scale_max
 
 

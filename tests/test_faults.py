@@ -216,7 +216,7 @@ def test_rotor_rule_ignores_the_cable_torque_and_sees_a_missing_rotor(slope50):
     assert found is not None and found.kind is FaultKind.ROTOR
     # it took the low-pass to 1/1.5 of the step (ln 3 time constants) plus the dwell
     cfg = slope50.mission.detection
-    expected = cfg.rotor_filter_time * math.log(3.0) + cfg.rotor_dwell
+    expected = cfg.rotor_torque_time_constant * math.log(3.0) + cfg.rotor_dwell
     assert found.t - 10.0 == pytest.approx(expected, abs=0.01)
     assert mon.cable_torque_B(_hover_estimate(slope50, 0.0, l, 0.0)) == pytest.approx(0.0)
 

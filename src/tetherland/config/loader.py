@@ -11,6 +11,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
+from tetherland.config.renames import check_renames
 from tetherland.config.scenario import Scenario
 from tetherland.config.schema import allowed_range as _allowed_range
 from tetherland.errors import ConfigError
@@ -155,7 +156,9 @@ def format_validation_error(err: ValidationError, model: type[BaseModel] = Scena
 
 
 def scenario_from_dict(data: dict[str, Any], default_name: str = "custom") -> Scenario:
-    """Validate a nested dict (TOML layout) into a :class:`Scenario`."""
+    """Validate a nested dict (TOML layout) into a :class:`Scenario` (old field names are
+    refused with their new name, :mod:`tetherland.config.renames`)."""
+    check_renames(data)
     data = dict(data)
     data.setdefault("name", default_name)
     try:

@@ -11,17 +11,17 @@ link state and the estimated tension. Action (float32, 4): normalised rotor thru
 a_i in [0, 1], f_i = f_min + a_i (f_max - f_min) [N], sent as speed commands through the
 believed rotor model.
 
-Landing: the episode runs to touchdown (a contact force above ``verdict.contact_force``,
+Landing: the episode runs to touchdown (a contact force above ``verdict.touchdown_force``,
 as the judge of a mission) and on until the rotors have idled (the action's zero, the
 motors-off of the mission) for ``rest_time``; conditions (1)-(4) are judged at touchdown
 with the scenario's ``[verdict]`` tolerances and (5) over the rest as the judge does: the
-slip over the whole idle interval, the speed from ``verdict.rest_settle`` after idling.
+slip over the whole idle interval, the speed from ``verdict.rest_settle_time`` after idling.
 The rest ends early if the rotors are driven again. The final
 reward is the number of conditions held plus ``success_bonus`` when all five hold.
 Takeoff: the episode ends ``rest_time`` after the planned end; success when the link
 elevation and the tilt are within ``takeoff_tolerance`` of the planned taut end hover.
 A frame contact above ``verdict.crash_force`` (crash) or a slack cable (true tension
-below ``SLACK_TENSION`` for ``mission.fault_slack_time`` while airborne) ends the episode
+below ``SLACK_TENSION`` for ``mission.detection.slack_dwell`` while airborne) ends the episode
 with ``-failure_penalty``;
 each step costs ``dt`` x the distance to the goal [m s]. Episodes are truncated at
 ``time_limit`` (default: the plan's duration + ``rest_time`` + 3 s).
@@ -136,7 +136,7 @@ class TetheredEnv(gymnasium.Env):
     randomize : bool
         Draw the campaign perturbations at each reset.
     rest_time : float
-        Landing: the rest with idle rotors judged for condition (5) (> verdict.rest_settle);
+        Landing: the rest with idle rotors judged for condition (5) (> verdict.rest_settle_time);
         takeoff: time after the planned end [s], in (0, 10].
     time_limit : float, optional
         Truncation time [s] (default: plan duration + rest_time + 3 s), in (0, 600].
@@ -175,10 +175,10 @@ class TetheredEnv(gymnasium.Env):
             raise ConfigError(f"maneuver must be landing or takeoff (got {maneuver!r})") from None
         if not 0 < rest_time <= 10:
             raise ConfigError(f"rest_time must be in (0, 10] s (got {rest_time})")
-        self._rest_settle = sc.verdict.rest_settle
+        self._rest_settle = sc.verdict.rest_settle_time
         if self.maneuver is Maneuver.LANDING and rest_time <= self._rest_settle:
             raise ConfigError(
-                f"rest_time must exceed verdict.rest_settle = {self._rest_settle:g} s for a "
+                f"rest_time must exceed verdict.rest_settle_time = {self._rest_settle:g} s for a "
                 f"landing (got {rest_time})"
             )
         if time_limit is not None and not 0 < time_limit <= 600:
@@ -302,7 +302,7 @@ class TetheredEnv(gymnasium.Env):
         if frame > cfg.crash_force:
             return -self.failure_penalty, Outcome.CRASHED, info
         force = max(float(plant.lander_forces.max()), frame)
-        airborne = force <= cfg.contact_force
+        airborne = force <= cfg.touchdown_force
         if self._slack(t, plant.tension, airborne):
             return -self.failure_penalty, Outcome.SLACK, info
         if self.maneuver is Maneuver.LANDING:
@@ -321,7 +321,7 @@ class TetheredEnv(gymnasium.Env):
             return False
         if self._slack_since is None:
             self._slack_since = t
-        return t - self._slack_since > self.scenario.mission.fault_slack_time
+        return t - self._slack_since > self.scenario.mission.detection.slack_dwell
 
     def _landing(self, t, p_RL, z_B, v_W, airborne, idle, info) -> tuple[float, Outcome]:
         geo = self.geometry

@@ -217,11 +217,11 @@ def chain_spec(scenario: Scenario) -> ChainSpec:
 
 
 def hook_timeconst(scenario: Scenario) -> float:
-    """Time constant of the chain's hook connection [s]: ``sim.cable_timeconst``, or for
+    """Time constant of the chain's hook connection [s]: ``sim.cable_time_constant``, or for
     an elastic line at least 1/sqrt(k/m), so that a cable snapping taut stops the vehicle
     no faster than the line's own spring would (snap load about v sqrt(k m))."""
     sim, t = scenario.sim, scenario.tether
-    tau = max(sim.cable_timeconst, 2.0 * sim.timestep)  # MuJoCo's floor: two steps
+    tau = max(sim.cable_time_constant, 2.0 * sim.timestep)  # MuJoCo's floor: two steps
     k = t.stiffness
     return tau if k is None else max(tau, math.sqrt(scenario.vehicle.mass / k))
 
@@ -331,7 +331,7 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
     geom = layout.geometry
     surf = geom.surface
     mu = scenario.surface.friction
-    contact_solref = _fmt((sim.contact_timeconst, sim.contact_dampratio))
+    contact_solref = _fmt((sim.contact_time_constant, sim.contact_damping_ratio))
 
     root = ET.Element("mujoco", model=f"tetherland_{scenario.name}")
     _sub(root, "compiler", angle="radian", autolimits="true")
@@ -564,7 +564,7 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             root,
             p_A,
             chain_spec(scenario),
-            solref=_fmt((hook_timeconst(scenario), sim.cable_dampratio)),
+            solref=_fmt((hook_timeconst(scenario), sim.cable_damping_ratio)),
         )
     tendon = _sub(root, "tendon")
     cable_attrs = {"width": "0.004", "rgba": ".95 .85 .2 1"}
@@ -572,7 +572,7 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
         cable_attrs.update(
             limited="true",
             range=_fmt((0.0, tether.length)),
-            solreflimit=_fmt((sim.cable_timeconst, sim.cable_dampratio)),
+            solreflimit=_fmt((sim.cable_time_constant, sim.cable_damping_ratio)),
         )
     elif cable_model == CableModel.CHAIN:
         cable_attrs["group"] = str(CABLE_GROUP_HIDDEN)  # the links are drawn instead
