@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from legacy_random import LegacySource
 from tetherland.config import load_scenario, scenario_from_dict, with_overrides
 from tetherland.geometry import LandingGeometry
 from tetherland.mission import TRANSITIONS, Phase
@@ -159,7 +160,7 @@ def test_a_lagging_link_far_above_the_surface_is_not_taken_for_contact():
     truth = load_scenario(
         "slope50", ["surface.slope_deg=20", "tether.length=1.2", "tether.hook_drop=1.0"]
     )
-    perturbation = sample_perturbation(truth, np.random.default_rng(seed))
+    perturbation = sample_perturbation(truth, LegacySource(seed))  # as the campaign drew it
     assert perturbation.mass_factor > 1.04  # the case is the one described above
     plant, belief = apply_perturbation(truth, perturbation)
     verdict = run_for_campaign(plant, belief, perturbation, "tethered", seed)
@@ -177,7 +178,7 @@ def test_release_on_a_wall_with_a_light_believed_mass_does_not_swing_into_it():
 
     seed = 2429995221
     truth = load_scenario("wall90")
-    p = sample_perturbation(truth, np.random.default_rng(seed))
+    p = sample_perturbation(truth, LegacySource(seed))  # as the campaign drew it
     assert p.mass_factor == pytest.approx(0.962, abs=1e-3)  # the premise
     plant, belief = apply_perturbation(truth, p)
     verdict = run_for_campaign(plant, belief, p, "tethered", seed)
@@ -197,13 +198,14 @@ def test_flat_mission_lands_although_the_cable_slackens_on_the_ground():
 
 def _wall90_campaign_run(seed: int):
     """The wall90 campaign's run with per-run ``seed`` (base seed 2026), flown exactly as
-    the campaign flies it (perturbed plant and belief, wind gusts), with its full log."""
+    the campaign flew it (perturbed plant and belief, wind gusts, drawn before the named
+    random streams: :mod:`legacy_random`), with its full log."""
     from tetherland.campaign.jobs import worker_planners
     from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
     from tetherland.sim.disturbances import WindGusts
 
     truth = load_scenario("wall90")
-    p = sample_perturbation(truth, np.random.default_rng(seed))
+    p = sample_perturbation(truth, LegacySource(seed))
     plant, belief = apply_perturbation(truth, p)
     period = 1.0 / plant.controller.rate_hz
     wind: list[WindGusts] = []

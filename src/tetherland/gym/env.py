@@ -21,15 +21,18 @@ reward is the number of conditions held plus ``success_bonus`` when all five hol
 Takeoff: the episode ends ``rest_time`` after the planned end; success when the link
 elevation and the tilt are within ``takeoff_tolerance`` of the planned taut end hover.
 A frame contact above ``verdict.crash_force`` (crash) or a slack cable (true tension
-below ``SLACK_TENSION`` for ``mission.detection.slack_dwell`` while airborne) ends the episode
-with ``-failure_penalty``;
+below ``SLACK_TENSION`` for ``mission.detection.slack_dwell`` while airborne) ends the
+episode with ``-failure_penalty``;
 each step costs ``dt`` x the distance to the goal [m s]. Episodes are truncated at
 ``time_limit`` (default: the plan's duration + ``rest_time`` + 3 s).
 
-``randomize=True`` draws the campaign perturbations (:mod:`tetherland.campaign.perturb`)
-from the env's RNG at each reset: the plant keeps the scenario as the truth (with the drawn
-sensor-noise scale and mocap dropouts), the estimator believes the perturbed vehicle,
-surface and anchor (``info["perturbation"]``). Wind gusts are not applied.
+Each reset draws the episode's seed from the env's RNG (``info["seed"]``); the episode's
+sensor noise and perturbation come from that seed's named streams
+(:mod:`tetherland.randomness`). ``randomize=True`` draws the campaign perturbations
+(:mod:`tetherland.campaign.perturb`) at each reset: the plant keeps the scenario as the
+truth (with the drawn sensor-noise scale and mocap dropouts), the estimator believes the
+perturbed vehicle, surface and anchor (``info["perturbation"]``). Wind gusts are not
+applied.
 """
 
 from __future__ import annotations
@@ -59,6 +62,7 @@ from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.maneuver import Maneuver
 from tetherland.planning.trajectory import Trajectory
+from tetherland.randomness import RandomSource
 from tetherland.rotations import quat_to_rotmat
 from tetherland.sim import Plant, Runner
 from tetherland.sim.baselines import ConstantSpeedController
@@ -222,10 +226,11 @@ class TetheredEnv(gymnasium.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[FloatArray, dict[str, Any]]:
         super().reset(seed=seed)
-        rng = self.np_random
+        # one random source per episode, its seed drawn from the environment's generator
+        random = RandomSource(int(self.np_random.integers(2**63)))
         plant_sc, belief, perturbation = self.scenario, self.scenario, None
         if self.randomize:
-            perturbation = sample_perturbation(self.scenario, rng, horizon=self.time_limit)
+            perturbation = sample_perturbation(self.scenario, random, horizon=self.time_limit)
             plant_sc, belief = apply_perturbation(self.scenario, perturbation)
         if self._plant.scenario != plant_sc:
             self._plant = Plant(plant_sc)
@@ -236,8 +241,10 @@ class TetheredEnv(gymnasium.Env):
                         plant=self._plant)  # fmt: skip
         if self._loop is not None:
             self._loop.close()
-        self._loop = runner.steps(self.time_limit + 2 * self.dt, initial_state=self._x0,
-                                  rotor_speeds=self._w0, cable_engaged=True, rng=rng)  # fmt: skip
+        self._loop = runner.steps(
+            self.time_limit + 2 * self.dt, initial_state=self._x0, rotor_speeds=self._w0,
+            cable_engaged=True, random=random,
+        )  # fmt: skip
         tick = next(self._loop)
         self._history: deque[tuple[FloatArray, FloatArray]] = deque(maxlen=3)
         self._touchdown: dict[str, Any] | None = None
@@ -247,7 +254,7 @@ class TetheredEnv(gymnasium.Env):
         self._idle_since: float | None = None
         self._done = False
         self._record_truth()
-        info = {"t": tick.t, "outcome": Outcome.RUNNING.value,
+        info = {"t": tick.t, "outcome": Outcome.RUNNING.value, "seed": random.seed,
                 "perturbation": perturbation.to_dict() if perturbation else {}}  # fmt: skip
         return _observe(tick.estimate), info
 
