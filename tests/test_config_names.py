@@ -192,7 +192,9 @@ def _doc_files() -> list[Path]:
     files = []
     for root in roots:
         files += [root] if root.is_file() else sorted(root.rglob("*"))
-    return [p for p in files if p.suffix in (".md", ".py", ".toml", ".sh")]
+    generated = ROOT / "docs" / "reference"  # lists the old names on purpose
+    return [p for p in files if p.suffix in (".md", ".py", ".toml", ".sh")
+            and generated not in p.parents]  # fmt: skip
 
 
 def test_command_lines_and_names_in_the_docs_are_current_fields():
