@@ -81,7 +81,7 @@ def main() -> None:
     planners = Planners()
     # first run in a process: numba loads its cached kernels (see bench_control_estimation)
     t0 = time.perf_counter()
-    run_mission(with_overrides(scenario, ["mission.max_duration=1"]), planners=planners)
+    run_mission(with_overrides(scenario, ["mission.time_limit=1"]), planners=planners)
     print(f"warm-up (kernel loading, planner compilation): {time.perf_counter() - t0:.2f} s")
     for controller in controllers:
         rtfs = []

@@ -104,7 +104,7 @@ def main() -> None:
 
         planners = Planners()
         sc = load_scenario("slope50")
-        run_mission(with_overrides(sc, ["mission.max_duration=2"]), planners=planners)  # warm-up
+        run_mission(with_overrides(sc, ["mission.time_limit=2"]), planners=planners)  # warm-up
         run = Runner.run
         logs = []
 

@@ -173,7 +173,7 @@ class Reference:
     lateral_free : bool
         Tethered: leave the link azimuth delta to gravity, with no sideways force but a
         fraction of the damping of delta' (the supervisor's lateral release in the last centimetres,
-        ``mission.touchdown_lateral_clearance``). The hierarchical controller honours it;
+        ``mission.touchdown.lateral_clearance``). The hierarchical controller honours it;
         the DFL controller tracks ``output`` as given.
     """
 

@@ -8,8 +8,6 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from tetherland.analysis import analyze
 from tetherland.campaign.faults import fault_time, phase_at, sample_fault
 from tetherland.campaign.perturb import Perturbation, apply_perturbation, sample_perturbation
@@ -17,6 +15,7 @@ from tetherland.campaign.spec import RunSpec
 from tetherland.config import Scenario, apply_overrides, scenario_from_dict
 from tetherland.errors import TetherlandError
 from tetherland.methods import Planners
+from tetherland.randomness import RandomSource
 from tetherland.runs import run_mission
 from tetherland.sim.disturbances import WindGusts
 
@@ -109,11 +108,14 @@ def run_for_campaign(
     return campaign_fields(result.summary)
 
 
-def execute(job: Job) -> dict[str, Any]:
+def execute(job: Job, random: RandomSource | None = None) -> dict[str, Any]:
     """Run one job and return its record for the results table.
 
-    Bad inputs and failures inside the run are recorded (``status = "error"``), not
-    raised, so one broken run cannot stop a campaign.
+    Every draw comes from ``random`` (default: the run seed's
+    :class:`~tetherland.randomness.RandomSource`): the perturbation, the wind, the fault,
+    and the sensor noise (``run_mission`` with the run's seed). Bad inputs and failures
+    inside the run are recorded (``status = "error"``), not raised, so one broken run
+    cannot stop a campaign.
     """
     start = time.perf_counter()
     run = job.run
@@ -127,14 +129,14 @@ def execute(job: Job) -> dict[str, Any]:
     }
     try:
         truth = run_scenario(job)
-        perturbation = sample_perturbation(truth, np.random.default_rng(run.seed))
+        random = RandomSource(run.seed) if random is None else random
+        perturbation = sample_perturbation(truth, random)
         record["perturbation"] = perturbation.to_dict()
         plant, belief = apply_perturbation(truth, perturbation)
         faults = None
         if run.fault is not None:  # its own stream: the perturbation stays that of the seed
             assert run.fault_slice is not None
-            rng = np.random.default_rng([run.seed, 15])
-            faults = sample_fault(run.fault, run.fault_slice, belief, rng)
+            faults = sample_fault(run.fault, run.fault_slice, belief, random.stream("faults"))
             plant = plant.model_copy(update={"faults": faults})
             record["fault"] = {"kind": run.fault, "t": fault_time(faults),
                                **faults.model_dump(mode="json")}  # fmt: skip

@@ -2,7 +2,9 @@
 
 The scenario as given is the truth that the plant simulates. Each run draws model and
 pose errors; the *belief* scenario (used by the planner, controllers and estimator) has
-them. Sensor noise, mocap dropouts and wind gusts act on the plant.
+them. Sensor noise, mocap dropouts and wind gusts act on the plant. The errors come from
+the run's ``perturbation`` stream, the gusts from its ``wind`` stream
+(:mod:`tetherland.randomness`).
 """
 
 from __future__ import annotations
@@ -13,8 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from tetherland.config import Scenario, scenario_from_dict
+from tetherland.config import PerturbationConfig, Scenario, scenario_from_dict
 from tetherland.geometry import LandingGeometry
+from tetherland.randomness import RandomSource
 from tetherland.surface import normal_from_slope, surface_frame
 
 
@@ -86,15 +89,10 @@ class Perturbation:
         return d
 
 
-def sample_perturbation(
-    scenario: Scenario, rng: np.random.Generator, horizon: float = 120.0
-) -> Perturbation:
-    """Draw one perturbation from the scenario's ``[perturbation]`` ranges."""
-    c = scenario.perturbation
-
-    def rel(half: float) -> float:
-        return float(1.0 + rng.uniform(-half, half))
-
+def sample_gusts(
+    c: PerturbationConfig, rng: np.random.Generator, horizon: float = 120.0
+) -> tuple[Gust, ...]:
+    """Wind gusts over ``horizon`` [s]: Poisson start times, uniform peak force and heading."""
     gusts = []
     if c.wind_gust_rate > 0 and c.wind_gust_force > 0:
         t = float(rng.exponential(1.0 / c.wind_gust_rate))
@@ -109,21 +107,41 @@ def sample_perturbation(
                 )
             )
             t += c.wind_gust_duration + float(rng.exponential(1.0 / c.wind_gust_rate))
+    return tuple(gusts)
+
+
+def sample_perturbation(
+    scenario: Scenario, random: RandomSource, horizon: float = 120.0
+) -> Perturbation:
+    """Draw one perturbation from the scenario's ``[perturbation]`` ranges.
+
+    The gusts come from ``random``'s ``wind`` stream (over ``horizon`` [s]), everything
+    else from its ``perturbation`` stream, so that the wind settings leave the model errors
+    of a seed unchanged. The gusts are drawn first: with one generator for both streams
+    this is the draw of earlier versions, which had no named streams.
+    """
+    c = scenario.perturbation
+    gusts = sample_gusts(c, random.stream("wind"), horizon)
+    rng = random.stream("perturbation")
+
+    def rel(half: float) -> float:
+        return float(1.0 + rng.uniform(-half, half))
+
     return Perturbation(
         mass_factor=rel(c.mass_rel),
         inertia_factor=rel(c.inertia_rel),
         thrust_coefficient_factor=rel(c.thrust_coefficient_rel),
         motor_time_constant_factor=rel(c.motor_time_constant_rel),
-        slope_error_deg=float(rng.uniform(-c.slope_deg, c.slope_deg)),
-        azimuth_error_deg=float(rng.uniform(-c.azimuth_deg, c.azimuth_deg)),
+        slope_error_deg=float(rng.uniform(-c.slope_error_deg, c.slope_error_deg)),
+        azimuth_error_deg=float(rng.uniform(-c.azimuth_error_deg, c.azimuth_error_deg)),
         anchor_error_S=(
-            float(rng.uniform(-c.anchor_position, c.anchor_position)),
-            float(rng.uniform(-c.anchor_position, c.anchor_position)),
+            float(rng.uniform(-c.anchor_error, c.anchor_error)),
+            float(rng.uniform(-c.anchor_error, c.anchor_error)),
         ),
         noise_scale=float(rng.uniform(c.noise_scale_min, c.noise_scale_max)),
         mocap_dropout_rate=c.mocap_dropout_rate,
         mocap_dropout_duration=c.mocap_dropout_duration,
-        gusts=tuple(gusts),
+        gusts=gusts,
     )
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from tetherland.campaign.faults import DEFAULT_WINDOW, FAULT_KINDS, time_slice
 from tetherland.errors import ConfigError
 from tetherland.methods import method_names
+from tetherland.randomness import derive_seed
 
 METHODS = method_names()
 JOBS = ("mission", "analysis")
@@ -125,7 +126,7 @@ class CampaignSpec:
             return [
                 RunSpec(
                     f"{kind}-{i:05d}", "tethered", i,
-                    int(np.random.SeedSequence([self.seed, 15, j, i]).generate_state(1)[0]),
+                    derive_seed(self.seed, 15, j, i),
                     None, None, kind, time_slice(self.fault_window, i, self.runs),
                 )
                 for i in range(self.runs)  # interleaved: a partial campaign has every kind
@@ -136,7 +137,7 @@ class CampaignSpec:
         specs = []
         for j, value in enumerate(sweep_values):
             for i in range(self.runs):
-                seed = int(np.random.SeedSequence([self.seed, j, i]).generate_state(1)[0])
+                seed = derive_seed(self.seed, j, i)
                 for method in self.methods:
                     tag = f"{method}-{'base' if value is None else f'{value:g}'}-{i:05d}"
                     specs.append(RunSpec(tag, method, i, seed, key, value))

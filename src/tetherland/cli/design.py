@@ -82,7 +82,7 @@ def design(
         title = (
             f"{sc.name}: {sc.vehicle.mass:g} kg, rotors {sc.vehicle.f_min:g}-"
             f"{sc.vehicle.f_max:g} N, control margin {sc.vehicle.control_margin:g} N\n"
-            f"hooking pass: overshoot {sc.mission.hook_overshoot:g} m, capture radius "
+            f"hooking pass: overshoot {sc.mission.hooking.overshoot:g} m, capture radius "
             f"{sc.tether.capture_radius:g} m"
         )
         files["map"] = str(save_map_figure(out / "feasibility_map.png", fmap, result.chosen, title))

@@ -9,10 +9,11 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import annotated_types as at
 from pydantic import BaseModel, ValidationError
 
+from tetherland.config.renames import check_renames
 from tetherland.config.scenario import Scenario
+from tetherland.config.schema import allowed_range as _allowed_range
 from tetherland.errors import ConfigError
 
 _BUILTIN_PACKAGE = "tetherland.scenarios"
@@ -119,25 +120,6 @@ def _field_info(model: type[BaseModel], loc: Sequence[Any]):
     return info
 
 
-def _allowed_range(info: Any) -> str | None:
-    lo = hi = None
-    lo_open = hi_open = False
-    for m in getattr(info, "metadata", []):
-        if isinstance(m, at.Gt):
-            lo, lo_open = m.gt, True
-        elif isinstance(m, at.Ge):
-            lo, lo_open = m.ge, False
-        elif isinstance(m, at.Lt):
-            hi, hi_open = m.lt, True
-        elif isinstance(m, at.Le):
-            hi, hi_open = m.le, False
-    if lo is None and hi is None:
-        return None
-    left = "(" if lo_open or lo is None else "["
-    right = ")" if hi_open or hi is None else "]"
-    return f"{left}{'-inf' if lo is None else lo:g}, {'inf' if hi is None else hi:g}{right}"
-
-
 def format_validation_error(err: ValidationError, model: type[BaseModel] = Scenario) -> str:
     """One line naming the first bad field, what is wrong and the allowed range."""
     errors = err.errors(include_url=False)
@@ -174,7 +156,9 @@ def format_validation_error(err: ValidationError, model: type[BaseModel] = Scena
 
 
 def scenario_from_dict(data: dict[str, Any], default_name: str = "custom") -> Scenario:
-    """Validate a nested dict (TOML layout) into a :class:`Scenario`."""
+    """Validate a nested dict (TOML layout) into a :class:`Scenario` (old field names are
+    refused with their new name, :mod:`tetherland.config.renames`)."""
+    check_renames(data)
     data = dict(data)
     data.setdefault("name", default_name)
     try:

@@ -14,32 +14,33 @@ from tetherland.config.base import Section
 class VerdictConfig(Section):
     """Landing tolerances and the contact rules of the judge, measured on the plant's truth."""
 
-    position_m: float = Field(0.03, gt=0, le=1)
+    position_error: float = Field(0.03, gt=0, le=1)
     """Condition (1): largest ||p_RL(t_L) - p*_L|| [m]."""
-    attitude_deg: float = Field(3.0, gt=0, le=45)
+    attitude_error_deg: float = Field(3.0, gt=0, le=45)
     """Condition (2): largest angle between z_B(t_L) and z_S [deg]."""
-    speed_mps: float = Field(0.1, gt=0, le=10)
+    touchdown_speed: float = Field(0.1, gt=0, le=10)
     """Condition (3): largest ||p'_R(t_L-)|| [m/s]."""
-    angular_rate_rps: float = Field(0.3, gt=0, le=50)
+    touchdown_angular_rate: float = Field(0.3, gt=0, le=50)
     """Condition (3): largest ||omega_B(t_L-)|| [rad/s]."""
-    accel_mps2: float = Field(1.0, gt=0, le=100)
+    touchdown_accel: float = Field(1.0, gt=0, le=100)
     """Condition (4): largest ||p''_R(t_L-)|| [m/s^2]."""
-    angular_accel_rps2: float = Field(10.0, gt=0, le=1000)
+    touchdown_angular_accel: float = Field(10.0, gt=0, le=1000)
     """Condition (4): largest ||omega'_B(t_L-)|| [rad/s^2]."""
-    slip_m: float = Field(0.01, gt=0, le=1)
+    rest_slip: float = Field(0.01, gt=0, le=1)
     """Condition (5): largest displacement of p_RL while the motors are off [m]."""
-    rest_speed_mps: float = Field(0.02, gt=0, le=10)
-    """Condition (5): largest speed while resting, from ``rest_settle`` after the motors
-    go off [m/s]."""
-    rest_settle: float = Field(0.3, ge=0, le=10)
+    rest_speed: float = Field(0.02, gt=0, le=10)
+    """Condition (5): largest speed while resting, from ``rest_settle_time`` after the
+    motors go off [m/s]."""
+    rest_settle_time: float = Field(0.3, ge=0, le=10)
     """Condition (5): the rest speed is judged from this long after the motors go off
     (rotor spin-down, contact transient); the slip is measured over the whole rest [s]."""
-    contact_force: float = Field(0.05, gt=0, le=100)
-    """Touchdown: a normal force above this on a lander (or on the frame) [N]."""
-    safe_stop_speed_mps: float = Field(0.3, gt=0, le=10)
+    touchdown_force: float = Field(0.05, gt=0, le=100)
+    """Touchdown (t_L): the first true normal force above this on a lander (or on the
+    frame); the robot's own estimate is ``mission.contact.surface_force`` [N]."""
+    safe_stop_speed: float = Field(0.3, gt=0, le=10)
     """Safe stop: largest vehicle speed at the end of the run for the supervisor's safe
-    state (hover, landed, motors off) to count as reached, in (0, 10] [m/s]."""
-    return_position_m: float = Field(0.1, gt=0, le=10)
+    state (hover, landed, motors off) to count as reached [m/s]."""
+    return_position_error: float = Field(0.1, gt=0, le=10)
     """Return: largest ||p_RL - pad|| at the end of the run; the cable must also be
     unhooked by then [m]."""
     crash_force: float = Field(1e-6, gt=0, le=100)

@@ -5,7 +5,7 @@ learning from demonstration. It holds the plan (a :class:`TrajectoryTrack` start
 t = 0) and the mission's :class:`~tetherland.control.SwitchingController` in tethered mode.
 Landing ends as the mission's touchdown phase does, by the same rule
 (:mod:`tetherland.mission.contact`): contact is confirmed near the end of the plan, and
-past it in a guarded descent that lowers phi_d at ``mission.touchdown_rate_deg``, when the
+past it in a guarded descent that lowers phi_d at ``mission.touchdown.descent_rate_deg_s``, when the
 clearance, the link stall and (if the estimate carries it) the surface force agree; the
 expert then holds the link where it touched for ``mission.settle_time`` and idles the
 rotors at f_min (the action's zero: the motors-off of the mission). An observation holds
@@ -96,8 +96,8 @@ class ExpertPolicy:
         """The tethered reference at ``t``: the plan, then the guarded touchdown (landing).
 
         As the mission's supervisor (:class:`~tetherland.mission.contact.ContactRule`):
-        contact counts from the last ``mission.contact_window`` of the plan on; past the
-        plan's end phi_d descends at ``touchdown_rate_deg``.
+        contact counts from the last ``mission.contact.window`` of the plan on; past the
+        plan's end phi_d descends at ``mission.touchdown.descent_rate_deg_s``.
         """
         if self._hold is not None:
             return self._hold
@@ -107,10 +107,10 @@ class ExpertPolicy:
         m = self.scenario.mission
         T = self.plan.duration
         if t >= T:
-            ref = guarded_descent(m, ref, t - T, ref.phase)
-        if early_contact_armed(m, t, 0.0, T):
+            ref = guarded_descent(m.touchdown, ref, t - T, ref.phase)
+        if early_contact_armed(m.contact, t, 0.0, T):
             if self._contact.update(t, est, ref.output[0, 0]).confirmed:
-                self._hold = contact_hold(m, t, est, ref, ref.phase)
+                self._hold = contact_hold(m.contact, t, est, ref, ref.phase)
                 return self._hold
         else:
             self._contact.idle()

@@ -35,7 +35,7 @@ class TetheredMethod:
             controller=SwitchingController(belief, controller or belief.controller.kind),
             initial_state=plan.start,
             rotor_speeds=None,
-            duration=belief.mission.max_duration,
+            duration=belief.mission.time_limit,
             diagnostic_keys=DIAGNOSTICS,
         )
 

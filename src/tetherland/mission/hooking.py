@@ -3,7 +3,7 @@
 The pass is the one the mission supervisor flies (:func:`tetherland.mission.plan_mission`
 puts its ends into the waypoints): the vehicle level with heading x_A,
 the hook point moving straight along the approach direction n from ``approach_distance``
-before the anchor to ``hook_overshoot`` beyond it (``mission`` section).
+before the anchor to ``overshoot`` beyond it (``[mission.hooking]``).
 
 Hook model assumed here: the hook point is the cable attachment point moved by
 ``hook_drop`` along n (:func:`tetherland.models.hook.hook_offset`, the one statement of it,
@@ -15,11 +15,11 @@ The clearance is that of the plant's collision shape, computed by
 The unhooking pass (:func:`unhooking_path`) is the hooking pass in reverse, but no deeper
 than it needs: the cable is released when the hook point crosses the capture plane back
 (along -n, within the capture radius), so the pass begins on its axis with the hook point
-only ``mission.unhook_depth`` beyond the plane (:meth:`HookingPass.entry`), not at the
-pass's end ``hook_overshoot`` beyond it. From the release point the vehicle first backs
+only ``mission.hooking.unhook_depth`` beyond the plane (:meth:`HookingPass.entry`), not at the
+pass's end ``overshoot`` beyond it. From the release point the vehicle first backs
 off along -n to that depth (away from the surface: the approach runs toward it), then
 moves across to the axis at that depth and out along -n. The frame so stays
-``hook_overshoot - unhook_depth`` farther from the surface than at the end of the hooking
+``overshoot - unhook_depth`` farther from the surface than at the end of the hooking
 pass, a margin for the belief errors (slope, anchor) and the release transient that the
 pass's planned clearance alone does not cover.
 """
@@ -83,8 +83,8 @@ def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) ->
         approach_A=t.approach_direction,
         hook_drop=t.hook_drop,
         r_att_B=scenario.vehicle.cable_attachment,
-        approach_distance=cfg.approach_distance,
-        hook_overshoot=cfg.hook_overshoot,
+        approach_distance=cfg.hooking.approach_distance,
+        hook_overshoot=cfg.hooking.overshoot,
     )
 
 
@@ -168,11 +168,11 @@ def check_pass(
     scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass
 ) -> HookingClearance:
     """Clearance of the level vehicle (``scenario``'s collision shape) from the surface of
-    ``geometry`` along the hooking pass, against ``mission.hooking_clearance``, with the
+    ``geometry`` along the hooking pass, against ``mission.hooking.min_clearance``, with the
     hook drop that would restore it."""
     count = PIPE_SAMPLES if geometry.surface.kind == "pipe" else 2
     points = hooking.points(count)
-    margin = scenario.mission.hooking_clearance
+    margin = scenario.mission.hooking.min_clearance
     return hooking_clearance(scenario, geometry.surface, points, hooking.yaw, margin, hooking.n_W)
 
 

@@ -50,17 +50,17 @@ class Waypoints:
         Ends of the straight hooking pass: the hook point ``approach_distance`` before and
         ``hook_overshoot`` beyond the anchor along the approach direction, in level flight.
     unhook_entry : (3,) array
-        On the pass axis with the hook point ``mission.unhook_depth`` beyond the anchor:
+        On the pass axis with the hook point ``mission.hooking.unhook_depth`` beyond the anchor:
         where the reverse (unhooking) pass begins
         (:func:`tetherland.mission.hooking.unhooking_path`).
     slack_out : (3,) array
-        Inside the cable length (``mission.slack_out_distance``, or less where the frame
+        Inside the cable length (``mission.stretch.slack_out_distance``, or less where the frame
         needs it to clear the surface), on the line of the planned start elevation.
     stretch : (3,) array
         Just beyond the cable length: the pull that makes the cable taut (phase (c)).
     release_distance : float
         Distance of the attachment point from the anchor at the end of the release leg,
-        along the cable: ``mission.release_slack`` inside the cable length, or less where
+        along the cable: ``mission.hooking.release_slack`` inside the cable length, or less where
         the frame needs it to clear the surface (short cables on walls) [m].
     z_safe : float
         Height of the transfers between the pad and the anchor [m].
@@ -187,7 +187,7 @@ def plan_mission(
         No verified landing or takeoff plan, a hooking pass that would hit the surface
         (the message names the ``tether.hook_drop`` the surface needs), or another
         free-flight leg that would pass closer to the surface than
-        ``mission.hooking_clearance`` (the message names the leg).
+        ``mission.hooking.min_clearance`` (the message names the leg).
     """
     cfg = scenario.mission
     v = scenario.vehicle
@@ -222,19 +222,19 @@ def plan_mission(
     takeoff_traj = takeoff.require()
     d_T = R_WA @ link_direction(float(takeoff_traj.output(takeoff_traj.duration).phi[0]), 0.0)
     wn = scenario.controller.free_flight.position_frequency
-    pull = scenario.planner.start_tension / (v.mass * wn * wn) + cfg.stretch_margin
+    pull = scenario.planner.start_tension / (v.mass * wn * wn) + cfg.stretch.pull_margin
     # On short cables near walls the frame limits how far inside the cable length the
     # take-up and the release may go (the default distances would put it into the wall):
     # there they keep the clearance of the hooking pass's end (at least
-    # mission.hooking_clearance) and stop at least SLACK_MIN short of the cable length.
-    keep = max(clearance.clearance_m, cfg.hooking_clearance)
+    # mission.hooking.min_clearance) and stop at least SLACK_MIN short of the cable length.
+    keep = max(clearance.clearance_m, cfg.hooking.min_clearance)
     radii = []
-    for d_W, inside in ((d0, cfg.slack_out_distance), (d_T, cfg.release_slack)):
+    for d_W, inside in ((d0, cfg.stretch.slack_out_distance), (d_T, cfg.hooking.release_slack)):
         wanted = length - inside
         r = _clear_radius(scenario, geo, d_W, attachment_W, yaw, wanted, keep, length - SLACK_MIN)
         if r is None:
             r = _clear_radius(
-                scenario, geo, d_W, attachment_W, yaw, wanted, cfg.hooking_clearance,
+                scenario, geo, d_W, attachment_W, yaw, wanted, cfg.hooking.min_clearance,
                 length - SLACK_MIN,
             )  # fmt: skip
         radii.append(r)
@@ -243,18 +243,18 @@ def plan_mission(
                     (r_release, "release at the planned takeoff end")):  # fmt: skip
         if r is None:
             raise MissionError(
-                f"the {what} would bring the frame within mission.hooking_clearance = "
-                f"{cfg.hooking_clearance * 100:.0f} cm of the surface anywhere more than "
+                f"the {what} would bring the frame within mission.hooking.min_clearance = "
+                f"{cfg.hooking.min_clearance * 100:.0f} cm of the surface anywhere more than "
                 f"{SLACK_MIN * 100:.0f} cm inside the cable length {length:g} m"
             )
     assert r_slack is not None and r_release is not None
-    z_safe = max(float(hook_start[2]), float(p_start[2]) + cfg.takeoff_height)
-    z_safe += cfg.safe_height_margin
+    z_safe = max(float(hook_start[2]), float(p_start[2]) + cfg.flight.takeoff_height)
+    z_safe += cfg.flight.safe_height_margin
     waypoints = Waypoints(
         start=_frozen(p_start),
         hook_start=_frozen(hook_start),
         hook_end=_frozen(hook_end),
-        unhook_entry=_frozen(hooking.entry(cfg.unhook_depth, cfg.hook_overshoot)),
+        unhook_entry=_frozen(hooking.entry(cfg.hooking.unhook_depth, cfg.hooking.overshoot)),
         slack_out=_frozen(p_A + r_slack * d0 - attachment_W),
         stretch=_frozen(p_A + (length + pull) * d0 - attachment_W),
         release_distance=r_release,
@@ -291,7 +291,7 @@ def free_flight_legs(
     :mod:`tetherland.mission.supervisor`.
     """
     cfg = scenario.mission
-    top = wp.start + cfg.takeoff_height * Z_W
+    top = wp.start + cfg.flight.takeoff_height * Z_W
     over_hook = np.array([*wp.hook_start[:2], wp.z_safe])
     release = geo.p_A + wp.release_distance * d_T_W - wp.attachment_W
     return {
@@ -308,16 +308,16 @@ def _check_legs(
     scenario: Scenario, geo: LandingGeometry, wp: Waypoints, d_T_W: FloatArray
 ) -> float:
     """Smallest clearance over :func:`free_flight_legs`; raises :class:`MissionError`
-    naming the first leg below ``mission.hooking_clearance`` [m]."""
-    margin = scenario.mission.hooking_clearance
+    naming the first leg below ``mission.hooking.min_clearance`` [m]."""
+    margin = scenario.mission.hooking.min_clearance
     smallest = math.inf
     for name, leg in free_flight_legs(scenario, geo, wp, d_T_W).items():
         c = _leg_clearance(scenario, geo.surface, leg, wp.yaw)
         if c < margin - 1e-9:
             raise MissionError(
                 f"the {name} leg would pass {c * 100:.1f} cm from the surface (needs >= "
-                f"{margin * 100:.0f} cm, mission.hooking_clearance): move the start pad "
-                f"(sim.start_position) or raise mission.safe_height_margin"
+                f"{margin * 100:.0f} cm, mission.hooking.min_clearance): move the start pad "
+                f"(sim.start_position) or raise mission.flight.safe_height_margin"
             )
         smallest = min(smallest, c)
     return smallest

@@ -224,11 +224,11 @@ def chain_spec(scenario: Scenario) -> ChainSpec:
 
 
 def hook_timeconst(scenario: Scenario) -> float:
-    """Time constant of the chain's hook connection [s]: ``sim.cable_timeconst``, or for
+    """Time constant of the chain's hook connection [s]: ``sim.cable_time_constant``, or for
     an elastic line at least 1/sqrt(k/m), so that a cable snapping taut stops the vehicle
     no faster than the line's own spring would (snap load about v sqrt(k m))."""
     sim, t = scenario.sim, scenario.tether
-    tau = max(sim.cable_timeconst, 2.0 * sim.timestep)  # MuJoCo's floor: two steps
+    tau = max(sim.cable_time_constant, 2.0 * sim.timestep)  # MuJoCo's floor: two steps
     k = t.stiffness
     return tau if k is None else max(tau, math.sqrt(scenario.vehicle.mass / k))
 
@@ -369,7 +369,7 @@ class SceneXml:
     def contact_solref(self) -> str:
         """``solref`` of every contact with the environment (ground, surface)."""
         sim = self.scenario.sim
-        return _fmt((sim.contact_timeconst, sim.contact_dampratio))
+        return _fmt((sim.contact_time_constant, sim.contact_damping_ratio))
 
     def text(self) -> str:
         """The MJCF text (compile with ``MjModel.from_xml_string``)."""
@@ -633,14 +633,14 @@ def add_cable(scene: SceneXml) -> None:
             scene.root,
             scene.layout.geometry.p_A,
             chain_spec(scenario),
-            solref=_fmt((hook_timeconst(scenario), sim.cable_dampratio)),
+            solref=_fmt((hook_timeconst(scenario), sim.cable_damping_ratio)),
         )
     cable_attrs = {"width": "0.004", "rgba": ".95 .85 .2 1"}
     if cable_model == CableModel.IDEAL:
         cable_attrs.update(
             limited="true",
             range=_fmt((0.0, tether.length)),
-            solreflimit=_fmt((sim.cable_timeconst, sim.cable_dampratio)),
+            solreflimit=_fmt((sim.cable_time_constant, sim.cable_damping_ratio)),
         )
     elif cable_model == CableModel.CHAIN:
         cable_attrs["group"] = str(CABLE_GROUP_HIDDEN)  # the links are drawn instead

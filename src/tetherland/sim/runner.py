@@ -42,6 +42,7 @@ from tetherland.interfaces import (
     StateEstimate,
 )
 from tetherland.provenance import provenance
+from tetherland.randomness import RandomSource
 from tetherland.sim.baselines import ConstantReference, TruthEstimator
 from tetherland.sim.faults import FaultInjector, mocap_outage
 from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
@@ -170,7 +171,8 @@ class Runner:
     reference : ReferenceSource, optional
         Default: hold the initial position in free flight.
     seed : int
-        Seed of the sensor noise (IMU and mocap draw from independent child streams).
+        Seed of the sensor noise: the ``imu`` and ``mocap`` streams of ``RandomSource(seed)``
+        (:mod:`tetherland.randomness`), unless :meth:`run` is given a random source.
     plant : Plant, optional
         Reuse an existing plant (it is reset at each :meth:`run`).
     diagnostic_keys : sequence of str
@@ -241,7 +243,7 @@ class Runner:
         initial_state: RigidBodyState | None = None,
         rotor_speeds: FloatArray | None = None,
         cable_engaged: bool = False,
-        rng: np.random.Generator | None = None,
+        random: RandomSource | None = None,
     ) -> SimLog:
         """Simulate ``duration`` seconds (or until the reference asks to terminate).
 
@@ -255,15 +257,16 @@ class Runner:
             Initial rotor speeds and held command (default: stopped) [rad/s].
         cable_engaged
             Start hooked.
-        rng
-            Generator for the sensor noise (default: ``numpy.random.default_rng(seed)``).
+        random
+            Random source of the sensor noise, its ``imu`` and ``mocap`` streams (default:
+            ``RandomSource(seed)``, :mod:`tetherland.randomness`).
 
         Returns
         -------
         SimLog
             One row per control tick; ``log.status`` tells how the run ended.
         """
-        loop = self._loop(duration, initial_state, rotor_speeds, cable_engaged, rng, False)
+        loop = self._loop(duration, initial_state, rotor_speeds, cable_engaged, random, False)
         try:
             next(loop)
         except StopIteration as done:
@@ -277,7 +280,7 @@ class Runner:
         initial_state: RigidBodyState | None = None,
         rotor_speeds: FloatArray | None = None,
         cable_engaged: bool = False,
-        rng: np.random.Generator | None = None,
+        random: RandomSource | None = None,
     ) -> Generator[ControlTick, Command, SimLog]:
         """The loop of :meth:`run`, one control tick at a time, commanded from outside.
 
@@ -287,7 +290,7 @@ class Runner:
         the duration is over, the reference terminates or the run fails. Arguments as for
         :meth:`run`.
         """
-        return self._loop(duration, initial_state, rotor_speeds, cable_engaged, rng, True)
+        return self._loop(duration, initial_state, rotor_speeds, cable_engaged, random, True)
 
     def _loop(
         self,
@@ -295,18 +298,16 @@ class Runner:
         initial_state: RigidBodyState | None,
         rotor_speeds: FloatArray | None,
         cable_engaged: bool,
-        rng: np.random.Generator | None,
+        random: RandomSource | None,
         external: bool,
     ) -> Generator[ControlTick, Command, SimLog]:
         if not (duration > 0 and math.isfinite(duration)):
             raise ValueError(f"duration must be a positive number of seconds, got {duration}")
         sc, sched, plant = self.scenario, self.schedule, self.plant
         plant.reset(initial_state, rotor_speeds=rotor_speeds, cable_engaged=cable_engaged)
-        seeded = rng is None
-        rng = np.random.default_rng(self.seed) if rng is None else rng
-        rng_imu, rng_mocap = rng.spawn(2)
-        imu = Imu(sc.sensors.imu, rng_imu, sc.sensors.noise_scale)
-        mocap = Mocap(sc.sensors.mocap, rng_mocap, sc.sensors.noise_scale,
+        random = RandomSource(self.seed) if random is None else random
+        imu = Imu(sc.sensors.imu, random.stream("imu"), sc.sensors.noise_scale)
+        mocap = Mocap(sc.sensors.mocap, random.stream("mocap"), sc.sensors.noise_scale,
                       mocap_outage(sc.faults))  # fmt: skip
         reference = self.reference
         if reference is None:
@@ -424,7 +425,7 @@ class Runner:
             status, message = RunStatus.FAILED, f"t = {k * dt:.4f} s: {err}"
         wall = time.perf_counter() - wall0
         return writer.finish(
-            self._metadata(status, message, k, wall, reference, seeded),
+            self._metadata(status, message, k, wall, reference, random.seed),
             p_A=self._p_A,
             R_WA=self._R_WA,
             r_att_B=self._r_att,
@@ -478,7 +479,7 @@ class Runner:
         k: int,
         wall: float,
         reference: ReferenceSource,
-        seeded: bool,
+        seed: int,
     ) -> dict[str, Any]:
         events = [dict(e.as_dict(), source="hook") for e in self.plant.hook.events]
         if isinstance(reference, EventSource):
@@ -489,9 +490,7 @@ class Runner:
             self._provenance = provenance(self.scenario, seed=self.seed)
         prov = dict(self._provenance)
         prov["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
-        prov["seed"] = self.seed if seeded else None
-        if not seeded:
-            prov["rng"] = "generator passed to Runner.run"
+        prov["seed"] = seed  # of the random source the run drew from
         return {
             "provenance": prov,
             "status": status.value,

@@ -6,14 +6,14 @@ point of the plant's scenario; the robot may have believed otherwise. The same r
 serve every landing method (docs/theory.md section 5):
 
 * touchdown t_L: the first logged tick of the method's landing phases at which a lander
-  or the frame carries a normal force above ``verdict.contact_force`` (the plant's contact
+  or the frame carries a normal force above ``verdict.touchdown_force`` (the plant's contact
   solver: a real touch, not a distance); t_L- is the tick before;
 * (1) ||p_RL(t_L) - p*_L||, p_RL = p - h_R z_B; (2) angle(z_B(t_L), z_S);
   (3) ||p'(t_L-)||, ||omega(t_L-)||; (4) ||p''(t_L-)|| from the true specific force and
   ||omega'(t_L-)|| from the two ticks before;
 * (5) observed over the first motors-off interval after touchdown: the slip of p_RL along
   the surface (sliding; its settling along the normal onto all landers is reported apart)
-  over the whole interval and the speed from ``verdict.rest_settle`` after its start;
+  over the whole interval and the speed from ``verdict.rest_settle_time`` after its start;
 * crash: a normal force above ``verdict.crash_force`` on the hub or a rotor guard, at any
   time of the run.
 
@@ -107,14 +107,14 @@ def tolerances_of(scenario: Scenario) -> LandingTolerances:
     """The landing tolerances of a scenario's ``[verdict]`` section (SI units)."""
     v = scenario.verdict
     return LandingTolerances(
-        position=v.position_m,
-        attitude=math.radians(v.attitude_deg),
-        speed=v.speed_mps,
-        angular_rate=v.angular_rate_rps,
-        accel=v.accel_mps2,
-        angular_accel=v.angular_accel_rps2,
-        slip=v.slip_m,
-        rest_speed=v.rest_speed_mps,
+        position=v.position_error,
+        attitude=math.radians(v.attitude_error_deg),
+        speed=v.touchdown_speed,
+        angular_rate=v.touchdown_angular_rate,
+        accel=v.touchdown_accel,
+        angular_accel=v.touchdown_angular_accel,
+        slip=v.rest_slip,
+        rest_speed=v.rest_speed,
     )
 
 
@@ -148,7 +148,7 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     clearance = (p_RL - geo.surface.origin) @ geo.surface.z_S
     force = np.maximum(np.nan_to_num(log["lander_forces"]).max(axis=1),
                        np.nan_to_num(log["frame_force"]))  # fmt: skip
-    touching = force > cfg.contact_force
+    touching = force > cfg.touchdown_force
     idx = np.flatnonzero(in_landing & touching)
     if idx.size == 0:
         return {"reached": False, "min_clearance_m": float(clearance[in_landing].min())}
@@ -163,7 +163,7 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     rest_idx = _first_run(log["mode"].astype(int) == int(ControlMode.MOTORS_OFF), k)
     rested = bool(rest_idx.size)
     rest_p = p_RL[rest_idx] if rested else p_RL[k : k + 1]
-    settled = rest_idx[t[rest_idx] >= t[rest_idx[0]] + cfg.rest_settle] if rested else rest_idx
+    settled = rest_idx[t[rest_idx] >= t[rest_idx[0]] + cfg.rest_settle_time] if rested else rest_idx
     rest_v = log["v_W"][settled] if settled.size else np.zeros((1, 3))
     verdict = evaluate_landing(
         p_RL=p_RL[k], z_B=z_B[k], v_W=log["v_W"][k_prev], omega_B=w[k_prev], a_W=a_W,
@@ -180,7 +180,7 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
         # friction alone may hold it and the cable slackens), nor where the plan itself is
         # slack (flat ground)
         min_tension = record.belief_scenario().planner.min_tension
-        airborne = np.nan_to_num(log["lander_forces"]).max(axis=1) <= cfg.contact_force
+        airborne = np.nan_to_num(log["lander_forces"]).max(axis=1) <= cfg.touchdown_force
         planned = _in(log, record, record.tension_phases) & airborne
         if "diag.ff_tension" in log:
             planned &= np.nan_to_num(log["diag.ff_tension"]) >= min_tension
@@ -243,7 +243,7 @@ def _return(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     unhooked = not bool(log["hook"][-1]) if "hook" in log else True
     return {
         "required": True,
-        "completed": unhooked and error <= truth.verdict.return_position_m,
+        "completed": unhooked and error <= truth.verdict.return_position_error,
         "unhooked": unhooked,
         "position_error_m": error,
         "speed_mps": float(np.linalg.norm(log["v_W"][-1])),
@@ -306,7 +306,7 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
         elif "position_error_m" in ret:
             why = (
                 f"ended {ret['position_error_m']:.3g} m from the start pad (tolerance "
-                f"{truth.verdict.return_position_m:g} m)"
+                f"{truth.verdict.return_position_error:g} m)"
             )
         else:
             why = "not flown to the end"
@@ -368,7 +368,7 @@ def _safe_stop(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any
         return {"reached": False, "why": "no safe state reached by the end of the run"}
     speed = float(np.linalg.norm(log["v_W"][-1])) if len(log) else math.nan
     crashed = bool(np.any(np.nan_to_num(log["frame_force"]) > truth.verdict.crash_force))
-    limit = truth.verdict.safe_stop_speed_mps
+    limit = truth.verdict.safe_stop_speed
     out: dict[str, Any] = {"state": record.safe_state, "final_speed_mps": speed}
     if crashed:
         return out | {"reached": False, "why": "crashed"}
