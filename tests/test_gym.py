@@ -8,8 +8,8 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import tetherland.gym as tg
-from tetherland.errors import ConfigError
 from tetherland.config import with_overrides
+from tetherland.errors import ConfigError
 from tetherland.gym.env import OBSERVATION, PRIVILEGED_INFO, Outcome, TetheredEnv, estimate_of
 
 

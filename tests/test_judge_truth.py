@@ -168,6 +168,19 @@ def test_a_gentle_bounce_in_place_passes(truth):
     assert [b["t"] for b in landing["bounces"]] == pytest.approx([1.3])
 
 
+@pytest.mark.parametrize(("lost_ticks", "bounce"), [(2, False), (3, True)])
+def test_contact_lost_for_less_than_the_contact_time_constant_is_no_bounce(truth, lost_ticks,
+                                                                          bounce):  # fmt: skip
+    """sim.contact_timeconst = 5 ms: 2 ticks without contact (4 ms) are the soft contact's
+    own transient, 3 ticks (6 ms) a bounce, judged (here at 0.3 m/s: (3) fails)."""
+    assert truth.sim.contact_timeconst == 0.005
+    t_back = 1.1 + lost_ticks * DT
+    landing, verdict = landing_of(truth, Motion(bounce=(1.1, t_back, 0.3, 0.0)))
+    assert [b["t"] for b in landing["bounces"]] == pytest.approx([t_back] if bounce else [])
+    assert verdict.success is not bounce
+    assert landing["conditions"]["3"] is not bounce
+
+
 @pytest.mark.parametrize("lie", ["motors_off_with_thrust_on", "flying_with_motors_off"])
 def test_the_robots_mode_does_not_decide_the_rest(truth, lie):
     """The robot's declared mode lies: the judge follows the true thrust."""
@@ -241,7 +254,7 @@ def test_a_deploy_time_shorter_than_the_rest_is_rejected_before_flying(tmp_path,
     assert err.startswith("error: mission.deploy_time = 0.1 s must be >= ")
     assert "verdict.min_rest_time" in err
     assert not out.exists()  # nothing flown, nothing written
-    with pytest.raises(ValueError, match="verdict.rest_settle"):
+    with pytest.raises(ValueError, match=r"verdict\.rest_settle"):
         load_scenario("slope50", ["verdict.min_rest_time=0.2"])
 
 

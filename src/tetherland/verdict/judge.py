@@ -13,7 +13,8 @@ serve every landing method (docs/theory.md section 5):
 * (1) ||p_RL(t_L) - p*_L||, p_RL = p - h_R z_B; (2) angle(z_B(t_L), z_S);
   (3) ||p'(t_L-)||, ||omega(t_L-)||; (4) ||p''(t_L-)|| from the true specific force and
   ||omega'(t_L-)|| from the two ticks before; (1)-(4) hold only if they hold at t_L and
-  at every bounce (contact lost and regained) up to the contact that starts the rest;
+  at every bounce (contact lost for at least ``sim.contact_timeconst`` and regained) up to
+  the contact that starts the rest;
 * (5) observed on the truth: the rest is the first interval after t_L in which the true
   total rotor thrust is below the motors-off level
   (:func:`~tetherland.config.verdict.motors_off_thrust`); it must last
@@ -231,7 +232,9 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     cfg = truth.verdict
     tol = tolerances_of(truth)
     geo = LandingGeometry.from_scenario(truth)
-    found = find_touchdowns(log, cfg.contact_force, motors_off_thrust(truth.vehicle))
+    found = find_touchdowns(
+        log, cfg.contact_force, motors_off_thrust(truth.vehicle), truth.sim.contact_timeconst
+    )
     z_B = _z_axes(log["q_WB"])
     p_RL = log["p_W"] - geo.h_R * z_B
     if found.first is None:

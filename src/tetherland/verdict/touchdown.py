@@ -8,9 +8,12 @@ rest is the interval in which the plant's true total rotor thrust (``rotor_thrus
 below the motors-off level (:func:`tetherland.config.verdict.motors_off_thrust`).
 
 * the touchdown t_L is the first tick of contact with the landing surface;
-* a bounce is contact lost (no lander touches the surface through a whole control period)
-  and regained; every touchdown from t_L to the contact that starts the rest is judged
-  by conditions (1)-(4);
+* a bounce is contact lost (no lander touches the surface, at any physics step, for at
+  least the contact's time constant ``sim.contact_timeconst``) and regained; every
+  touchdown from t_L to the contact that starts the rest is judged by conditions (1)-(4).
+  Shorter losses are the soft contact's own transient, not a flight: MuJoCo's contact is
+  a spring-damper with that time constant, and a lander that pivots or unloads chatters
+  on and off within micrometres of the surface from one physics step to the next;
 * the rest is the first low-thrust interval that ends after t_L; it ends at spin-up (the
   first tick with the thrust back up) or at the end of the log;
 * the contact that starts the rest is the contact under way when the rest begins, or
@@ -19,6 +22,7 @@ below the motors-off level (:func:`tetherland.config.verdict.motors_off_thrust`)
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -110,6 +114,17 @@ def onsets(touching: np.ndarray) -> tuple[int, ...]:
     return tuple(int(k) for k in ([0] if m[0] else []) + starts.tolist())
 
 
+def bridged(mask: np.ndarray, gap: int) -> np.ndarray:
+    """``mask`` with every run of fewer than ``gap`` False entries between two True ones
+    set True (a contact lost for less than ``gap`` ticks was never lost)."""
+    m = np.asarray(mask, dtype=bool).copy()
+    on = np.flatnonzero(m)
+    d = np.diff(on)
+    for i in np.flatnonzero((d > 1) & (d <= gap)):
+        m[on[i] + 1 : on[i + 1]] = True
+    return m
+
+
 def surface_contact(log: SimLog, threshold: float) -> np.ndarray:
     """(n,) bool: some lander pressed by the landing surface above ``threshold`` [N]
     during the control period that ends at each tick."""
@@ -130,7 +145,9 @@ def rest_after(thrust: np.ndarray, t: np.ndarray, level: float, k: int) -> Rest 
     return None
 
 
-def find_touchdowns(log: SimLog, contact_force: float, motors_off: float) -> Touchdowns:
+def find_touchdowns(
+    log: SimLog, contact_force: float, motors_off: float, bounce_time: float
+) -> Touchdowns:
     """Touchdowns and the rest of a run (see the module docstring).
 
     Parameters
@@ -141,9 +158,14 @@ def find_touchdowns(log: SimLog, contact_force: float, motors_off: float) -> Tou
         A lander force above this counts as contact (``verdict.contact_force``) [N].
     motors_off : float
         The motors-off level of the total true thrust [N].
+    bounce_time : float
+        Contact lost for less than this was not lost (the contact's time constant) [s].
     """
     require_columns(log)
-    touching = surface_contact(log, contact_force)
+    t = log["t"]
+    dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
+    # a run of m ticks without contact spans at least m control periods
+    touching = bridged(surface_contact(log, contact_force), math.ceil(bounce_time / dt - 1e-9))
     on = onsets(touching)
     if not on:
         return Touchdowns((), None, None, None)
