@@ -259,22 +259,6 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     if why_5 is not None:
         notes["5"] = why_5
     required = record.expects.required_conditions
-    tension: dict[str, float | None] = {"min_tension_N": None, "min_tension_all_N": None}
-    if record.tension_phases:
-        # the cable must be taut during the tethered maneuvers wherever the vehicle flies on
-        # a plan that needs tension: not while the landers carry it (on a gentle slope
-        # friction alone may hold it and the cable slackens), nor where the plan itself is
-        # slack (flat ground)
-        min_tension = record.belief_scenario().planner.min_tension
-        airborne = np.nan_to_num(log["lander_forces"]).max(axis=1) <= cfg.contact_force
-        planned = _in(log, record, record.tension_phases) & airborne
-        if "diag.ff_tension" in log:
-            planned &= np.nan_to_num(log["diag.ff_tension"]) >= min_tension
-        tethered = _in(log, record, record.tethered_phases)
-        tension = {
-            "min_tension_N": float(log["tension"][planned].min()) if planned.any() else None,
-            "min_tension_all_N": float(log["tension"][tethered].min()) if tethered.any() else None,
-        }
     return {
         "reached": True,
         "t_L": float(t[k]),
@@ -282,11 +266,32 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
         "bounces": bounces,
         "rest_contact_t": None if found.rest_contact is None else float(t[found.rest_contact]),
         **rest,
-        **tension,
+        **_tension(log, record, cfg.contact_force),
         "conditions": conditions,
         "condition_notes": notes,
         "required_conditions": [str(n) for n in required],
         "all_conditions": all(conditions[str(n)] for n in required),
+    }
+
+
+def _tension(log: SimLog, record: RunRecord, contact_force: float) -> dict[str, float | None]:
+    """Least true tension where the plan needs it while airborne, and over every tethered
+    phase [N] (None: no such tick)."""
+    if not record.tension_phases:
+        return {"min_tension_N": None, "min_tension_all_N": None}
+    # the cable must be taut during the tethered maneuvers wherever the vehicle flies on
+    # a plan that needs tension: not while the landers carry it (on a gentle slope
+    # friction alone may hold it and the cable slackens), nor where the plan itself is
+    # slack (flat ground)
+    min_tension = record.belief_scenario().planner.min_tension
+    airborne = np.nan_to_num(log["lander_forces"]).max(axis=1) <= contact_force
+    planned = _in(log, record, record.tension_phases) & airborne
+    if "diag.ff_tension" in log:
+        planned &= np.nan_to_num(log["diag.ff_tension"]) >= min_tension
+    tethered = _in(log, record, record.tethered_phases)
+    return {
+        "min_tension_N": float(log["tension"][planned].min()) if planned.any() else None,
+        "min_tension_all_N": float(log["tension"][tethered].min()) if tethered.any() else None,
     }
 
 
