@@ -161,6 +161,17 @@ def test_a_bounce_is_judged_at_the_contact_that_starts_the_rest(truth):
     assert landing["slip_m"] == pytest.approx(0.04)
 
 
+def test_motors_off_above_the_surface_is_judged_at_the_fall(truth):
+    """Contact lost at 1.1 s, the motors go off at 1.5 s with the vehicle in the air and
+    it falls back at 1.6 s at 0.2 m/s: the contact that starts the rest is that fall."""
+    landing, verdict = landing_of(truth, Motion(bounce=(1.1, 1.6, 0.2, 0.0)))
+    assert landing["rest_interval_s"] == pytest.approx([1.5, 3.0])
+    assert landing["rest_contact_t"] == pytest.approx(1.6)
+    assert [b["t"] for b in landing["bounces"]] == pytest.approx([1.6])
+    assert landing["bounces"][0]["touchdown_speed_mps"] == pytest.approx(0.2)
+    assert not landing["conditions"]["3"] and not verdict.success
+
+
 def test_a_gentle_bounce_in_place_passes(truth):
     """The same bounce arriving at 1 cm/s where it left: every touchdown meets (1)-(4)."""
     landing, verdict = landing_of(truth, Motion(bounce=(1.1, 1.3, 0.01, 0.0)))
