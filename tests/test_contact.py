@@ -286,11 +286,20 @@ def study_run(slope: float, seed: int) -> Job:
     return Job(scenario=spec.scenario, run=run)
 
 
+DROPPED_AT_MOTORS_OFF = pytest.mark.xfail(
+    strict=True,
+    reason="judged on the truth (issue 22): in the hold the vehicle stood on two landers, "
+    "the other two about 1 cm up, floated 3 mm off the surface for its last 0.3 s, and fell "
+    "back at 0.14 m/s when the motors went off (conditions 3, 4 and 5 at the contact that "
+    "starts the rest); the judge of the robot's motors-off mode did not see it",
+)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("slope", "seed"),
     [(60.0, 2046954335), (70.0, 3556918803), (70.0, 1375799514), (70.0, 1787690056),
-     (70.0, 705352918)],
+     pytest.param(70.0, 705352918, marks=DROPPED_AT_MOTORS_OFF)],
 )  # fmt: skip
 def test_previously_failing_study_runs_land(slope, seed):
     """The study's failures at 60-70 deg, each flown exactly as the campaign does, now land
@@ -348,7 +357,9 @@ def test_the_motors_go_off_on_the_surface_not_above_it():
     t_L = result.flight.reference.times["t_L"]
     held = hold[log["t"][hold] > t_L + 0.2]  # after the hold has settled
     assert held.size > 0 and held[-1] == off - 1
-    loaded = log["lander_forces"][held].sum(axis=1) > 0.0
+    # loaded: the surface presses a lander at some physics step of the tick (the touch
+    # sensors read once a tick miss single-step contacts)
+    loaded = log["lander_surface_forces"][held].sum(axis=1) > 0.0
     assert loaded.mean() > 0.8  # a lander chatters (unloads for single ticks) early in the hold
     assert np.all(loaded[log["t"][held] > log["t"][off] - 0.05])  # loaded when motors go off
     R_WB = quat_to_rotmat(log["q_WB"][off])

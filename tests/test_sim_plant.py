@@ -13,7 +13,7 @@ from tetherland.config import load_scenario
 from tetherland.errors import SimulationError
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import quat_to_rotmat
-from tetherland.sim.mjcf import SceneLayout, build_mjcf
+from tetherland.sim.mjcf import SENSOR_SLICES, SceneLayout, build_mjcf
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
@@ -243,3 +243,50 @@ def test_thrust_impulse_follows_the_continuous_motor_lag(plant, scenario):
     integral = w_c**2 * (T - 2 * tau * (1 - e1) + 0.5 * tau * (1 - e2))
     expected = 4 * c_f / v.mass * integral - GRAVITY * T
     assert plant.state().v_W[2] == pytest.approx(expected, rel=1e-3)
+
+
+@pytest.mark.parametrize("where", ["surface", "pad"])
+def test_lander_contact_forces_are_split_by_what_they_touch(where):
+    """At rest with the motors off, the landers' normal forces sum to the weight's normal
+    component, m g cos(beta) on a 20 deg slope (friction 0.6 > tan 20 deg holds it) and
+    m g on the start pad, all on that partner and none on the other."""
+    sc = load_scenario("slope50", ["surface.slope_deg=20"])
+    plant = Plant(sc)
+    plant.reset(plant.landed_state() if where == "surface" else None)
+    plant.step(800)  # settle
+    peaks = np.zeros(8)
+    plant.contact_peaks_into(peaks)
+    plant.step(1)
+    plant.contact_peaks_into(peaks)  # one physics step: the forces at rest
+    surface, ground = peaks[:4], peaks[4:]
+    weight = sc.vehicle.mass * GRAVITY
+    if where == "surface":
+        assert surface.sum() == pytest.approx(weight * math.cos(math.radians(20)), rel=1e-3)
+        assert np.all(surface > 0.0) and not np.any(ground)
+    else:
+        assert ground.sum() == pytest.approx(weight, rel=1e-3)
+        assert np.all(ground > 0.0) and not np.any(surface)
+    np.testing.assert_allclose(plant.lander_forces, surface + ground, rtol=1e-9)
+
+
+def test_lander_contact_peaks_are_taken_at_every_physics_step(scenario):
+    """Dropped 2 cm onto the pad, the impact's force varies from step to step: the peak
+    read after 10 steps is the largest of the 10 per-step normal forces, and reading
+    starts over."""
+    plant = Plant(scenario)
+    s = plant.start_state()
+    plant.reset(RigidBodyState.at_rest(s.p_W + np.array([0.0, 0.0, 0.02]), s.q_WB))
+    plant.step(60)  # just before the impact (free fall of 2 cm: 64 ms)
+    peaks = np.zeros(8)
+    plant.contact_peaks_into(peaks)
+    first, last = SENSOR_SLICES["lander0_ground"], SENSOR_SLICES["lander3_ground"]
+    ground = np.s_[first.start : last.stop : 3]  # the ground sensors' normal entries
+    per_step = []
+    for _ in range(10):
+        plant.step(1)
+        per_step.append(plant.sensordata[ground].copy())
+    plant.contact_peaks_into(peaks)
+    np.testing.assert_array_equal(peaks[4:], np.max(per_step, axis=0))
+    assert np.max(per_step) > np.max(per_step[-1])  # the peak is not the last step's value
+    plant.contact_peaks_into(peaks)
+    assert not np.any(peaks)

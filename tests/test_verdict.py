@@ -67,10 +67,11 @@ def test_an_aborted_run_is_judged_aborted_not_crashed(short_tethered):
 
 
 def test_the_judge_measures_touchdown_at_the_first_contact_force(perched):
-    """t_L is the first tick whose lander force exceeds verdict.touchdown_force; the speed
-    of condition (3) is the true speed of the tick before."""
+    """t_L is the first tick at which the landing surface presses a lander above
+    verdict.touchdown_force (peak over the tick's physics steps); the speed of condition (3)
+    is the true speed of the tick before."""
     log, s = perched.log, perched.summary
-    force = np.maximum(log["lander_forces"].max(axis=1), log["frame_force"])
+    force = log["lander_surface_forces"].max(axis=1)
     limit = perched.plant_scenario.verdict.touchdown_force
     k = int(np.flatnonzero(force > limit)[0])
     assert s["landing"]["t_L"] == pytest.approx(log["t"][k])

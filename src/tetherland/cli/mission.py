@@ -174,13 +174,16 @@ def _print_summary(summary: dict, files: dict[str, Path]) -> None:
         ("touchdown speed", "touchdown_speed_mps", 1, "m/s"),
         ("touchdown angular rate", "touchdown_angular_rate_rps", 1, "rad/s"),
         ("touchdown acceleration", "touchdown_accel_mps2", 1, "m/s^2"),
-        ("slip while motors off", "slip_m", 1000, "mm"),
+        ("slip, touchdown to spin-up", "slip_m", 1000, "mm"),
         ("min cable tension", "min_tension_N", 1, "N"),
     ]
     for label, key, scale, unit in rows:
         value = landing.get(key)
         if value is not None:
             table.add_row(label, f"{value * scale:.3g} {unit}")
+    rest = landing.get("rest_interval_s")
+    if rest is not None:
+        table.add_row("rest (true thrust off)", f"{rest[0]:.2f}-{rest[1]:.2f} s")
     conditions = landing.get("conditions") or {}
     table.add_row(
         "conditions (1)-(5)", " ".join(f"{k}:{'ok' if v else 'NO'}" for k, v in conditions.items())

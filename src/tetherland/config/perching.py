@@ -66,8 +66,9 @@ class PerchingConfig(Section):
     """Least clearance of the landers and rotor guards above the surface before t_L [m]."""
     hover_time: float = Field(4.0, ge=0, le=60)
     """Hover at the start point before the maneuver starts (closed-loop run) [s]."""
-    rest_time: float = Field(1.0, gt=0, le=60)
-    """Simulated time with the motors off after touchdown (closed-loop run) [s]."""
+    rest_time: float = Field(1.5, gt=0, le=60)
+    """Simulated time with the motors off after touchdown (closed-loop run), at least
+    ``verdict.min_rest_time`` plus the rotors' spin-down [s]."""
     contact_grace: float = Field(0.1, ge=0, le=5)
     """Longest flight past the planned touchdown time, holding the touchdown thrust and
     attitude, while waiting for (estimated) contact; then the motors go off anyway [s]."""

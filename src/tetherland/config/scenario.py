@@ -18,7 +18,7 @@ from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig
 from tetherland.config.planning import PlannerConfig
 from tetherland.config.sensors import SensorsConfig
 from tetherland.config.simulation import SimConfig
-from tetherland.config.verdict import VerdictConfig
+from tetherland.config.verdict import VerdictConfig, spin_down_time
 
 ON_SURFACE_TOL = 1e-3
 """Tolerance for a point to count as lying on (or at height h_A above) the surface [m]."""
@@ -87,6 +87,27 @@ class Scenario(Section):
                 raise ValueError(
                     f"anchor.landing_point must lie on the surface (within {ON_SURFACE_TOL} m); "
                     f"it is {off:+.3g} m off"
+                )
+        return self
+
+    @model_validator(mode="after")
+    def _rest_long_enough(self) -> Scenario:
+        # The judge needs the true thrust below the motors-off level for min_rest_time: the
+        # motors are off for deploy_time (rest_time) from the command, less the spin-down
+        # and up to a control period at each end before the log shows the change.
+        need = (
+            self.verdict.min_rest_time + spin_down_time(self.vehicle)
+            + 2.0 / self.controller.rate_hz
+        )  # fmt: skip
+        for field, value in (
+            ("mission.deploy_time", self.mission.deploy_time),
+            ("perching.rest_time", self.perching.rest_time),
+        ):
+            if value < need:
+                raise ValueError(
+                    f"{field} = {value:g} s must be >= {need:.3g} s: verdict.min_rest_time = "
+                    f"{self.verdict.min_rest_time:g} s of rest with the true thrust below the "
+                    "motors-off level, plus the rotors' spin-down and two control periods"
                 )
         return self
 

@@ -31,8 +31,16 @@ sensor noise and perturbation come from that seed's named streams
 (:mod:`tetherland.randomness`). ``randomize=True`` draws the campaign perturbations
 (:mod:`tetherland.campaign.perturb`) at each reset: the plant keeps the scenario as the
 truth (with the drawn sensor-noise scale and mocap dropouts), the estimator believes the
-perturbed vehicle, surface and anchor (``info["perturbation"]``). Wind gusts are not
-applied.
+perturbed vehicle, surface and anchor (``env.belief``, what an agent or the expert may plan
+on). Wind gusts are not applied.
+
+``info`` holds what an agent may know: ``t``, ``seed``, ``outcome``, the landing
+``conditions`` when judged (the episode's result, as the reward) and a ``message`` when the
+physics diverged. The truth (:data:`PRIVILEGED_INFO`: the true ``tension``, the drawn
+``perturbation``, the judge's ``measures``, the true touchdown ``t_L`` and the start of
+the judged rest ``t_rest``) is added only for an env made with ``privileged=True``: for
+debugging, or for the critic of an asymmetric actor-critic, never for a policy that is
+meant to fly a real robot.
 """
 
 from __future__ import annotations
@@ -82,6 +90,8 @@ OBSERVATION_BOUND = np.array(
 """Bounds of the observation space (far beyond any flight; |q| = 1; angles wrap at pi)."""
 SLACK_TENSION = 0.05
 """True tension below which the cable counts as slack [N]."""
+PRIVILEGED_INFO = ("tension", "perturbation", "measures", "t_L", "t_rest")
+"""``info`` entries that carry the plant's truth: only with ``privileged=True``."""
 
 
 class Outcome(StrEnum):
@@ -149,7 +159,17 @@ class TetheredEnv(gymnasium.Env):
     success_bonus, failure_penalty : float
         Reward terms [-].
     planner : Planner, optional
-        Reuse compiled solvers.
+        Reuse compiled solvers (kept as :attr:`planner`, the expert's too).
+    privileged : bool
+        Add the truth to ``info`` (:data:`PRIVILEGED_INFO`): debugging, asymmetric
+        actor-critic.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The truth the plant simulates.
+    belief : Scenario
+        What the robot believes this episode (the scenario itself unless ``randomize``).
     """
 
     metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (gymnasium's convention)
@@ -167,6 +187,7 @@ class TetheredEnv(gymnasium.Env):
         success_bonus: float = 5.0,
         failure_penalty: float = 10.0,
         planner: Planner | None = None,
+        privileged: bool = False,
     ) -> None:
         super().__init__()
         if isinstance(scenario, Scenario):
@@ -192,12 +213,15 @@ class TetheredEnv(gymnasium.Env):
                 f"takeoff_tolerance_deg must be in (0, 45] (got {takeoff_tolerance_deg})"
             )
         self.scenario = sc
+        self.belief = sc
         self.randomize = bool(randomize)
+        self.privileged = bool(privileged)
         self.rest_time = float(rest_time)
         self.tolerance = tolerances_of(sc)
         self.takeoff_tolerance = math.radians(takeoff_tolerance_deg)
         self.success_bonus, self.failure_penalty = float(success_bonus), float(failure_penalty)
-        result = (planner or Planner()).plan(sc, self.maneuver)
+        self.planner = planner or Planner()
+        result = self.planner.plan(sc, self.maneuver)
         if result.trajectory is None or result.status.value != "solved":
             raise ConfigError(f"no {self.maneuver.value} plan for '{sc.name}': {result.message}")
         self.plan: Trajectory = result.require()
@@ -256,7 +280,7 @@ class TetheredEnv(gymnasium.Env):
         self._record_truth()
         info = {"t": tick.t, "outcome": Outcome.RUNNING.value, "seed": random.seed,
                 "perturbation": perturbation.to_dict() if perturbation else {}}  # fmt: skip
-        return _observe(tick.estimate), info
+        return _observe(tick.estimate), self._shown(info)
 
     def step(self, action: FloatArray) -> tuple[FloatArray, float, bool, bool, dict[str, Any]]:
         if self._loop is None or self._done:
@@ -276,13 +300,20 @@ class TetheredEnv(gymnasium.Env):
             obs[0] = t
             penalty = 0.0 if outcome is Outcome.TIME_LIMIT else -self.failure_penalty
             info = {"t": t, "outcome": outcome.value, "message": log.metadata.get("message", "")}
-            return obs, penalty, outcome is Outcome.DIVERGED, outcome is Outcome.TIME_LIMIT, info
+            return (obs, penalty, outcome is Outcome.DIVERGED, outcome is Outcome.TIME_LIMIT,
+                    self._shown(info))  # fmt: skip
         reward, outcome, info = self._judge(tick.t, not a.any())
         terminated = outcome not in (Outcome.RUNNING, Outcome.TIME_LIMIT)
         truncated = outcome is Outcome.TIME_LIMIT
         self._done = terminated or truncated
         info.update(t=tick.t, outcome=outcome.value)
-        return _observe(tick.estimate), reward, terminated, truncated, info
+        return _observe(tick.estimate), reward, terminated, truncated, self._shown(info)
+
+    def _shown(self, info: dict[str, Any]) -> dict[str, Any]:
+        """``info`` as the env shows it: without the truth unless privileged."""
+        if self.privileged:
+            return info
+        return {k: v for k, v in info.items() if k not in PRIVILEGED_INFO}
 
     def close(self) -> None:
         if self._loop is not None:

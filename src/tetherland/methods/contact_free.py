@@ -256,7 +256,6 @@ class ContactFreeMethod:
             base,
             controller=base.controller or "free-flight tracker",
             phase_codes={p.name.lower(): int(p) for p in PerchPhase},
-            landing_phases=tuple(p.name.lower() for p in PerchPhase),
             phases=tuple(spans),
             times=times,
             finished=t_off is not None and t_end >= t_off + ref.rest_time - 1e-9,

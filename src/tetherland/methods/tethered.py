@@ -54,7 +54,6 @@ class TetheredMethod:
         return replace(
             base,
             phase_codes={p.name.lower(): int(p) for p in Phase},
-            landing_phases=("tethered_landing", "touchdown"),
             tension_phases=("tethered_landing", "tethered_takeoff"),
             tethered_phases=("tethered_landing", "touchdown", "spin_up", "tethered_takeoff"),
             phases=tuple(

@@ -18,7 +18,9 @@ the cable (docs/tether.md), by ``tether.cable_model``:
 Sensors (in ``sensordata`` order, see :data:`SENSOR_LAYOUT`): IMU accelerometer and gyro
 at the centre of mass, cable tension at the attachment (``tendonlimitfrc``,
 ``actuatorfrc`` or a user sensor the plant writes) and length, lander touch forces and a
-touch sensor around the frame (crash detection).
+touch sensor around the frame (crash detection), and the contact force of each lander
+with the landing surface and with the ground (``contact`` sensors filtered by partner
+geom: what a lander touches, for the judge; :data:`CONTACT_PARTNERS`).
 
 Names are fixed (``vehicle``, ``attachment``, ``cable``, ...): the plant, the renderer and
 tests find elements by these names.
@@ -70,6 +72,11 @@ CHAIN_W_DT = 0.5
 """Highest angular frequency times the time step allowed for a link's swing about its
 joint under the largest tension (the armature of :func:`chain_spec`) [-]."""
 
+CONTACT_PARTNERS: tuple[str, ...] = ("surface", "ground")
+"""Geoms whose contact force with each lander has its own sensor ``lander<i>_<partner>``:
+the force of the first contact of the pair in its contact frame (normal, tangent 1,
+tangent 2) [N]; a lander sphere meets the box, cylinder or plane at one point."""
+
 SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("accelerometer", 3),
     ("gyro", 3),
@@ -80,6 +87,7 @@ SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("lander2_touch", 1),
     ("lander3_touch", 1),
     ("frame_touch", 1),
+    *((f"lander{i}_{partner}", 3) for partner in CONTACT_PARTNERS for i in range(4)),
 )
 """Sensors in ``sensordata`` order: (name, dimension)."""
 
@@ -687,6 +695,10 @@ def add_sensors(scene: SceneXml) -> None:
     for i in range(len(LANDER_CORNERS)):
         _sub(sensor, "touch", name=f"lander{i}_touch", site=f"lander{i}_zone")
     _sub(sensor, "touch", name="frame_touch", site="frame_zone")
+    for partner in CONTACT_PARTNERS:
+        for i in range(4):
+            _sub(sensor, "contact", name=f"lander{i}_{partner}", geom1=f"lander{i}",
+                 geom2=partner, num="1", data="force", reduce="none")  # fmt: skip
 
 
 SCENE_BUILDERS: tuple[Callable[[SceneXml], None], ...] = (

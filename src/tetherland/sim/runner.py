@@ -325,7 +325,7 @@ class Runner:
         imu_truth = sd[0:6]
         sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["frame_touch"].stop]
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
-        rotor_buf, scalars = np.zeros(8), np.zeros(9)
+        rotor_buf, scalars, contact_buf = np.zeros(8), np.zeros(9), np.zeros(8)
         # the measurement columns, contiguous in the row: last IMU sample, its true biases,
         # last delivered mocap pose
         meas = np.full(19, np.nan)
@@ -350,10 +350,11 @@ class Runner:
             controller.update,
         )
         command, mocap_measure, mocap_tick = plant.command, mocap.measure, sched.mocap_tick
-        write_row, rotor_state_into, bias_into = (
+        write_row, rotor_state_into, bias_into, contact_peaks_into = (
             self._write_row,
             plant.rotor_state_into,
             imu.bias_into,
+            plant.contact_peaks_into,
         )
         observers = self.observers
         for observer in observers:
@@ -362,8 +363,8 @@ class Runner:
         hook = plant.hook
         # the row's parts, in schema order: fixed buffers refilled in place every tick and
         # slots for the estimate, reference and command (see _write_row)
-        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, meas,
-                                   *([_NAN3] * 11)]  # fmt: skip
+        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, contact_buf,
+                                   meas, *([_NAN3] * 11)]  # fmt: skip
         diag_buf = np.empty(len(diag_keys))
         if diag_keys:
             parts.append(diag_buf)
@@ -408,6 +409,7 @@ class Runner:
                 imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
                 imu_y[3:6] = sample.omega_B
                 bias_into(bias_buf)
+                contact_peaks_into(contact_buf)
                 if diag_keys:
                     diag_buf[:] = list(map(cmd.diagnostics.get, diag_keys, nans))
                 write_row(
@@ -457,7 +459,7 @@ class Runner:
             math.nan if cmd.thrust is None else cmd.thrust,
         )
         b = est.body
-        parts[6:17] = (
+        parts[7:18] = (
             b.p_W,
             b.v_W,
             b.q_WB,

@@ -105,8 +105,6 @@ class RunRecord:
         What the judge requires of this method.
     phase_codes : mapping of str to int
         The method's phase names and the codes its log's ``phase`` column holds.
-    landing_phases : tuple of str
-        Phases in which touchdown is looked for.
     tension_phases : tuple of str
         Airborne tethered maneuvers in which the cable must be taut where the plan needs
         tension (landing and takeoff tracking).
@@ -147,7 +145,6 @@ class RunRecord:
     expects: Expectations
     controller: str | None = None
     phase_codes: Mapping[str, int] = field(default_factory=dict)
-    landing_phases: tuple[str, ...] = ()
     tension_phases: tuple[str, ...] = ()
     tethered_phases: tuple[str, ...] = ()
     phases: tuple[PhaseSpan, ...] = ()
@@ -182,7 +179,6 @@ class RunRecord:
             "controller": self.controller,
             "expects": asdict(self.expects),
             "phase_codes": {k: int(v) for k, v in self.phase_codes.items()},
-            "landing_phases": list(self.landing_phases),
             "tension_phases": list(self.tension_phases),
             "tethered_phases": list(self.tethered_phases),
             "phases": [p.to_dict() for p in self.phases],
@@ -225,7 +221,6 @@ class RunRecord:
                     return_home=bool(data["expects"]["return_home"]),
                 ),
                 phase_codes={str(k): int(v) for k, v in data["phase_codes"].items()},
-                landing_phases=tuple(data.get("landing_phases", ())),
                 tension_phases=tuple(data.get("tension_phases", ())),
                 tethered_phases=tuple(data.get("tethered_phases", ())),
                 phases=tuple(PhaseSpan(**p) for p in data.get("phases", [])),
