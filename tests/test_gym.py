@@ -186,7 +186,7 @@ def test_info_has_no_truth_unless_privileged():
         env.close()
         keys = set().union(*infos)
         if env is public:
-            assert keys == {"t", "outcome"}
+            assert keys == {"t", "seed", "outcome"}
             assert not keys & set(PRIVILEGED_INFO)
         else:
             assert keys == {"t", "outcome", "tension", "perturbation"}
