@@ -1,0 +1,64 @@
+"""Real flight firmware in the loop: Betaflight 4.6 SITL as the vehicle's rate controller.
+
+tetherland's supervisor, estimator and controllers become the outer loop; their desired
+attitude and thrust reach the firmware as body-rate and throttle sticks over a simulated
+radio link, and the firmware's motor outputs drive the plant's rotors, in lockstep
+(docs/firmware.md). Needs the optional extra ``tetherland[firmware]`` and a C compiler.
+
+Roles: :mod:`~tetherland.firmware.build` (the patched SITL in the cache),
+:mod:`~tetherland.firmware.process` (one SITL process), :mod:`~tetherland.firmware.configure`
+(the CLI configuration), :mod:`~tetherland.firmware.packets` (the UDP packets),
+:mod:`~tetherland.firmware.frames` (frame conventions), :mod:`~tetherland.firmware.motors`
+(ESC, throttle path, motor order), :mod:`~tetherland.firmware.rc` (sticks),
+:mod:`~tetherland.firmware.handover` (what the outer loop sends),
+:mod:`~tetherland.firmware.inner_loop` (the lockstep bridge).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from tetherland.config import Scenario
+from tetherland.firmware.build import FirmwareBuild, FirmwareUnavailable, ensure_firmware
+from tetherland.firmware.configure import FirmwareConfig
+from tetherland.firmware.handover import RateHandover, outer_belief
+from tetherland.firmware.inner_loop import FirmwareInnerLoop
+from tetherland.firmware.process import FirmwareError
+
+FIRMWARES = ("betaflight",)
+"""Names accepted by ``--firmware``."""
+
+
+@dataclass(frozen=True)
+class BetaflightSitl:
+    """Factory of :class:`FirmwareInnerLoop` for :func:`tetherland.runs.run_mission`.
+
+    Attributes
+    ----------
+    radio_hz : float
+        Radio frame rate [Hz].
+    timeout_s : float
+        Wall time without a motor packet before the firmware counts as lost [s].
+    """
+
+    radio_hz: float = 100.0
+    timeout_s: float = 2.0
+
+    def outer_belief(self, belief: Scenario) -> Scenario:
+        return outer_belief(belief)
+
+    def __call__(self, truth: Scenario, belief: Scenario) -> FirmwareInnerLoop:
+        return FirmwareInnerLoop(truth, belief, radio_hz=self.radio_hz, timeout_s=self.timeout_s)
+
+
+__all__ = [
+    "FIRMWARES",
+    "BetaflightSitl",
+    "FirmwareBuild",
+    "FirmwareConfig",
+    "FirmwareError",
+    "FirmwareInnerLoop",
+    "FirmwareUnavailable",
+    "RateHandover",
+    "ensure_firmware",
+]
