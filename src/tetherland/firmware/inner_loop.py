@@ -17,7 +17,6 @@ FrSky at 50-500 Hz, SBUS 9-14 ms frames); it divides the 1 kHz IMU rate.
 
 from __future__ import annotations
 
-import math
 import socket
 
 import numpy as np
@@ -31,11 +30,10 @@ from tetherland.firmware.handover import RateHandover
 from tetherland.firmware.motors import Esc, ThrottleMap
 from tetherland.firmware.packets import RcPacket, unpack_servo
 from tetherland.firmware.process import LOOPBACK, FirmwareError, SitlProcess
-from tetherland.firmware.rc import ARM_LOW, RcMap
+from tetherland.firmware.rc import RcMap
 from tetherland.geometry import FloatArray
-from tetherland.models.quadrotor import RotorLayout
 from tetherland.interfaces import Command, ControlMode, ImuSample, Reference, StateEstimate
-
+from tetherland.models.quadrotor import RotorLayout
 
 BOOT_S = 2.0
 """Firmware time on the pad before the mission starts [s]."""
@@ -75,9 +73,9 @@ class FirmwareInnerLoop:
         every = imu_hz / radio_hz
         if radio_hz <= 0 or abs(every - round(every)) > 1e-9 or round(every) < 1:
             raise ValueError(f"radio_hz = {radio_hz:g} Hz must divide the IMU rate {imu_hz:g} Hz")
-        self.imu_hz = int(round(imu_hz))
+        self.imu_hz = round(imu_hz)
         self.dt = 1.0 / imu_hz
-        self.radio_every = int(round(every))
+        self.radio_every = round(every)
         self.timeout_s = timeout_s
         self.esc = Esc.from_vehicle(truth.vehicle)
         self._believed_esc = Esc.from_vehicle(belief.vehicle)
@@ -185,19 +183,9 @@ class FirmwareInnerLoop:
     def _lost(self, err: Exception) -> str:
         assert self.sitl is not None
         code = self.sitl.proc.poll()
-        why = "no motor packet within %g s" % self.timeout_s if isinstance(
+        why = f"no motor packet within {self.timeout_s:g} s" if isinstance(
             err, TimeoutError) else f"{type(err).__name__}: {err}"  # fmt: skip
         state = "process running" if code is None else f"process exited with code {code}"
         return f"firmware lost after {self.k} packets ({why}; {state})"
 
-    @property
-    def disarm_channels(self) -> tuple[int, ...]:
-        return self.rc.channels(np.zeros(3), 0.0, False)
-
-
-def radio_frame_period(radio_hz: float) -> float:
-    """Seconds between radio frames."""
-    return 1.0 / radio_hz if radio_hz > 0 else math.inf
-
-
-__all__ = ["ARM_LOW", "FirmwareInnerLoop"]
+__all__ = ["BOOT_S", "FirmwareInnerLoop"]
