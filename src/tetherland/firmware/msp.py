@@ -18,6 +18,7 @@ MSP_STATUS_EX = 150
 MSP_RAW_IMU = 102
 MSP_ATTITUDE = 108
 MSP_MOTOR = 104
+MSP_DEBUG = 254
 
 
 def _frame(command: int, payload: bytes = b"") -> bytes:
@@ -75,10 +76,17 @@ def arming_disable_flags(payload: bytes) -> int:
 
 
 def raw_imu(payload: bytes) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """(acc, gyro) of an MSP_RAW_IMU answer: acc in 1/512 g (``acc_1G`` / 512 scaled),
-    gyro in deg/s."""
+    """(acc, gyro) of an MSP_RAW_IMU answer, both in the sensors' raw units: acc in
+    1/``acc_1G`` g (256 per g for the virtual accelerometer), gyro in LSB of the gyro
+    driver's scale (16.384 per deg/s for the virtual gyro: ``gyroRateDps`` divides the
+    filtered rate by the driver's scale, despite its name)."""
     v = struct.unpack_from("<9h", payload)
     return v[0:3], v[3:6]
+
+
+def debug_values(payload: bytes) -> tuple[int, ...]:
+    """The ``debug[]`` array of an MSP_DEBUG answer (what ``debug_mode`` selects)."""
+    return struct.unpack_from(f"<{len(payload) // 2}h", payload)
 
 
 def attitude(payload: bytes) -> tuple[float, float, float]:
@@ -87,4 +95,4 @@ def attitude(payload: bytes) -> tuple[float, float, float]:
     return r / 10.0, p / 10.0, float(y)
 
 
-__all__ = ["MspClient", "arming_disable_flags", "attitude", "raw_imu"]
+__all__ = ["MspClient", "arming_disable_flags", "attitude", "debug_values", "raw_imu"]
