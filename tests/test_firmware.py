@@ -18,7 +18,7 @@ from tetherland.firmware.frames import (
     firmware_euler,
     firmware_gyro,
 )
-from tetherland.firmware.handover import RateHandover, outer_belief
+from tetherland.firmware.handover import RateHandover, RateLoopGain
 from tetherland.firmware.motors import Esc, MotorOrder, ThrottleMap
 from tetherland.firmware.packets import FDM, RC, SERVO, FdmPacket, RcPacket, unpack_servo
 from tetherland.firmware.rc import RcMap
@@ -136,25 +136,84 @@ def test_sticks_are_linear_in_rate_and_yaw_is_inverted():
     assert rc.channels(np.full(3, 100.0), 2.0, False)[0:5] == (2000, 2000, 2000, 1000, 1000)
 
 
-def test_rate_handover_reproduces_the_attitude_law_through_a_first_order_rate_loop(scenario):
-    # free flight, tilted 0.2 rad about x, turning: w_cmd must be w + alpha / k_w with
-    # alpha the law's angular acceleration, i.e. -(k_R/k_w) e_R for a hold
-    belief = outer_belief(scenario)
-    ctrl = FreeFlightController(belief)
+def _throttle_map(vehicle, config):
+    return ThrottleMap(vehicle.f_max, config.number("motor_idle") / 1e4,
+                       config.number("thrust_linear") / 100)  # fmt: skip
+
+
+def test_mix_slope_is_the_derivative_of_the_throttle_path(scenario):
+    v = scenario.vehicle
+    tm = _throttle_map(v, FirmwareConfig.load())
+    k, idle = tm.thrust_linear, tm.idle
+    for thrust in (4.0, v.mass * GRAVITY, 16.0):
+        t = tm.throttle(thrust)
+        x = t / (1 + (k - k * k / 2) * (1 - t) ** 2)  # compensated throttle: the mix adds here
+
+        def rotor_thrust(m, x=x):
+            y = x + m
+            return v.f_max * (idle + (1 - idle) * y * (1 + k * (1 - y) ** 2)) ** 2
+
+        h = 1e-6
+        numeric = (rotor_thrust(h) - rotor_thrust(-h)) / (2 * h)
+        assert tm.mix_slope(thrust) == pytest.approx(numeric, rel=1e-6)
+
+
+def test_rate_loop_gain_of_the_default_p_terms_is_the_attitude_law_rate_gain(scenario):
+    # K = 0.032029 P (180/pi)/1000 (df/dm) sum|lever| / J, by hand for the x layout
+    v = scenario.vehicle
+    cfg = FirmwareConfig.load()
+    tm = _throttle_map(v, cfg)
+    hover = v.mass * GRAVITY
+    gain = RateLoopGain.from_config(cfg, v, tm).at(hover)
+    slope = tm.mix_slope(hover)
+    arm = 4 * v.arm_length / math.sqrt(2)
+    per_p = 0.032029 * math.degrees(1.0) / 1000 * slope
+    assert gain[0] == pytest.approx(per_p * 60 * arm / v.inertia[0], rel=1e-12)
+    assert gain[2] == pytest.approx(per_p * 250 * 4 * v.drag_coefficient / v.inertia[2],
+                                    rel=1e-12)  # fmt: skip
+    # the default P puts K at k_w of the attitude law on roll and pitch, within 1 %
+    g = scenario.controller.free_flight
+    k_w = 2 * g.attitude_damping * g.attitude_frequency
+    assert gain[0] == gain[1] == pytest.approx(k_w, rel=0.01)
+
+
+def test_rate_handover_sends_the_rate_whose_error_is_the_commanded_acceleration(scenario):
+    # free flight, tilted 0.2 rad about x, turning: the P loop's alpha = K (w_cmd - w_gyro)
+    # must be the controller's alpha, the gyro reading w plus the gyro bias
+    cfg = FirmwareConfig.load()
+    ctrl = FreeFlightController(scenario)
     q = rotvec_to_quat(np.array([0.2, 0.0, 0.0]))
     est = _estimate(q=q, w=(0.3, -0.1, 0.05))
-    ref = Reference(0.0, p_W=np.zeros((3, 3)))
-    cmd = ctrl.update(0.0, est, ref)
-    rates = RateHandover(belief).rates(est, ref, cmd)
-    g = belief.controller.free_flight
-    k_w = 2 * g.attitude_damping * g.attitude_frequency
-    k_R = g.attitude_frequency**2
-    J = np.asarray(belief.vehicle.inertia)
+    bias = np.array([0.01, -0.02, 0.005])
+    est = StateEstimate(0.0, est.body, gyro_bias_B=bias)
+    cmd = ctrl.update(0.0, est, Reference(0.0, p_W=np.zeros((3, 3))))
+    tm = _throttle_map(scenario.vehicle, cfg)
+    rates = RateHandover(scenario, cfg, tm).rates(est, cmd)
+    J = np.asarray(scenario.vehicle.inertia)
     w = est.body.omega_B
     alpha = (cmd.torque_B - np.cross(w, J * w)) / J
-    assert np.allclose(rates[:2], w[:2] + alpha[:2] / k_w)
-    # the measured rate cancels: roll rate command is -(k_R/k_w) e_R,x (no saturation)
+    K = RateLoopGain.from_config(cfg, scenario.vehicle, tm).at(cmd.thrust)
+    assert np.allclose(K * (rates - (w + bias)), alpha, rtol=1e-12, atol=1e-12)
+    # the measured rate cancels: the roll rate sent is the attitude law's -(k_R/K) e_R,x
+    g = scenario.controller.free_flight
     assert cmd.diagnostics["saturation"] == 0.0
-    assert rates[0] < 0.0 and abs(rates[0]) == pytest.approx(k_R / k_w * abs(
-        np.sin(0.2)), rel=0.05)  # fmt: skip
-    assert not belief.controller.tethered.offset_compensation
+    assert rates[0] - bias[0] == pytest.approx(
+        -g.attitude_frequency**2 / K[0] * math.sin(0.2), rel=0.05
+    )
+
+
+@pytest.mark.parametrize("setting", ["i_roll", "d_pitch", "f_yaw", "d_max_roll"])
+def test_rate_handover_refuses_a_rate_loop_with_more_than_a_p_term(scenario, setting):
+    cfg = FirmwareConfig.load().with_settings(**{setting: 10})
+    with pytest.raises(ValueError, match=f"set {setting} = 0"):
+        RateHandover(scenario, cfg, _throttle_map(scenario.vehicle, cfg))
+
+
+def test_config_with_settings_replaces_and_appends_set_commands():
+    cfg = FirmwareConfig.load()
+    changed = cfg.with_settings(p_roll=70, rc_smoothing="ON")
+    assert changed.number("p_roll") == 70 and changed.settings["rc_smoothing"] == "ON"
+    assert "set p_roll = 70" in changed.commands and "set p_roll = 60" not in changed.commands
+    assert len(changed.commands) == len(cfg.commands)  # both existed: replaced in place
+    assert changed.with_settings(yaw_lowpass_hz=50).commands[-1] == "set yaw_lowpass_hz = 50"
+    assert changed.key() != cfg.key()

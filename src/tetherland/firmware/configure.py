@@ -63,6 +63,20 @@ class FirmwareConfig:
         except (KeyError, ValueError):
             raise FirmwareError(f"{self.source}: needs a numeric 'set {name} = ...'") from None
 
+    def with_settings(self, **values: str | float) -> FirmwareConfig:
+        """This configuration with the ``set`` values of ``values`` replaced (appended when
+        absent); the source names the change."""
+        commands, pending = [], {k: str(v) for k, v in values.items()}
+        for command in self.commands:
+            m = _SET.match(command)
+            if m and m.group(1) in pending:
+                command = f"set {m.group(1)} = {pending.pop(m.group(1))}"
+            commands.append(command)
+        commands += [f"set {k} = {v}" for k, v in pending.items()]
+        settings = {**self.settings, **{k: str(v) for k, v in values.items()}}
+        changes = ", ".join(f"{k} = {v}" for k, v in values.items())
+        return FirmwareConfig(tuple(commands), settings, f"{self.source} ({changes})")
+
     def key(self) -> str:
         return hashlib.sha256("\n".join(self.commands).encode()).hexdigest()[:16]
 

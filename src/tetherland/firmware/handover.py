@@ -1,37 +1,91 @@
-"""What the outer loop hands to a rate-commanding inner loop: body rates and thrust.
+"""What the outer loop hands to the firmware's rate loop: body rates and thrust.
 
-tetherland's controllers end in the SO(3) attitude law (Lee et al. 2010),
+tetherland's controllers end in a torque command, an angular acceleration
+alpha = J^-1 (tau - w x J w) of the attitude law (Lee et al. 2010)
 
-    tau = w x J w - J (k_R e_R + k_w (w - w_d)) + J alpha_ff,
+    alpha = -k_R e_R - k_w (w - w_d) + alpha_ff        (alpha_ff: feed-forward, cable torque)
 
-an angular acceleration alpha = J^-1 (tau - w x J w) = -k_R e_R - k_w (w - w_d) + alpha_ff.
-A rate loop that follows its setpoint as a first-order lag of bandwidth k_w,
-w' = k_w (w_cmd - w), produces exactly that alpha for
+and their own inner loop is that torque on the rotors. The firmware instead runs a rate
+loop on its gyro; configured as a proportional loop (``betaflight_default.txt``: no I, D
+or feed-forward terms) it commands alpha = K (w_cmd - w_gyro) for a gain K per axis that
+follows from the configuration and the vehicle (:class:`RateLoopGain`). Sending
 
-    w_cmd = w + alpha / k_w = w_d - (k_R / k_w) e_R + alpha_ff / k_w,
+    w_cmd = w + b_g + alpha / K          (w the estimated rate, b_g the estimated gyro bias)
 
-in which the measured rate cancels: a proportional attitude loop of gain k_R/k_w with the
-planned rate and acceleration as feed-forward. This is the rate sent to the firmware,
-computed from the command's torque, so the hand-over needs nothing of a controller's
-inside. The collective thrust goes over as it is (the throttle map inverts the firmware's
-throttle path). With a rate loop faster than k_w the attitude closes at k_R/k_w
-(7.8 rad/s for the default gains).
+makes the firmware command exactly the outer controller's alpha at the radio frame: the
+measured rate cancels, and between frames the firmware adds K (w(t_k) - w(t)), the same
+rate damping tetherland's own inner loop would apply at K = k_w. The default P gains put
+K at k_w (25.2 rad/s) on roll and pitch at hover.
 
-The torque must hold the attitude law alone: a torque that cancels a known disturbance
-(the cable at the attachment offset) would become a standing rate. With a rate-commanding
-inner loop the firmware's I term carries such torques, and the outer controllers run
-without offset compensation (:func:`outer_belief`).
+An integrating rate loop would not fit: the rate error w_cmd - w is the commanded
+angular acceleration, so an I term would integrate every standing torque the outer
+controller asks for (the cable's offset torque, held by feed-forward) and cancel it, and
+the attitude would settle off by alpha_ff / k_R (10 deg for 0.5 N m). The outer
+controllers' own integrators (position, link angles) remove model errors.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
-from tetherland.config import Scenario
-from tetherland.control.attitude import AttitudeGains
+from tetherland.config import Scenario, VehicleConfig
+from tetherland.firmware.configure import FirmwareConfig
+from tetherland.firmware.motors import ThrottleMap
 from tetherland.geometry import FloatArray
-from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
+from tetherland.interfaces import Command, StateEstimate
+from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import cross3
+
+PTERM_SCALE = 0.032029
+"""Betaflight's P term per deg/s of rate error and unit of P gain (``pid.h``) [-]."""
+PID_MIXER_SCALING = 1000.0
+"""PID sum per unit of motor mix (``pid.h``) [-]."""
+AXES = ("roll", "pitch", "yaw")
+PROPORTIONAL_ONLY = tuple(f"{term}_{axis}" for term in ("i", "d", "d_max", "f") for axis in AXES
+                          if not (term == "d_max" and axis == "yaw"))  # fmt: skip
+"""Settings the hand-over needs at 0: a proportional rate loop (no d_max on yaw)."""
+
+
+@dataclass(frozen=True)
+class RateLoopGain:
+    """The firmware's proportional rate loop as an angular-acceleration gain (believed).
+
+    A rate error e [rad/s] gives a PID sum s P (180/pi) e (s = ``PTERM_SCALE``), a motor
+    mix m = sum/1000 with QUADX's +-1 coefficients, and a body torque
+    m (df/dm) sum_i |Gamma_ai| (the allocation row of axis a: arm offsets for roll and
+    pitch, drag coefficients for yaw), so
+
+        K_a = s P_a (180/pi) / 1000 * (df/dm) sum_i |Gamma_ai| / J_a     [1/s]
+
+    with df/dm the thrust slope of the throttle path at the collective thrust
+    (:meth:`ThrottleMap.mix_slope`).
+
+    Attributes
+    ----------
+    per_slope : (3,) array
+        K / (df/dm) for roll, pitch, yaw [1/(s N)].
+    throttle_map : ThrottleMap
+    """
+
+    per_slope: FloatArray
+    throttle_map: ThrottleMap
+
+    @classmethod
+    def from_config(
+        cls, config: FirmwareConfig, vehicle: VehicleConfig, throttle_map: ThrottleMap
+    ) -> RateLoopGain:
+        p = np.array([config.number(f"p_{axis}") for axis in AXES])
+        lever = np.abs(RotorLayout.from_config(vehicle).allocation[1:4]).sum(axis=1)
+        J = np.asarray(vehicle.inertia, dtype=float)
+        mix_per_rate = PTERM_SCALE * p * math.degrees(1.0) / PID_MIXER_SCALING
+        return cls(mix_per_rate * lever / J, throttle_map)
+
+    def at(self, thrust: float) -> FloatArray:
+        """K of roll, pitch, yaw at a collective thrust [N] [1/s]."""
+        return self.per_slope * self.throttle_map.mix_slope(thrust)
 
 
 class RateHandover:
@@ -40,33 +94,36 @@ class RateHandover:
     Parameters
     ----------
     belief : Scenario
-        Believed inertia and the attitude gains of both controllers.
+        Believed vehicle (inertia, rotors).
+    config : FirmwareConfig
+        The firmware's configuration: P gains; I, D and feed-forward must be 0.
+    throttle_map : ThrottleMap
+        The believed throttle path of that configuration.
+
+    Raises
+    ------
+    ValueError
+        A term of :data:`PROPORTIONAL_ONLY` is not 0 (naming it).
     """
 
-    def __init__(self, belief: Scenario):
+    def __init__(self, belief: Scenario, config: FirmwareConfig, throttle_map: ThrottleMap):
+        for name in PROPORTIONAL_ONLY:
+            value = config.number(name)
+            if value != 0.0:
+                raise ValueError(f"{config.source}: the rate hand-over needs a proportional rate "
+                                 f"loop: set {name} = 0 (is {value:g})")  # fmt: skip
         self.J = np.asarray(belief.vehicle.inertia, dtype=float)
-        c = belief.controller
-        self.k_w = {
-            ControlMode.FREE_FLIGHT: AttitudeGains.from_config(c.free_flight).k_w,
-            ControlMode.TETHERED: AttitudeGains.from_config(c.tethered).k_w,
-        }
+        self.gain = RateLoopGain.from_config(config, belief.vehicle, throttle_map)
 
-    def rates(self, estimate: StateEstimate, reference: Reference, command: Command) -> FloatArray:
+    def rates(self, estimate: StateEstimate, command: Command) -> FloatArray:
         """w_cmd in F_B [rad/s]; zero when the command carries no torque (motors off)."""
         tau = command.torque_B
-        k_w = self.k_w.get(reference.mode)
-        if tau is None or k_w is None:
+        if tau is None or command.thrust is None:
             return np.zeros(3)
         w = np.asarray(estimate.body.omega_B, dtype=float)
         alpha = (np.asarray(tau, dtype=float) - cross3(w, self.J * w)) / self.J
-        return w + alpha / k_w
+        gyro = w if estimate.gyro_bias_B is None else w + estimate.gyro_bias_B
+        return gyro + alpha / self.gain.at(command.thrust)
 
 
-def outer_belief(belief: Scenario) -> Scenario:
-    """The belief the outer controllers use above a rate loop: no cable-offset torque."""
-    tethered = belief.controller.tethered.model_copy(update={"offset_compensation": False})
-    controller = belief.controller.model_copy(update={"tethered": tethered})
-    return belief.model_copy(update={"controller": controller})
-
-
-__all__ = ["RateHandover", "outer_belief"]
+__all__ = ["PROPORTIONAL_ONLY", "PTERM_SCALE", "RateHandover", "RateLoopGain"]

@@ -81,12 +81,12 @@ class FirmwareInnerLoop:
         self._believed_esc = Esc.from_vehicle(belief.vehicle)
         self._layout = RotorLayout.from_config(belief.vehicle)
         self._c_f = belief.vehicle.thrust_coefficient
-        self.handover = RateHandover(belief)
         self.throttle_map = ThrottleMap(
             belief.vehicle.f_max,
             idle=self.config.number("motor_idle") / 1e4,
             thrust_linear=self.config.number("thrust_linear") / 100.0,
         )
+        self.handover = RateHandover(belief, self.config, self.throttle_map)
         self.rc = RcMap.from_config(self.config)
         self._build = build
         self.sitl: SitlProcess | None = None
@@ -138,7 +138,7 @@ class FirmwareInnerLoop:
         if not self.armed:  # arm first: sticks centred, throttle low
             self.channels = self.rc.arming()
             return
-        rates = self.handover.rates(estimate, reference, command)
+        rates = self.handover.rates(estimate, command)
         thrust = 0.0 if command.thrust is None else command.thrust
         self.last_rates, self.last_throttle = rates, self.throttle_map.throttle(thrust)
         self.channels = self.rc.channels(rates, self.last_throttle, True)

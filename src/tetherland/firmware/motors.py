@@ -152,5 +152,19 @@ class ThrottleMap:
         """Throttle stick in [0, 1] for a collective thrust [N] (clipped to the range)."""
         return float(np.interp(thrust, self._f, self._t))  # type: ignore[attr-defined]
 
+    def mix_slope(self, thrust: float) -> float:
+        """df/dm: one rotor's thrust per unit of attitude mix m at the steady output of a
+        collective thrust [N].
+
+        The mix adds to the compensated throttle before the linearisation, so at stick t
+        (x = t_c) the output is u = u_idle + (1 - u_idle) L(x + m), L(x) = x (1 + k (1-x)^2),
+        and df/dm = 2 f_max u (1 - u_idle) L'(x), L'(x) = 1 + k (1 - x)(1 - 3 x).
+        """
+        t = self.throttle(thrust)
+        k = self.thrust_linear
+        x = t / (1.0 + (k - 0.5 * k * k) * (1.0 - t) ** 2)
+        u = float(self.output(t))
+        return 2.0 * self.f_max * u * (1.0 - self.idle) * (1.0 + k * (1.0 - x) * (1.0 - 3.0 * x))
+
 
 __all__ = ["QUADX_POSITIONS", "SITL_SLOT_OF_MOTOR", "Esc", "MotorOrder", "ThrottleMap"]

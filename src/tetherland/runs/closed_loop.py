@@ -32,12 +32,12 @@ EstimatorFactory = Callable[[Scenario, RigidBodyState, float, FloatArray | None]
 class InnerLoopFactory(Protocol):
     """Makes the flight controller under the method's controller (e.g. the firmware)."""
 
-    def outer_belief(self, belief: Scenario) -> Scenario:
-        """The belief the outer controllers run on above this inner loop."""
-        ...
-
     def __call__(self, truth: Scenario, belief: Scenario) -> InnerLoop:
         """The inner loop for a run: hardware from ``truth``, knowledge from ``belief``."""
+        ...
+
+    def describe(self) -> dict[str, Any]:
+        """What flies the inner loop, for the run's provenance (name, versions, settings)."""
         ...
 
 
@@ -155,8 +155,6 @@ def run_mission(
     belief = belief or scenario
     if scenario.faults.active or belief.faults.active:  # the robot never knows the faults
         belief = faulty_belief(belief, scenario.faults)
-    if inner_loop is not None:
-        belief = inner_loop.outer_belief(belief)
     how = get_method(method)
     if how.name == "tethered":
         controller = controller or belief.controller.kind
@@ -167,8 +165,9 @@ def run_mission(
         method=how.name, seed=int(seed), controller=name,
         truth=scenario.model_dump(mode="json"), belief=belief.model_dump(mode="json"),
         expects=how.expects,
-        provenance=provenance(scenario, seed=seed, extra={"method": how.name,
-                                                           "controller": name}),
+        provenance=provenance(scenario, seed=seed, extra={
+            "method": how.name, "controller": name,
+            **({} if inner_loop is None else {"inner_loop": inner_loop.describe()})}),
     )  # fmt: skip
     plant = Plant(scenario) if plant is None else plant
     if plant_setup is not None:
