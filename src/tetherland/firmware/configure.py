@@ -10,6 +10,7 @@ hash of the executable and the commands; each flight starts from a copy.
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 import shutil
 import socket
@@ -148,7 +149,7 @@ def configured_eeprom(build: FirmwareBuild, config: FirmwareConfig) -> Path:
         except Exception as err:
             raise FirmwareError("the SITL did not exit after 'save'") from err
         image = sitl.folder / "eeprom.bin"
-        tmp = target.with_suffix(f".{id(sitl)}.tmp")
+        tmp = target.with_suffix(f".{os.getpid()}.{id(sitl)}.tmp")  # parallel workers
         shutil.copyfile(image, tmp)
         tmp.replace(target)
     return target

@@ -47,7 +47,8 @@ class FirmwareInnerLoop:
     truth : Scenario
         The hardware: the ESCs' full-output speed and the IMU rate.
     belief : Scenario
-        What the outer loop knows: inertia, attitude gains, thrust per rotor.
+        What the outer loop knows: inertia and rotors (the hand-over's gain, the throttle
+        map).
     config : FirmwareConfig, optional
         CLI commands (default: ``betaflight_default.txt``).
     radio_hz : float
