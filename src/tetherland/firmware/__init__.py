@@ -10,8 +10,9 @@ Roles: :mod:`~tetherland.firmware.build` (the patched SITL in the cache),
 (the CLI configuration), :mod:`~tetherland.firmware.packets` (the UDP packets),
 :mod:`~tetherland.firmware.frames` (frame conventions), :mod:`~tetherland.firmware.motors`
 (ESC, throttle path, motor order), :mod:`~tetherland.firmware.rc` (sticks),
-:mod:`~tetherland.firmware.handover` (what the outer loop sends),
-:mod:`~tetherland.firmware.inner_loop` (the lockstep bridge).
+:mod:`~tetherland.firmware.handover` (what the outer loop sends, the rate loop's gain),
+:mod:`~tetherland.firmware.inner_loop` (the lockstep bridge),
+:mod:`~tetherland.firmware.step_response` (rate steps on the plant, either inner loop).
 """
 
 from __future__ import annotations
