@@ -15,6 +15,7 @@ import re
 import shutil
 import socket
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,12 +83,10 @@ class FirmwareConfig:
         return hashlib.sha256("\n".join(self.commands).encode()).hexdigest()[:16]
 
 
-def _read_until_prompt(sock: socket.socket, timeout: float) -> bytes:
-    data = b""
-    deadline = time.monotonic() + timeout
-    while not data.endswith(_PROMPT):
-        if time.monotonic() > deadline:
-            raise FirmwareError(f"no CLI prompt within {timeout:g} s (got {data[-80:]!r})")
+def _read_until(sock: socket.socket, done: Callable[[bytes], bool], timeout: float) -> bytes:
+    """Receive until ``done(data)``, the peer closes or ``timeout`` seconds pass [s]."""
+    data, deadline = b"", time.monotonic() + timeout
+    while not done(data) and time.monotonic() < deadline:
         try:
             chunk = sock.recv(4096)
         except TimeoutError:
@@ -95,6 +94,13 @@ def _read_until_prompt(sock: socket.socket, timeout: float) -> bytes:
         if not chunk:
             break
         data += chunk
+    return data
+
+
+def _read_until_prompt(sock: socket.socket, timeout: float) -> bytes:
+    data = _read_until(sock, lambda d: d.endswith(_PROMPT), timeout)
+    if not data.endswith(_PROMPT):
+        raise FirmwareError(f"no CLI prompt within {timeout:g} s (got {data[-80:]!r})")
     return data
 
 
@@ -125,15 +131,7 @@ def apply_cli(port: int, commands: tuple[str, ...], timeout: float = 5.0) -> lis
                 raise FirmwareError(f"the firmware rejected {command!r}: {line[:160]}")
             answers.append(answer)
         sock.sendall(b"save\n")  # writes eeprom.bin, answers 'Rebooting' and exits
-        reply, deadline = b"", time.monotonic() + timeout
-        while b"Rebooting" not in reply and time.monotonic() < deadline:
-            try:
-                chunk = sock.recv(4096)
-            except TimeoutError:
-                continue
-            if not chunk:
-                break
-            reply += chunk
+        _read_until(sock, lambda d: b"Rebooting" in d, timeout)
     return answers
 
 
