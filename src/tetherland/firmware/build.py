@@ -106,7 +106,7 @@ def ensure_firmware(jobs: int = 2) -> FirmwareBuild:
     root = cache_dir()
     root.mkdir(parents=True, exist_ok=True)
     target = root / f"betaflight_{FIRMWARE_VERSION}_SITL_{key}"
-    info = target.with_suffix(".json")
+    info = target.with_name(target.name + ".json")  # the name has dots: no with_suffix
     with (root / "build.lock").open("w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         if not target.is_file():
@@ -128,7 +128,7 @@ def _build(target: Path, info: Path, jobs: int) -> None:
     _run(["patch", "-p1", "--batch", "--forward", "-i", str(PATCH)], work, log, "patching")
     _run(["make", f"-j{jobs}", "TARGET=SITL"], work, log, "make TARGET=SITL")
     seconds = time.perf_counter() - t0
-    tmp = target.with_suffix(".tmp")
+    tmp = target.with_name(target.name + ".tmp")
     shutil.copy2(work / _BINARY, tmp)
     tmp.replace(target)
     info.write_text(json.dumps({"build_seconds": round(seconds, 1), "package": PACKAGE,
