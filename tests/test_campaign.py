@@ -87,6 +87,22 @@ def test_unknown_method_and_bad_counts_are_rejected():
         make_executor("mpi", 2)
 
 
+def test_firmware_campaigns_are_checked_and_reach_every_job(tmp_path: Path):
+    with pytest.raises(ConfigError, match="--firmware must be one of betaflight"):
+        CampaignSpec(scenario={}, runs=1, firmware="px4")
+    with pytest.raises(ConfigError, match="--firmware flies missions"):
+        CampaignSpec(scenario={}, runs=1, firmware="betaflight", job="analysis")
+    own = CampaignSpec(scenario={}, runs=2, methods=("tethered",))
+    fw = CampaignSpec(scenario={}, runs=2, methods=("tethered",), firmware="betaflight")
+    assert "firmware" not in own.to_dict()  # campaigns without firmware keep their fingerprint
+    assert fw.fingerprint() != own.fingerprint()  # --resume never mixes the two
+    assert [r.seed for r in fw.expand()] == [r.seed for r in own.expand()]  # the same runs
+    from tetherland.campaign.run import pending_jobs
+
+    jobs, total = pending_jobs(fw, open_store(fw, tmp_path / "fw"))
+    assert total == 2 and {job.firmware for job in jobs} == {"betaflight"}
+
+
 @pytest.mark.parametrize(
     ("k", "n", "lo", "hi"),
     [

@@ -189,7 +189,7 @@ def test_info_has_no_truth_unless_privileged():
             assert keys == {"t", "seed", "outcome"}
             assert not keys & set(PRIVILEGED_INFO)
         else:
-            assert keys == {"t", "outcome", "tension", "perturbation"}
+            assert keys == {"t", "seed", "outcome", "tension", "perturbation"}
             assert infos[0]["perturbation"]["mass_factor"] != 1.0
             assert infos[-1]["tension"] == privileged._plant.tension > 0.0
     # the landing's end: conditions are public, the judge's measures and times are not

@@ -28,6 +28,7 @@ class Job:
     run: RunSpec
     kind: str = "mission"
     controller: str = "hierarchical"
+    firmware: str | None = None
 
 
 def run_scenario(job: Job) -> Scenario:
@@ -91,18 +92,25 @@ def run_for_campaign(
     method: str,
     seed: int,
     controller: str = "hierarchical",
+    firmware: str | None = None,
 ) -> dict[str, Any]:
     """Fly one perturbed run of ``method`` (wind gusts on the plant) and keep its verdict.
 
     ``controller`` names the tethered law; the contact-free method flies its own tracker.
+    ``firmware`` names flight firmware as the inner loop (None: tetherland's own).
     """
     if method != "tethered":
         controller = None
+    inner_loop = None
+    if firmware is not None:
+        from tetherland.firmware import BetaflightSitl
+
+        inner_loop = BetaflightSitl()
     period = 1.0 / plant.controller.rate_hz
     wind: list[WindGusts] = []
     result = run_mission(
         plant, belief, method=method, controller=controller, seed=seed,
-        planners=worker_planners(), observers=wind,
+        planners=worker_planners(), observers=wind, inner_loop=inner_loop,
         plant_setup=lambda p: wind.append(WindGusts(p, perturbation.gusts, period)),
     )  # fmt: skip
     return campaign_fields(result.summary)
@@ -144,7 +152,7 @@ def execute(job: Job, random: RandomSource | None = None) -> dict[str, Any]:
             verdict = _analysis_verdict(plant, belief, run.method)
         else:
             verdict = run_for_campaign(
-                plant, belief, perturbation, run.method, run.seed, job.controller
+                plant, belief, perturbation, run.method, run.seed, job.controller, job.firmware
             )
             if faults is not None:
                 record["fault"]["phase"] = phase_at(verdict["phases"], fault_time(faults))

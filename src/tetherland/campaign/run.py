@@ -33,7 +33,9 @@ def pending_jobs(spec: CampaignSpec, store: ResultsStore) -> tuple[list[Job], in
     runs = spec.expand()
     done = store.done_ids()
     todo = [
-        Job(spec.scenario, run, spec.job, spec.controller) for run in runs if run.run_id not in done
+        Job(spec.scenario, run, spec.job, spec.controller, spec.firmware)
+        for run in runs
+        if run.run_id not in done
     ]
     return todo, len(runs)
 

@@ -87,6 +87,8 @@ class CampaignSpec:
     """Fault kinds: ``runs`` tethered runs each instead of the methods (issue 15)."""
     fault_window: tuple[float, float] = DEFAULT_WINDOW
     """Window of the fault times [s]."""
+    firmware: str | None = None
+    """Flight firmware flying every run as the inner loop (``tetherland.firmware``)."""
 
     def __post_init__(self) -> None:
         if self.runs < 1:
@@ -103,6 +105,14 @@ class CampaignSpec:
             raise ConfigError(
                 f"--faults: unknown fault kind {bad_faults} (allowed: {', '.join(FAULT_KINDS)})"
             )
+        if self.firmware is not None:
+            from tetherland.firmware import FIRMWARES  # no firmware package needed to check
+
+            if self.firmware not in FIRMWARES:
+                raise ConfigError(f"--firmware must be one of {', '.join(FIRMWARES)} "
+                                  f"(got {self.firmware!r})")  # fmt: skip
+            if self.job != "mission":
+                raise ConfigError("--firmware flies missions (--job mission)")
         if self.faults and (self.sweep is not None or self.job != "mission"):
             raise ConfigError("--faults runs missions without --sweep (and --job mission)")
 
@@ -114,6 +124,8 @@ class CampaignSpec:
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["methods"] = list(self.methods)
+        if self.firmware is None:  # campaigns on tetherland's own inner loop keep theirs
+            del d["firmware"]
         if not self.faults:  # campaigns without faults keep their fingerprint
             del d["faults"], d["fault_window"]
         else:

@@ -77,6 +77,10 @@ def campaign(
         str,
         typer.Option("--fault-window", help="START:END of the fault times [s] (stratified)."),
     ] = f"{DEFAULT_WINDOW[0]:g}:{DEFAULT_WINDOW[1]:g}",
+    firmware: Annotated[
+        str | None,
+        typer.Option("--firmware", help="Fly every run through flight firmware: betaflight."),
+    ] = None,
     overrides: SetOption = None,
 ) -> None:
     """Run randomised missions for each method (and sweep value) and summarise success rates.
@@ -98,6 +102,7 @@ def campaign(
         controller=controller,
         faults=parse_faults(faults) if faults is not None else (),
         fault_window=parse_window(fault_window),
+        firmware=firmware,
     )
     if spec.sweep is not None:  # validate every swept value up front: fail fast, one line
         for value in spec.sweep.values:

@@ -89,6 +89,10 @@ def mission(
     live_rate: Annotated[
         float, typer.Option("--live-rate", help="With --live: messages per second per topic.")
     ] = 100.0,
+    firmware: Annotated[
+        str | None,
+        typer.Option("--firmware", help="Fly through flight firmware in lockstep: betaflight."),
+    ] = None,
 ) -> None:
     """Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, controllers, supervisor).
 
@@ -106,6 +110,7 @@ def mission(
         )
     if seed < 0:
         raise ConfigError(f"--seed must be >= 0 (got {seed})")
+    inner_loop = _firmware(firmware)
     if mcap:
         from tetherland.optional import require
 
@@ -128,6 +133,7 @@ def mission(
             sc, method=how.name, controller=controller, seed=seed,
             observers=[_ProgressObserver(progress, task, phase_of), *([view] if view else [])],
             on_flight=lambda flight: holder.update(reference=flight.reference),
+            inner_loop=inner_loop,
         )  # fmt: skip
         if view is not None:
             view.finish(result.summary)
@@ -151,6 +157,17 @@ def mission(
         _print_summary(summary, files)
     if not summary["success"]:
         raise typer.Exit(1)
+
+
+def _firmware(name: str | None) -> Any:
+    """The inner-loop factory of ``--firmware`` (ConfigError for an unknown name)."""
+    if name is None:
+        return None
+    from tetherland.firmware import FIRMWARES, BetaflightSitl
+
+    if name not in FIRMWARES:
+        raise ConfigError(f"--firmware must be one of {', '.join(FIRMWARES)} (got {name!r})")
+    return BetaflightSitl()
 
 
 def _print_summary(summary: dict, files: dict[str, Path]) -> None:

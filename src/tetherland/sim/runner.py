@@ -36,6 +36,7 @@ from tetherland.interfaces import (
     Controller,
     Estimator,
     EventSource,
+    InnerLoop,
     MocapSample,
     Reference,
     ReferenceSource,
@@ -179,6 +180,9 @@ class Runner:
         ``Command.diagnostics`` entries to record as ``diag.<key>`` columns.
     observers : sequence of callables
         Called as ``observer(t_k, plant)`` after every control tick.
+    inner_loop : InnerLoop, optional
+        A flight controller between the controller and the rotors: it gets each command
+        as a setpoint and each IMU sample, and its output is what the rotors are held at.
     """
 
     def __init__(
@@ -192,6 +196,7 @@ class Runner:
         plant: Plant | None = None,
         diagnostic_keys: Sequence[str] = (),
         observers: Sequence[Observer] = (),
+        inner_loop: InnerLoop | None = None,
     ) -> None:
         if not isinstance(controller, Controller):
             raise TypeError(f"{type(controller).__name__} does not implement Controller.update")
@@ -210,6 +215,9 @@ class Runner:
         self.seed = int(seed)
         self.diagnostic_keys = tuple(diagnostic_keys)
         self.observers = tuple(observers)
+        if inner_loop is not None and not isinstance(inner_loop, InnerLoop):
+            raise TypeError(f"{type(inner_loop).__name__} does not implement InnerLoop")
+        self.inner_loop = inner_loop
         if scenario.faults.active:  # the plant-side faults of [faults] (sim/faults.py)
             self.observers += (FaultInjector(scenario.faults),)
         self._snap = np.zeros(13)  # [qpos (7), qvel (6)] at the control tick
@@ -369,8 +377,11 @@ class Runner:
         if diag_keys:
             parts.append(diag_buf)
         nans = [math.nan] * len(diag_keys)
+        inner = self.inner_loop
         wall0 = time.perf_counter()
         try:
+            if inner is not None:
+                inner.start()
             for k in range(n_ticks):
                 control_tick = k % n_ctrl == 0
                 if control_tick or k == next_mocap:
@@ -383,6 +394,8 @@ class Runner:
                 if k % imu_every == 0:
                     sample = imu_sample(k * dt, imu_truth)
                     predict(sample)
+                    if inner is not None:
+                        command(inner.step(sample))
                 if k == next_mocap:
                     t_del = k + lat
                     queue.append((t_del, mocap_measure(k * dt, snap[0:3], snap[3:7], t_del * dt)))
@@ -401,7 +414,11 @@ class Runner:
                 est = estimate()
                 ref = get_reference(t_k, est)
                 cmd = (yield ControlTick(t_k, est, ref)) if external else control(t_k, est, ref)
-                command(cmd.rotor_speeds)
+                if inner is None:
+                    command(cmd.rotor_speeds)
+                else:
+                    inner.setpoint(t_k, est, ref, cmd)
+                    cmd = inner.applied(cmd)
                 if command_aware:
                     estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
                 if reference_aware:
@@ -425,6 +442,9 @@ class Runner:
             status, message = RunStatus.DIVERGED, str(err)
         except TetherlandError as err:
             status, message = RunStatus.FAILED, f"t = {k * dt:.4f} s: {err}"
+        finally:
+            if inner is not None:
+                inner.stop()
         wall = time.perf_counter() - wall0
         return writer.finish(
             self._metadata(status, message, k, wall, reference, random.seed),
@@ -504,6 +524,7 @@ class Runner:
             "real_time_factor": sim_time / wall if wall > 0 else math.inf,
             "controller": type(self.controller).__name__,
             "estimator": type(self.estimator).__name__,
+            "inner_loop": None if self.inner_loop is None else type(self.inner_loop).__name__,
             "reference": type(reference).__name__,
             "anchor_W": self._p_A,
             "R_WA": self._R_WA,
