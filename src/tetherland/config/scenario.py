@@ -5,10 +5,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from tetherland import surface as geo
 from tetherland.config.base import Section
+from tetherland.config.checks import check_name, check_scenario
 from tetherland.config.control import ControllerConfig
 from tetherland.config.faults import FaultsConfig
 from tetherland.config.mission import MissionConfig
@@ -29,7 +30,8 @@ class Scenario(Section):
     mission and simulation settings. Load it with :func:`tetherland.config.load_scenario`."""
 
     name: str = Field("custom", min_length=1, max_length=100)
-    """Short identifier of the scenario."""
+    """Short identifier of the scenario: a label (output folders are named after it), no
+    path separators, ``.``, ``..`` or control characters."""
     description: str = ""
     """One-line description."""
     vehicle: VehicleConfig = VehicleConfig()
@@ -46,6 +48,11 @@ class Scenario(Section):
     verdict: VerdictConfig = VerdictConfig()
     faults: FaultsConfig = FaultsConfig()
     """Injected faults (the plant's truth; the robot's belief never has them)."""
+
+    @field_validator("name")
+    @classmethod
+    def _label(cls, value: str) -> str:
+        return check_name(value)
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:
@@ -131,4 +138,9 @@ class Scenario(Section):
                 f"{w_dt:.3g} must be <= {limit:.3g} at damping_ratio {zeta:g}; use a smaller "
                 'sim.timestep, a softer cable or tether.material = "ideal"'
             )
+        return self
+
+    @model_validator(mode="after")
+    def _cross_checks(self) -> Scenario:
+        check_scenario(self)  # rates, timing, tension threshold: tetherland.config.checks
         return self
