@@ -123,18 +123,21 @@ def test_a_second_writer_gets_one_line_and_exit_2(tmp_path, capsys):
 @pytest.mark.slow
 def test_a_second_resume_while_the_first_runs_does_no_run_twice(tmp_path):
     out = tmp_path / "camp"
-    cmd = [EXE, "campaign", "slope50", "--job", "analysis", "--runs", "40", "--workers", "2",
-           "--sweep", "surface.slope_deg=30,60", "--out", str(out)]  # fmt: skip
+    cmd = [EXE, "campaign", "slope50", "--job", "analysis", "--runs", "3000", "--workers", "2",
+           "--methods", "tethered", "--out", str(out)]  # fmt: skip
     first = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     assert wait_until(lambda: lines(out / "results.jsonl") >= 1, 120)
     second = subprocess.run([*cmd, "--resume"], capture_output=True, text=True, timeout=120)
+    running = first.poll() is None
+    first.send_signal(signal.SIGINT)
+    assert first.wait(timeout=120) in (0, 130), first.stderr.read()
+    assert running, "the first campaign ended before the second started"
     assert second.returncode == 2, second.stderr
     assert second.stderr.count("\n") == 1 and "another process" in second.stderr
     assert f"pid {first.pid}" in second.stderr
-    assert first.wait(timeout=300) == 0, first.stderr.read()
     ids = [r["run_id"] for r in ResultsStore(out).load()]
-    assert len(ids) == len(set(ids)) == 160
-    assert (out / "results.csv").read_text().count("\n") == 161
+    assert len(ids) == len(set(ids)) >= 1
+    assert (out / "results.csv").read_text().count("\n") == len(ids) + 1
 
 
 # --- 3. a lost local worker: restarted, its run retried and counted once -----------------------
@@ -196,14 +199,16 @@ def test_a_campaign_whose_worker_is_killed_equals_a_clean_one(tmp_path):
     victims = pool_workers(proc.pid)
     assert victims, "no pool worker to kill"
     os.kill(victims[0], signal.SIGKILL)
+    at_kill = lines(out / "results.jsonl")
     assert proc.wait(timeout=300) == 0, proc.stderr.read()
-    assert lines(out / "results.jsonl") < 240, "the campaign ended before the kill"
+    assert at_kill < 240, "the campaign ended before the kill"
     records = ResultsStore(out).load()
     ids = [r["run_id"] for r in records]
     assert len(ids) == len(set(ids)) == 240
     assert all(r["status"] == "ok" for r in records)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["complete"] and summary["lost_runs"] == []
+    assert summary["worker_restarts"] == 1  # the pool was rebuilt once
     assert sum(r["n"] for r in summary["rates"]) == 240
     clean_spec = spec_of(60, "surface.slope_deg=30,60")
     manifest = json.loads((out / "campaign.json").read_text())
@@ -223,8 +228,13 @@ def test_resume_reruns_lost_runs_but_not_real_errors(tmp_path):
     jobs = {j.run.run_id: j for j in (Job(spec.scenario, run, spec.job) for run in spec.expand())}
     lost_id, legacy_id, error_id, failed_id = sorted(reference)[:4]
     assert reference[failed_id]["verdict"]["success"] is False  # free-flight at 30/80 deg
-    real_error = {**reference[error_id], "status": "error", "error_kind": "run",
-                  "error": "internal error: ZeroDivisionError", "verdict": {"success": False}}
+    real_error = {
+        **reference[error_id],
+        "status": "error",
+        "error_kind": "run",
+        "error": "internal error: ZeroDivisionError",
+        "verdict": {"success": False},
+    }
     legacy = lost_record(jobs[legacy_id], RuntimeError("gone"))
     del legacy["error_kind"]  # written before records carried error_kind
     tampered = [

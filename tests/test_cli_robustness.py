@@ -55,7 +55,8 @@ def test_a_scenario_name_cannot_lead_outside_the_output_root(
 
 
 def test_a_scenario_name_with_nul_in_an_override_is_one_line(capsys):
-    assert "control characters" in one_error(capsys, main(["show", "flat", "--set", 'name="a\\u0000"']))
+    code = main(["show", "flat", "--set", 'name="a\\u0000"'])
+    assert "control characters" in one_error(capsys, code)
 
 
 # --- 2. an existing run is never silently overwritten or mixed -----------------------------
@@ -143,7 +144,9 @@ def _edit_json(path: Path, edit) -> None:
 def test_judge_exits_1_when_summary_json_differs(saved_run, tmp_path, capsys):
     assert main(["judge", str(saved_run)]) == 0
     run = _copy(saved_run, tmp_path)
-    _edit_json(run / "run.json", lambda d: d["times"].update(t_maneuver=d["times"]["t_maneuver"] + 1.0))
+    _edit_json(
+        run / "run.json", lambda d: d["times"].update(t_maneuver=d["times"]["t_maneuver"] + 1)
+    )
     capsys.readouterr()
     assert main(["judge", str(run)]) == 1
     out, err = capsys.readouterr()

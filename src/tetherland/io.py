@@ -149,14 +149,15 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(code, os.strerror(code), str(b))
 
 
-def _writable(directory: Path) -> bool:
+def _unwritable(directory: Path) -> str | None:
+    """Why no file can be created in ``directory`` (None: it can)."""
     try:
         fd, probe = tempfile.mkstemp(prefix=".write-test-", dir=directory)
-    except OSError:
-        return False
+    except OSError as err:
+        return err.strerror or str(err)
     os.close(fd)
     os.unlink(probe)
-    return True
+    return None
 
 
 class OutputDir:
@@ -204,9 +205,12 @@ class OutputDir:
             ) from None
         # staged next to the target (one file system: the final move is a rename); an
         # existing empty target in a folder we may not write is filled in place
-        self._in_place = not _writable(path.parent)
-        if self._in_place and not (path.is_dir() and _writable(path)):
-            raise ConfigError(f"{option}: cannot write the output directory '{path}'")
+        why = _unwritable(path.parent)
+        self._in_place = why is not None
+        if self._in_place and path.is_dir():
+            why = _unwritable(path)
+        if why is not None:
+            raise ConfigError(f"{option}: cannot write the output directory '{path}' ({why})")
 
     @contextmanager
     def staging(self) -> Iterator[Path]:

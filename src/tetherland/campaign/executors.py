@@ -28,7 +28,7 @@ from tetherland.errors import ConfigError
 ENGINES = ("local", "dask", "ray")
 CONNECT_TIMEOUT = 10.0
 """Longest wait for a cluster address to accept a TCP connection [s]."""
-HANDSHAKE_TIMEOUT = 18.0
+HANDSHAKE_TIMEOUT = 15.0
 """Longest wait for a throwaway client to connect to the cluster (protocol, authentication)
 [s]; with :data:`CONNECT_TIMEOUT` a bad address fails within 30 s."""
 DEFAULT_RETRIES = 2
@@ -114,15 +114,29 @@ def check_handshake(engine: str, address: str, timeout: float = HANDSHAKE_TIMEOU
         raise ConfigError(f"--address {address}: the {engine} client cannot connect: {cause}")
 
 
+_PR_SET_PDEATHSIG = 1
+
+
 def _watch_parent(parent: int) -> None:
     """Pool worker initializer: die with the campaign's main process, leave Ctrl-C to it.
 
-    A thread polls the parent's id every :data:`PARENT_POLL` seconds: when the main
-    process dies (SIGKILL, a crash), the worker is re-parented and exits at once instead
-    of running on as an orphan. SIGINT (a terminal's Ctrl-C reaches the whole process
-    group) is ignored: the main process stops the pool itself.
+    On Linux the kernel kills the worker when the thread that started it ends
+    (``prctl(PR_SET_PDEATHSIG, SIGKILL)``; the pool starts its workers from the thread
+    that submits, the main thread of a campaign). Elsewhere, and as a second line, a thread
+    polls the parent's id every :data:`PARENT_POLL` seconds (it runs only between
+    Python bytecodes, so a long solver call delays it). SIGINT (a terminal's Ctrl-C
+    reaches the whole process group) is ignored: the main process stops the pool itself.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no prctl in this libc
+            pass
+    if os.getppid() != parent:  # the parent died before the line above
+        os._exit(1)
 
     def watch() -> None:
         while os.getppid() == parent:
@@ -310,6 +324,8 @@ class DaskExecutor:
                 "--engine dask needs dask[distributed]: pip install 'tetherland[dask]'"
             ) from None
         self.retries = retries
+        self.restarts = 0
+        """Runs submitted again after Dask gave up on them."""
         self._cluster = None
         self._futures: dict[Any, tuple[Any, int]] = {}
         if address:
@@ -345,6 +361,7 @@ class DaskExecutor:
                     again = self._client.submit(fn, job, pure=False)
                     self._futures[again] = (job, attempts + 1)
                     running.add(again)
+                    self.restarts += 1
                     continue
                 if lost is None:
                     raise

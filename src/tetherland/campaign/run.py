@@ -96,6 +96,7 @@ def run_campaign(
         stop()
     # runs lost to the infrastructure say nothing about the mission: not in the rates,
     # and not finished (--resume runs them again)
+    restarts = getattr(executor, "restarts", None)  # pools rebuilt after a lost worker
     records = [r for r in store.load() if not retryable(r)]
     finished = {r["run_id"] for r in records}
     lost = sorted({r["run_id"] for r in store.load() if retryable(r)} - finished)
@@ -108,6 +109,7 @@ def run_campaign(
             "finished_runs": len(finished),
             "complete": len(finished) == total,
             "lost_runs": lost,
+            **({"worker_restarts": restarts} if restarts is not None else {}),
             "rates": [s.to_dict() for s in summary],
             **({"faults": fault_table(records)} if spec.faults else {}),
             "spec": spec.to_dict(),

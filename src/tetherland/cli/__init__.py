@@ -6,6 +6,7 @@ on stderr with exit code 2 and no traceback.
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 
@@ -15,6 +16,8 @@ if not os.environ.get("DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")
 
 import typer
+import typer.core
+import typer.main
 from typer.exceptions import TyperException
 
 from tetherland import __version__
@@ -81,10 +84,19 @@ def _error(err: BaseException | str) -> None:
         typer.echo(f"error: {one_line(message)}", err=True)
 
 
+@functools.cache
+def _command() -> typer.core.TyperGroup:
+    """The click command of :data:`app`, built once (building it takes 0.1 s: calling
+    :func:`main` many times in one process, as the tests do, stays fast)."""
+    command = typer.main.get_command(app)
+    assert isinstance(command, typer.core.TyperGroup)
+    return command
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``tetherland`` script; returns the exit code."""
     try:
-        result = app(args=argv, prog_name="tetherland", standalone_mode=False)
+        result = _command().main(args=argv, prog_name="tetherland", standalone_mode=False)
     except InfeasibleError as err:
         _error(err)
         return 1
@@ -101,7 +113,10 @@ def main(argv: list[str] | None = None) -> int:
         typer.echo("aborted", err=True)
         return INTERRUPTED
     except TyperException as err:  # usage errors: unknown option, missing argument, ...
-        _error(err.format_message())
+        if type(err).__name__ == "NoArgsIsHelpError":  # `tetherland` alone: the help, whole
+            typer.echo(err.format_message(), err=True)
+        else:
+            _error(err.format_message())
         return err.exit_code
     return int(result) if isinstance(result, int) else 0
 

@@ -71,7 +71,10 @@ def campaign(
         ),
     ] = DEFAULT_RETRIES,
     address: Annotated[
-        str | None, typer.Option("--address", help="Dask scheduler or Ray cluster address.")
+        str | None,
+        typer.Option(
+            "--address", help="Dask scheduler or Ray cluster address (docs/campaigns.md)."
+        ),
     ] = None,
     out: Annotated[Path | None, typer.Option("--out", help="Output directory.")] = None,
     resume: Annotated[
