@@ -356,6 +356,13 @@ def test_a_named_pipe_is_not_read(tmp_path):
     assert proc.stderr.count("\n") == 1
 
 
+def test_a_50_mb_scenario_file_is_refused_unread(tmp_path, capsys):
+    path = tmp_path / "big.toml"
+    with open(path, "wb") as fh:  # sparse: 50 MB long, nothing written
+        fh.truncate(50 * 2**20)
+    assert "at most 16 MiB" in one_error(capsys, main(["show", str(path)]))
+
+
 def test_a_huge_value_is_cut_in_the_error_line(tmp_path, capsys):
     path = tmp_path / "big.toml"
     path.write_text("[surface]\nslope_deg = [" + ", ".join(["1.5"] * 400_000) + "]\n")

@@ -266,7 +266,7 @@ def plan_mission(
     )
     leg_clearance = _check_legs(scenario, geo, waypoints, d_T)
     _check_stretch_tension(scenario, d0)
-    _check_duration(scenario, geo, waypoints, d_T, landing, takeoff)
+    _check_duration(scenario, mission_time_bound(scenario, geo, waypoints, d_T, landing, takeoff))
     return MissionPlan(
         start=start, geometry=geo, landing=landing, takeoff=takeoff, waypoints=waypoints,
         clearance=clearance, leg_clearance_m=leg_clearance,
@@ -386,16 +386,9 @@ def mission_time_bound(
     return landing.require().duration + takeoff.require().duration + holds + moving
 
 
-def _check_duration(
-    scenario: Scenario,
-    geo: LandingGeometry,
-    wp: Waypoints,
-    d_T_W: FloatArray,
-    landing: PlanResult,
-    takeoff: PlanResult,
-) -> None:
-    """The mission can end before ``mission.max_duration`` (else it would be cut off)."""
-    bound = mission_time_bound(scenario, geo, wp, d_T_W, landing, takeoff)
+def _check_duration(scenario: Scenario, bound: float) -> None:
+    """The mission can end before ``mission.max_duration`` (else it would be cut off);
+    ``bound`` from :func:`mission_time_bound` [s]."""
     cfg = scenario.mission
     if bound >= cfg.max_duration:
         raise MissionError(
