@@ -1,24 +1,47 @@
 """Checks across sections that every command applies before anything is planned or flown.
 
-Each check is a plain function of a validated :class:`~tetherland.config.Scenario`
-(or of the few values it needs) raising :class:`ValueError` with one line that names the
+Each check is a plain function of a validated scenario's sections (:class:`Sections`) or
+of the few values it needs, raising :class:`ValueError` with one line that names the
 field first; :class:`~tetherland.config.Scenario` runs them all, so ``show``, ``plan``,
 ``analyze``, ``mission`` and ``campaign`` accept and reject the same files. The physics
 simulation's rate schedule (:class:`tetherland.sim.runner.Schedule`) uses the same rate
-rule (:func:`ticks_per_sample`).
+rules (:func:`ticks_per_sample`, :func:`mocap_rate`).
 """
 
 from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from tetherland import GRAVITY
-from tetherland.config.simulation import RATE_TOL
+from tetherland.config.control import ControllerConfig
+from tetherland.config.mission import MissionConfig
+from tetherland.config.physical import TetherConfig, VehicleConfig
+from tetherland.config.planning import PlannerConfig
+from tetherland.config.sensors import SensorsConfig
+from tetherland.config.simulation import RATE_TOL, SimConfig
 
-if TYPE_CHECKING:  # pragma: no cover
-    from tetherland.config.scenario import Scenario
+
+class Sections(Protocol):
+    """The sections the checks read: a :class:`~tetherland.config.Scenario` has them (a
+    protocol, so that this module does not import the scenario that runs it)."""
+
+    @property
+    def vehicle(self) -> VehicleConfig: ...
+    @property
+    def tether(self) -> TetherConfig: ...
+    @property
+    def sensors(self) -> SensorsConfig: ...
+    @property
+    def planner(self) -> PlannerConfig: ...
+    @property
+    def controller(self) -> ControllerConfig: ...
+    @property
+    def mission(self) -> MissionConfig: ...
+    @property
+    def sim(self) -> SimConfig: ...
+
 
 MOCAP_TOL = 1e-6
 """Relative tolerance of the motion-capture rate's exact fraction [-]."""
@@ -78,7 +101,7 @@ def mocap_rate(rate_hz: float, steps_per_second: int) -> Fraction:
     return exact
 
 
-def check_rates(scenario: Scenario) -> None:
+def check_rates(scenario: Sections) -> None:
     """IMU and control rates divide the physics rate; the mocap rate is an exact fraction."""
     n = scenario.sim.steps_per_second
     ticks_per_sample(scenario.sensors.imu.rate_hz, n, "sensors.imu.rate_hz")
@@ -86,7 +109,7 @@ def check_rates(scenario: Scenario) -> None:
     mocap_rate(scenario.sensors.mocap.rate_hz, n)
 
 
-def check_timing(scenario: Scenario) -> None:
+def check_timing(scenario: Sections) -> None:
     """The fixed holds of a tethered mission fit in ``mission.max_duration``.
 
     Deploying, spinning up and the final hold on the pad alone take ``deploy_time +
@@ -104,7 +127,7 @@ def check_timing(scenario: Scenario) -> None:
         )
 
 
-def stretch_tension_limit(scenario: Scenario) -> float:
+def stretch_tension_limit(scenario: Sections) -> float:
     """Largest cable tension the stretching pull can hold, whatever the direction [N].
 
     The free-flight position loop (stiffness k_p = m w_n^2) pulls towards a point
@@ -124,7 +147,7 @@ def stretch_tension_limit(scenario: Scenario) -> float:
     return min(spring + integral, rotors)
 
 
-def check_tension_threshold(scenario: Scenario) -> None:
+def check_tension_threshold(scenario: Sections) -> None:
     """``mission.tension_threshold`` is a tension the stretching pull can reach."""
     threshold = scenario.mission.tension_threshold
     limit = stretch_tension_limit(scenario)
@@ -138,7 +161,7 @@ def check_tension_threshold(scenario: Scenario) -> None:
         )
 
 
-def check_scenario(scenario: Scenario) -> None:
+def check_scenario(scenario: Sections) -> None:
     """Every check of this module, in order (the first failure raises)."""
     check_rates(scenario)
     check_timing(scenario)
