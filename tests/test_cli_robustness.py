@@ -71,12 +71,12 @@ def test_mission_refuses_an_existing_run_and_overwrite_replaces_it_whole(tmp_pat
     assert {"landing_trajectory.csv", "figure_6_5.png", "log.npz"} <= set(before)
     capsys.readouterr()
     # the same --out again: refused on one line before anything flies, the run untouched
-    second = ["mission", "flat", "--method", "free-flight", "--seed", "3", "--out", str(out)]
+    second = ["mission", "slope50", "--method", "free-flight", "--seed", "3", "--out", str(out)]
     err = one_error(capsys, main(second))
     assert "--overwrite" in err and str(out) in err
     assert {p.name: p.stat().st_mtime_ns for p in out.iterdir()} == before
     # --overwrite: the new run's files and nothing else (no plan, figure or CSV of the first)
-    assert main([*second, "--overwrite", "--json"]) == 0
+    assert main([*second, "--overwrite", "--json"]) == 1  # it slides on 50 deg
     doc = json.loads(capsys.readouterr().out)
     listed = {Path(p).name for p in doc["files"].values()}
     assert {p.name for p in out.iterdir()} == listed == {
@@ -117,6 +117,18 @@ def test_output_dir_replaces_whole_or_not_at_all(tmp_path):
         OutputDir(home, overwrite=True)
     with pytest.raises(ConfigError, match="is a file"):
         OutputDir(home / "thesis.tex")
+
+
+def test_output_dir_through_a_symbolic_link_replaces_the_folder_and_keeps_the_link(tmp_path):
+    real = tmp_path / "disk" / "run"
+    real.mkdir(parents=True)
+    (real / "run.json").write_text("old")
+    link = tmp_path / "run"
+    link.symlink_to(real, target_is_directory=True)
+    with OutputDir(link, overwrite=True).staging() as stage:
+        (stage / "run.json").write_text("new")
+    assert link.is_symlink() and (link / "run.json").read_text() == "new"
+    assert sorted(p.name for p in (tmp_path / "disk").iterdir()) == ["run"]
 
 
 # --- 5. judge: a changed run or bad values in run.json ---------------------------------------

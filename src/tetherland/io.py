@@ -181,20 +181,24 @@ class OutputDir:
     def __init__(self, target: str | Path, *, overwrite: bool = False, option: str = "--out"):
         self.path = Path(target)
         self.option = option
-        path = self.path
+        # a symbolic link to a folder: the folder is replaced, the link stays
+        path = self._dir = Path(os.path.realpath(target)) if self.path.is_symlink() else self.path
         if path.exists() and not path.is_dir():
-            raise ConfigError(f"{option} '{path}' is a file, expected a directory")
-        contents = sorted(p.name for p in path.iterdir()) if path.is_dir() else []
+            raise ConfigError(f"{option} '{target}' is a file, expected a directory")
+        try:
+            contents = sorted(p.name for p in path.iterdir()) if path.is_dir() else []
+        except OSError as err:
+            raise ConfigError(f"{option}: cannot read '{target}' ({err.strerror or err})") from None
         if contents:
             marker = next((m for m in OUTPUT_MARKERS if m in contents), None)
             if marker is None:
                 raise ConfigError(
-                    f"{option} '{path}' is not empty and holds no tetherland output (no "
+                    f"{option} '{target}' is not empty and holds no tetherland output (no "
                     f"{', '.join(OUTPUT_MARKERS)}); choose another directory"
                 )
             if not overwrite:
                 raise ConfigError(
-                    f"{option} '{path}' already holds an output ({marker}); add --overwrite "
+                    f"{option} '{target}' already holds an output ({marker}); add --overwrite "
                     "to replace it as a whole, or choose another directory"
                 )
         try:
@@ -208,22 +212,22 @@ class OutputDir:
         why = _unwritable(path.parent)
         self._in_place = why is not None
         if self._in_place and path.is_dir():
-            why = _unwritable(path)
+            why = _unwritable(path) if not contents else "its folder cannot be written"
         if why is not None:
-            raise ConfigError(f"{option}: cannot write the output directory '{path}' ({why})")
+            raise ConfigError(f"{option}: cannot write the output directory '{target}' ({why})")
 
     @contextmanager
     def staging(self) -> Iterator[Path]:
         """A directory to write the output into; it becomes ``self.path`` on success."""
         if self._in_place:  # an empty directory: nothing stale to mix with
             try:
-                yield self.path
+                yield self._dir
             except BaseException:
-                for child in self.path.iterdir():
+                for child in self._dir.iterdir():
                     _remove(child)
                 raise
             return
-        tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.staging-", dir=self.path.parent))
+        tmp = Path(tempfile.mkdtemp(prefix=f".{self._dir.name}.staging-", dir=self._dir.parent))
         try:
             yield tmp
             os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; give what mkdir would
@@ -233,7 +237,7 @@ class OutputDir:
             raise
 
     def _publish(self, tmp: Path) -> None:
-        target = self.path
+        target = self._dir
         if not target.exists() or (target.is_dir() and not any(target.iterdir())):
             os.replace(tmp, target)  # POSIX: a directory may replace an empty one
         elif _exchange(tmp, target):

@@ -71,7 +71,7 @@ def check_reachable(engine: str, address: str, timeout: float = CONNECT_TIMEOUT)
 
 _HANDSHAKES = {
     "dask": "from dask.distributed import Client\n"
-    "Client({address!r}, timeout='{timeout:g}s').close()\n",
+    "Client({address!r}, timeout='{own:g}s').close()\n",
     "ray": "import ray\nray.init(address={address!r}, log_to_driver=False)\nray.shutdown()\n",
 }
 
@@ -91,7 +91,8 @@ def check_handshake(engine: str, address: str, timeout: float = HANDSHAKE_TIMEOU
     """
     if engine == "ray" and address == "auto":
         return
-    code = _HANDSHAKES[engine].format(address=address, timeout=timeout)
+    # Dask's own timeout first, when it keeps to it: its message names the cause
+    code = _HANDSHAKES[engine].format(address=address, own=0.7 * timeout)
     proc = subprocess.Popen(
         [sys.executable, "-c", code],
         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,

@@ -70,8 +70,7 @@ def default_output(name: str, kind: str) -> Path:
     except ValueError as err:
         raise ConfigError(f"name: {err}") from None
     path = OUTPUT_ROOT / name / kind
-    inside = os.path.normpath(path).split(os.sep)[0] == os.path.normpath(OUTPUT_ROOT)
-    if not inside or name in ("", ".", ".."):  # pragma: no cover - check_name rules it out
+    if Path(os.path.normpath(path)).parent.parent != OUTPUT_ROOT:  # what check_name ensures
         raise ConfigError(f"name {name!r} leads outside {OUTPUT_ROOT}/")
     return path
 

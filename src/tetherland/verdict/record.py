@@ -217,8 +217,7 @@ class RunRecord:
                 belief=_mapping(data["belief"], "belief"),
                 expects=Expectations(
                     required_conditions=tuple(
-                        int(_number(c, "expects.required_conditions", 1, 5))
-                        for c in data["expects"]["required_conditions"]
+                        _condition(c) for c in data["expects"]["required_conditions"]
                     ),
                     tension=_flag(data["expects"]["tension"], "expects.tension"),
                     takeoff=_flag(data["expects"]["takeoff"], "expects.takeoff"),
@@ -308,6 +307,12 @@ def _number(value: Any, what: str, low: float | None = 0.0, high: float = math.i
 def _integer(value: Any, what: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 0:
         raise RunRecordError(f"run record: {what} must be an integer >= 0 (got {value!r:.40})")
+    return value
+
+
+def _condition(value: Any) -> int:
+    if _integer(value, "expects.required_conditions") not in (1, 2, 3, 4, 5):
+        raise RunRecordError(f"run record: landing condition {value} is not one of 1-5")
     return value
 
 
