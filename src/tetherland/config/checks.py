@@ -110,20 +110,20 @@ def check_rates(scenario: Sections) -> None:
 
 
 def check_timing(scenario: Sections) -> None:
-    """The fixed holds of a tethered mission fit in ``mission.max_duration``.
+    """The fixed holds of a tethered mission fit in ``mission.time_limit``.
 
     Deploying, spinning up and the final hold on the pad alone take ``deploy_time +
-    spinup_time + done_hold_time``; a mission that cannot end before ``max_duration``
+    spinup_time + done_hold_time``; a mission that cannot end before ``time_limit``
     would be cut off (the plan adds the flight legs: :func:`tetherland.mission.plan_mission`).
     """
     m = scenario.mission
     holds = m.deploy_time + m.spinup_time + m.done_hold_time
-    if holds >= m.max_duration:
+    if holds >= m.time_limit:
         raise ValueError(
             f"mission.deploy_time = {m.deploy_time:g} s: with spinup_time {m.spinup_time:g} s "
             f"and done_hold_time {m.done_hold_time:g} s the mission holds {holds:g} s, not less "
-            f"than mission.max_duration = {m.max_duration:g} s; shorten deploy_time or raise "
-            "max_duration"
+            f"than mission.time_limit = {m.time_limit:g} s; shorten deploy_time or raise "
+            "time_limit"
         )
 
 
@@ -131,7 +131,7 @@ def stretch_tension_limit(scenario: Sections) -> float:
     """Largest cable tension the stretching pull can hold, whatever the direction [N].
 
     The free-flight position loop (stiffness k_p = m w_n^2) pulls towards a point
-    ``pull = planner.start_tension / k_p + mission.stretch_margin`` beyond the cable length;
+    ``pull = planner.start_tension / k_p + mission.stretch.pull_margin`` beyond the cable length;
     an elastic cable (k = EA/l) gives way by T/k, so the spring part holds
     k_p pull / (1 + k_p/k); the position integral adds at most its clamp
     (``integral_force_max`` m g per axis, sqrt(3) times that along any direction). The
@@ -139,7 +139,7 @@ def stretch_tension_limit(scenario: Sections) -> float:
     """
     v, ff = scenario.vehicle, scenario.controller.free_flight
     k_p = v.mass * ff.position_frequency**2
-    pull = scenario.planner.start_tension / k_p + scenario.mission.stretch_margin
+    pull = scenario.planner.start_tension / k_p + scenario.mission.stretch.pull_margin
     k = scenario.tether.stiffness
     spring = k_p * pull if k is None else k_p * pull / (1.0 + k_p / k)
     integral = math.sqrt(3.0) * ff.integral_force_max * v.mass * GRAVITY
@@ -148,21 +148,14 @@ def stretch_tension_limit(scenario: Sections) -> float:
 
 
 def check_tension_threshold(scenario: Sections) -> None:
-    """``mission.tension_threshold`` is a tension the stretching pull can reach."""
-    threshold = scenario.mission.tension_threshold
+    """``mission.stretch.tension_threshold`` is a tension the stretching pull can reach."""
+    threshold = scenario.mission.stretch.tension_threshold
     limit = stretch_tension_limit(scenario)
     if threshold >= limit:
         raise ValueError(
-            f"mission.tension_threshold = {threshold:g} N is not below {limit:.3g} N, the "
+            f"mission.stretch.tension_threshold = {threshold:g} N is not below {limit:.3g} N, the "
             "largest tension the stretching pull can hold (planner.start_tension, "
-            "mission.stretch_margin, the free-flight gains and the rotors): the hook would "
+            "mission.stretch.pull_margin, the free-flight gains and the rotors): the hook would "
             f"count as missed; use a threshold below planner.start_tension = "
             f"{scenario.planner.start_tension:g} N"
         )
-
-
-def check_scenario(scenario: Sections) -> None:
-    """Every check of this module, in order (the first failure raises)."""
-    check_rates(scenario)
-    check_timing(scenario)
-    check_tension_threshold(scenario)

@@ -9,7 +9,12 @@ from pydantic import Field, field_validator, model_validator
 
 from tetherland import surface as geo
 from tetherland.config.base import Section
-from tetherland.config.checks import check_name, check_scenario
+from tetherland.config.checks import (
+    check_name,
+    check_rates,
+    check_tension_threshold,
+    check_timing,
+)
 from tetherland.config.control import ControllerConfig
 from tetherland.config.faults import FaultsConfig
 from tetherland.config.mission import MissionConfig
@@ -53,6 +58,11 @@ class Scenario(Section):
     @classmethod
     def _label(cls, value: str) -> str:
         return check_name(value)
+
+    @model_validator(mode="after")
+    def _rates(self) -> Scenario:
+        check_rates(self)  # first: the checks below count in control periods and steps
+        return self
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:
@@ -142,5 +152,6 @@ class Scenario(Section):
 
     @model_validator(mode="after")
     def _cross_checks(self) -> Scenario:
-        check_scenario(self)  # rates, timing, tension threshold: tetherland.config.checks
+        check_timing(self)  # tetherland.config.checks
+        check_tension_threshold(self)
         return self

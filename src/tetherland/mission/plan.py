@@ -330,13 +330,13 @@ def rotor_tension_limit(scenario: Scenario, d_W: FloatArray) -> float:
 
 
 def _check_stretch_tension(scenario: Scenario, d0_W: FloatArray) -> None:
-    """The supervisor's ``mission.tension_threshold`` is within what the rotors can pull
+    """The supervisor's ``mission.stretch.tension_threshold`` is within what the rotors can pull
     along the planned start direction of the cable (else the hook counts as missed)."""
-    threshold = scenario.mission.tension_threshold
+    threshold = scenario.mission.stretch.tension_threshold
     limit = rotor_tension_limit(scenario, d0_W)
     if threshold >= limit:
         raise MissionError(
-            f"mission.tension_threshold = {threshold:g} N: the rotors can hold at most "
+            f"mission.stretch.tension_threshold = {threshold:g} N: the rotors can hold at most "
             f"{limit:.3g} N of tension along the cable at the planned start (4 x f_max = "
             f"{4 * scenario.vehicle.f_max:g} N, max_tilt_deg "
             f"{scenario.controller.free_flight.max_tilt_deg:g}); the hook would count as "
@@ -358,27 +358,28 @@ def mission_time_bound(
     the pad, the ``settle_time`` pause after the climb, the approach, the hooking pass,
     the unhooking, the return and the landing on the pad); and the free-flight segments
     the supervisor flies rest to rest (:func:`tetherland.mission.paths.segment_duration`)
-    at their speeds: the climb, the approach and the return at ``cruise_speed``, the
-    hooking pass, the unhooking and the descent onto the pad at ``hook_speed``, the
-    take-up before stretching at its fraction of ``cruise_speed``. The stretch itself
+    at their speeds: the climb, the approach and the return at ``flight.cruise_speed``,
+    the hooking pass, the unhooking and the descent onto the pad at ``hooking.speed``,
+    the take-up before stretching at its fraction of the cruise speed. The stretch itself
     and the release's pull are left out (they end on the tension).
     """
     cfg = scenario.mission
     legs = free_flight_legs(scenario, geo, wp, d_T_W)
-    top = wp.start + cfg.takeoff_height * Z_W
-    pad = wp.start - cfg.pad_press_depth * Z_W
-    take_up = cfg.take_up_speed_factor * cfg.cruise_speed
+    fly, hook = cfg.flight, cfg.hooking
+    top = wp.start + fly.takeoff_height * Z_W
+    pad = wp.start - fly.pad_press_depth * Z_W
+    take_up = cfg.stretch.take_up_speed_factor * fly.cruise_speed
     flown = [
-        ([wp.start, top], cfg.cruise_speed),
-        (legs["approach"], cfg.cruise_speed),
-        ([wp.hook_start, wp.hook_end], cfg.hook_speed),
+        ([wp.start, top], fly.cruise_speed),
+        (legs["approach"], fly.cruise_speed),
+        ([wp.hook_start, wp.hook_end], hook.speed),
         ([wp.hook_end, wp.slack_out], take_up),
-        (legs["release"], cfg.hook_speed),
-        (legs["return"], cfg.cruise_speed),
-        ([top, pad], cfg.hook_speed),
+        (legs["release"], hook.speed),
+        (legs["return"], fly.cruise_speed),
+        ([top, pad], hook.speed),
     ]
     moving = sum(
-        segment_duration(float(np.linalg.norm(b - a)), speed, cfg.cruise_accel)
+        segment_duration(float(np.linalg.norm(b - a)), speed, fly.cruise_accel)
         for leg, speed in flown
         for a, b in itertools.pairwise(leg)
     )
@@ -387,14 +388,14 @@ def mission_time_bound(
 
 
 def _check_duration(scenario: Scenario, bound: float) -> None:
-    """The mission can end before ``mission.max_duration`` (else it would be cut off);
+    """The mission can end before ``mission.time_limit`` (else it would be cut off);
     ``bound`` from :func:`mission_time_bound` [s]."""
     cfg = scenario.mission
-    if bound >= cfg.max_duration:
+    if bound >= cfg.time_limit:
         raise MissionError(
-            f"mission.max_duration = {cfg.max_duration:g} s is too short: the plans, "
+            f"mission.time_limit = {cfg.time_limit:g} s is too short: the plans, "
             f"deploy_time {cfg.deploy_time:g} s and the flight legs take at least {bound:.0f} s; "
-            f"raise max_duration above {bound:.0f} s or shorten deploy_time"
+            f"raise time_limit above {bound:.0f} s or shorten deploy_time"
         )
 
 
