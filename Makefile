@@ -24,7 +24,7 @@ $(STAMP): pyproject.toml
 	@touch $(STAMP)
 
 demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/tetherland mission $(SCENARIO) --out $(OUT)
+	MPLBACKEND=Agg $(BIN)/tetherland mission $(SCENARIO) --out $(OUT) --overwrite
 
 test: $(STAMP)
 	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS)

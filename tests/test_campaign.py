@@ -268,8 +268,8 @@ def test_believed_slope_is_not_clamped_at_vertical(name, error_deg):
 
 def test_torn_last_line_is_discarded(tmp_path: Path):
     spec = analysis_spec(runs=1, sweep=None)
-    store = open_store(spec, tmp_path)
-    store.append({"run_id": "x", "method": "tethered"})
+    with open_store(spec, tmp_path) as store:
+        store.append({"run_id": "x", "method": "tethered"})
     with open(store.results_path, "a") as fh:
         fh.write('{"run_id": "torn", "meth')
     store = open_store(spec, tmp_path, resume=True)

@@ -41,7 +41,8 @@ def test_the_loop_needs_no_specialisation_beyond_the_warm_up():
     sc = load_scenario("slope50")
     planners = Planners()
     # free flight, the estimator and mocap in the mission loop ...
-    run_mission(with_overrides(sc, ["mission.time_limit=0.5"]), planners=planners)
+    short = ["mission.abort_time=0.25", "mission.safe_hover_time=0.25"]  # ends at 0.5 s
+    run_mission(with_overrides(sc, short), planners=planners)
     # ... and the tethered controllers on a planned track's references, from the estimator
     traj = Planner().plan(sc, "landing").require()
     track = TrajectoryTrack(traj, 0.0, sc.controller.rate_hz)

@@ -11,7 +11,8 @@ from typing import Any
 from tetherland.analysis import analyze
 from tetherland.campaign.faults import fault_time, phase_at, sample_fault
 from tetherland.campaign.perturb import Perturbation, apply_perturbation, sample_perturbation
-from tetherland.campaign.spec import RunSpec
+from tetherland.campaign.spec import RunSpec, Sweep
+from tetherland.campaign.store import INFRASTRUCTURE
 from tetherland.config import Scenario, apply_overrides, scenario_from_dict
 from tetherland.errors import TetherlandError
 from tetherland.methods import Planners
@@ -35,7 +36,8 @@ def run_scenario(job: Job) -> Scenario:
     """The base scenario with the run's sweep value applied."""
     data = job.scenario
     if job.run.sweep_key is not None:
-        data = apply_overrides(data, [f"{job.run.sweep_key}={job.run.sweep_value!r}"])
+        assert job.run.sweep_value is not None
+        data = apply_overrides(data, [Sweep.override(job.run.sweep_key, job.run.sweep_value)])
     return scenario_from_dict(data, str(data.get("name", "custom")))
 
 
@@ -157,21 +159,23 @@ def execute(job: Job, random: RandomSource | None = None) -> dict[str, Any]:
             if faults is not None:
                 record["fault"]["phase"] = phase_at(verdict["phases"], fault_time(faults))
         record.update(status="ok", error=None, verdict=verdict)
-    except TetherlandError as err:
-        record.update(status="error", error=str(err), verdict={"success": False})
+    except TetherlandError as err:  # the run's own error: the same on every attempt
+        record.update(status="error", error_kind="run", error=str(err), verdict={"success": False})
     except Exception as err:
         last = traceback.format_exception_only(err)[-1].strip()
-        record.update(status="error", error=f"internal error: {last}", verdict={"success": False})
+        record.update(status="error", error_kind="run", error=f"internal error: {last}",
+                      verdict={"success": False})  # fmt: skip
     record["wall_time_s"] = time.perf_counter() - start
     return record
 
 
 def lost_record(job: Job, error: BaseException) -> dict[str, Any]:
-    """The record of a run whose worker was lost for good (the engine gave up on it)."""
+    """The record of a run whose worker was lost for good (the engine gave up on it):
+    an infrastructure error, which ``--resume`` runs again."""
     run = job.run
     return {
         "run_id": run.run_id, "method": run.method, "index": run.index, "seed": run.seed,
         "sweep_key": run.sweep_key, "sweep_value": run.sweep_value, "status": "error",
-        "error": f"worker lost: {type(error).__name__}: {error}", "verdict": {"success": False},
-        "wall_time_s": 0.0,
+        "error_kind": INFRASTRUCTURE, "error": f"worker lost: {type(error).__name__}: {error}",
+        "verdict": {"success": False}, "wall_time_s": 0.0,
     }  # fmt: skip

@@ -50,6 +50,13 @@ class Sweep:
             raise ConfigError(f"--sweep '{text}': no values")
         return cls(key, values)
 
+    @staticmethod
+    def override(key: str, value: float) -> str:
+        """``key=value`` as an override; a whole number is written as an integer, so that
+        an integer field (``mission.max_hook_attempts``) takes it under strict types."""
+        number = str(int(value)) if float(value).is_integer() else repr(float(value))
+        return f"{key}={number}"
+
 
 @dataclass(frozen=True)
 class RunSpec:

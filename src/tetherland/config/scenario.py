@@ -5,10 +5,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from tetherland import surface as geo
 from tetherland.config.base import Section
+from tetherland.config.checks import (
+    check_name,
+    check_rates,
+    check_tension_threshold,
+    check_timing,
+)
 from tetherland.config.control import ControllerConfig
 from tetherland.config.faults import FaultsConfig
 from tetherland.config.mission import MissionConfig
@@ -29,7 +35,8 @@ class Scenario(Section):
     mission and simulation settings. Load it with :func:`tetherland.config.load_scenario`."""
 
     name: str = Field("custom", min_length=1, max_length=100)
-    """Short identifier of the scenario."""
+    """Short identifier of the scenario: a label (output folders are named after it), no
+    path separators, ``.``, ``..`` or control characters."""
     description: str = ""
     """One-line description."""
     vehicle: VehicleConfig = VehicleConfig()
@@ -46,6 +53,16 @@ class Scenario(Section):
     verdict: VerdictConfig = VerdictConfig()
     faults: FaultsConfig = FaultsConfig()
     """Injected faults (the plant's truth; the robot's belief never has them)."""
+
+    @field_validator("name")
+    @classmethod
+    def _label(cls, value: str) -> str:
+        return check_name(value)
+
+    @model_validator(mode="after")
+    def _rates(self) -> Scenario:
+        check_rates(self)  # first: the checks below count in control periods and steps
+        return self
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:
@@ -131,4 +148,10 @@ class Scenario(Section):
                 f"{w_dt:.3g} must be <= {limit:.3g} at damping_ratio {zeta:g}; use a smaller "
                 'sim.timestep, a softer cable or tether.material = "ideal"'
             )
+        return self
+
+    @model_validator(mode="after")
+    def _cross_checks(self) -> Scenario:
+        check_timing(self)  # tetherland.config.checks
+        check_tension_threshold(self)
         return self

@@ -21,7 +21,7 @@ class SimConfig(Section):
     steps, so keep ``*_time_constant >= 2 timestep``.
     """
 
-    timestep: float = Field(0.001, gt=0, le=0.005)
+    timestep: float = Field(0.001, ge=1e-6, le=0.005)
     """Physics time step; 1/timestep must be an integer number of steps per second [s]."""
     integrator: Literal["implicitfast", "Euler"] = "implicitfast"
     """MuJoCo integrator (both semi-implicit in velocity; RK4 is not supported here) [-]."""

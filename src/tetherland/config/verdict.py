@@ -61,8 +61,9 @@ class VerdictConfig(Section):
     def _settle_within_rest(self) -> VerdictConfig:
         if self.rest_settle_time >= self.min_rest_time:
             raise ValueError(
-                f"verdict.rest_settle_time = {self.rest_settle_time:g} s must be < verdict.min_rest_time "
-                f"= {self.min_rest_time:g} s (the rest speed is judged after the settle)"
+                f"verdict.rest_settle_time = {self.rest_settle_time:g} s must be < "
+                f"verdict.min_rest_time = {self.min_rest_time:g} s (the rest speed is judged "
+                "after the settle)"
             )
         return self
 

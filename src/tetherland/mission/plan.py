@@ -14,11 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tetherland import GRAVITY
 from tetherland.analysis.clearance import HookingClearance, level_vehicle_distance
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.geometry import FloatArray, LandingGeometry, link_direction
 from tetherland.mission.hooking import check_pass, hooking_pass, unhooking_path
+from tetherland.mission.paths import segment_duration
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import rotation_from_z_and_yaw
@@ -263,6 +265,8 @@ def plan_mission(
         attachment_W=_frozen(attachment_W),
     )
     leg_clearance = _check_legs(scenario, geo, waypoints, d_T)
+    _check_stretch_tension(scenario, d0)
+    _check_duration(scenario, mission_time_bound(scenario, geo, waypoints, d_T, landing, takeoff))
     return MissionPlan(
         start=start, geometry=geo, landing=landing, takeoff=takeoff, waypoints=waypoints,
         clearance=clearance, leg_clearance_m=leg_clearance,
@@ -302,6 +306,97 @@ def free_flight_legs(
         ),
         "return": [wp.hook_start, over_hook, np.array([*wp.start[:2], wp.z_safe]), top],
     }
+
+
+def rotor_tension_limit(scenario: Scenario, d_W: FloatArray) -> float:
+    """Largest cable tension the rotors can hold with the cable along ``d_W`` [N].
+
+    ``d_W`` is the unit direction from the anchor to the vehicle; the cable pulls the
+    vehicle back along -d, so the thrust must be m g z_W + T d. With the total thrust
+    |f| <= 4 f_max: T = -m g c + sqrt(F^2 - (m g)^2 (1 - c^2)), c = z_W . d; with the
+    free-flight tilt limit theta (horizontal thrust <= tan(theta) x vertical thrust):
+    T (|d_h| - tan(theta) c) <= tan(theta) m g.
+    """
+    v = scenario.vehicle
+    w = v.mass * GRAVITY
+    c = float(d_W @ Z_W)
+    f_max = 4.0 * v.f_max
+    limit = -w * c + math.sqrt(max(f_max * f_max - w * w * (1.0 - c * c), 0.0))
+    tan = math.tan(math.radians(scenario.controller.free_flight.max_tilt_deg))
+    lean = math.sqrt(max(1.0 - c * c, 0.0)) - tan * c
+    if lean > 0.0:
+        limit = min(limit, tan * w / lean)
+    return limit
+
+
+def _check_stretch_tension(scenario: Scenario, d0_W: FloatArray) -> None:
+    """The supervisor's ``mission.stretch.tension_threshold`` is within what the rotors can pull
+    along the planned start direction of the cable (else the hook counts as missed)."""
+    threshold = scenario.mission.stretch.tension_threshold
+    limit = rotor_tension_limit(scenario, d0_W)
+    if threshold >= limit:
+        raise MissionError(
+            f"mission.stretch.tension_threshold = {threshold:g} N: the rotors can hold at most "
+            f"{limit:.3g} N of tension along the cable at the planned start (4 x f_max = "
+            f"{4 * scenario.vehicle.f_max:g} N, max_tilt_deg "
+            f"{scenario.controller.free_flight.max_tilt_deg:g}); the hook would count as "
+            "missed: lower the threshold"
+        )
+
+
+def mission_time_bound(
+    scenario: Scenario,
+    geo: LandingGeometry,
+    wp: Waypoints,
+    d_T_W: FloatArray,
+    landing: PlanResult,
+    takeoff: PlanResult,
+) -> float:
+    """A lower bound on the nominal mission's duration [s].
+
+    The planned landing and takeoff; the fixed holds (deploy, spin-up, the final hold on
+    the pad, the ``settle_time`` pause after the climb, the approach, the hooking pass,
+    the unhooking, the return and the landing on the pad); and the free-flight segments
+    the supervisor flies rest to rest (:func:`tetherland.mission.paths.segment_duration`)
+    at their speeds: the climb, the approach and the return at ``flight.cruise_speed``,
+    the hooking pass, the unhooking and the descent onto the pad at ``hooking.speed``,
+    the take-up before stretching at its fraction of the cruise speed. The stretch itself
+    and the release's pull are left out (they end on the tension).
+    """
+    cfg = scenario.mission
+    legs = free_flight_legs(scenario, geo, wp, d_T_W)
+    fly, hook = cfg.flight, cfg.hooking
+    top = wp.start + fly.takeoff_height * Z_W
+    pad = wp.start - fly.pad_press_depth * Z_W
+    take_up = cfg.stretch.take_up_speed_factor * fly.cruise_speed
+    flown = [
+        ([wp.start, top], fly.cruise_speed),
+        (legs["approach"], fly.cruise_speed),
+        ([wp.hook_start, wp.hook_end], hook.speed),
+        ([wp.hook_end, wp.slack_out], take_up),
+        (legs["release"], hook.speed),
+        (legs["return"], fly.cruise_speed),
+        ([top, pad], hook.speed),
+    ]
+    moving = sum(
+        segment_duration(float(np.linalg.norm(b - a)), speed, fly.cruise_accel)
+        for leg, speed in flown
+        for a, b in itertools.pairwise(leg)
+    )
+    holds = cfg.deploy_time + cfg.spinup_time + cfg.done_hold_time + 6 * cfg.settle_time
+    return landing.require().duration + takeoff.require().duration + holds + moving
+
+
+def _check_duration(scenario: Scenario, bound: float) -> None:
+    """The mission can end before ``mission.time_limit`` (else it would be cut off);
+    ``bound`` from :func:`mission_time_bound` [s]."""
+    cfg = scenario.mission
+    if bound >= cfg.time_limit:
+        raise MissionError(
+            f"mission.time_limit = {cfg.time_limit:g} s is too short: the plans, "
+            f"deploy_time {cfg.deploy_time:g} s and the flight legs take at least {bound:.0f} s; "
+            f"raise time_limit above {bound:.0f} s or shorten deploy_time"
+        )
 
 
 def _check_legs(

@@ -28,6 +28,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from tetherland.config import Scenario
+from tetherland.config.checks import mocap_rate, ticks_per_sample
 from tetherland.errors import ConfigError, SimulationError, TetherlandError
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import (
@@ -95,16 +96,6 @@ class ControlTick:
     reference: Reference
 
 
-def _ticks(rate_hz: float, steps_per_second: int, what: str) -> int:
-    n = steps_per_second / rate_hz
-    if abs(n - round(n)) > 1e-9 * n or round(n) < 1:
-        raise ConfigError(
-            f"{what} = {rate_hz:g} Hz must divide the physics rate {steps_per_second} Hz "
-            "(an integer number of physics steps per sample)"
-        )
-    return round(n)
-
-
 @dataclass(frozen=True)
 class Schedule:
     """Integer-tick schedule of every rate (validated against the physics rate).
@@ -129,19 +120,20 @@ class Schedule:
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> Schedule:
+        # the scenario's own rate rules (tetherland.config.checks): a Scenario that
+        # validated has rates that fit; a ValueError here is one built unvalidated
         N = scenario.sim.steps_per_second
-        mocap = scenario.sensors.mocap
-        if mocap.rate_hz > N:
-            raise ConfigError(
-                f"sensors.mocap.rate_hz = {mocap.rate_hz:g} Hz exceeds the physics rate {N} Hz"
+        imu, mocap, control = scenario.sensors.imu, scenario.sensors.mocap, scenario.controller
+        try:
+            return cls(
+                steps_per_second=N,
+                imu_every=ticks_per_sample(imu.rate_hz, N, "sensors.imu.rate_hz"),
+                control_every=ticks_per_sample(control.rate_hz, N, "controller.rate_hz"),
+                mocap_rate=mocap_rate(mocap.rate_hz, N),
+                mocap_latency_ticks=round(mocap.latency * N),
             )
-        return cls(
-            steps_per_second=N,
-            imu_every=_ticks(scenario.sensors.imu.rate_hz, N, "sensors.imu.rate_hz"),
-            control_every=_ticks(scenario.controller.rate_hz, N, "controller.rate_hz"),
-            mocap_rate=Fraction(mocap.rate_hz).limit_denominator(10_000),
-            mocap_latency_ticks=round(mocap.latency * N),
-        )
+        except ValueError as err:
+            raise ConfigError(str(err)) from None
 
     def mocap_tick(self, j: int) -> int:
         """Physics tick of mocap sample j: the first tick at or after j / f_mocap."""

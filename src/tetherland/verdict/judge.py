@@ -87,6 +87,16 @@ class Outcome(enum.Enum):
     UNFINISHED = "unfinished"
     """The run ended before the method's end state."""
 
+    @property
+    def label(self) -> str:
+        """The result in a word or two, as every command prints it: ``success``,
+        ``safe stop``, ``crash``, ``not flown`` or, for every other outcome, ``failure``."""
+        return _LABELS.get(self.value, "failure")
+
+
+_LABELS = {"success": "success", "safe_stop": "safe stop", "crashed": "crash",
+           "no_run": "not flown"}  # fmt: skip
+
 
 @dataclass(frozen=True)
 class Verdict:
