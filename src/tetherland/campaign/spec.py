@@ -53,7 +53,7 @@ class Sweep:
     @staticmethod
     def override(key: str, value: float) -> str:
         """``key=value`` as an override; a whole number is written as an integer, so that
-        an integer field (``mission.max_hook_attempts``) takes it under strict types."""
+        an integer field (``mission.hooking.max_attempts``) takes it under strict types."""
         number = str(int(value)) if float(value).is_integer() else repr(float(value))
         return f"{key}={number}"
 
