@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -12,9 +13,9 @@ import pytest
 
 from tetherland.campaign import CampaignSpec, Sweep, open_store, run_campaign
 from tetherland.campaign.executors import InlineExecutor
-from tetherland.campaign.jobs import draw_run, keeps
+from tetherland.campaign.jobs import draw_run, keep_run, keeps
 from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
-from tetherland.campaign.replay import differences
+from tetherland.campaign.replay import differences, replay
 from tetherland.campaign.store import ResultsStore
 from tetherland.cli import main
 from tetherland.config import load_scenario
@@ -117,6 +118,22 @@ def test_replay_of_a_crashed_run_gives_the_identical_record(crashed, tmp_path, c
     summary = json.loads((out / "summary.json").read_text())
     assert summary["outcome"] == "crashed"
     assert summary["provenance"]["perturbation"]["seed"] == recorded["seed"]
+
+
+@pytest.mark.slow
+def test_a_run_flown_again_replaces_its_kept_directory_as_a_whole(crashed, tmp_path):
+    """A resumed campaign flies again a run whose directory was written but whose record
+    was not (interrupted in between): the new directory replaces the old one whole."""
+    run_id = _records(crashed)[0]["run_id"]
+    copy = tmp_path / run_id
+    shutil.copytree(crashed / "runs" / run_id, copy)
+    (copy / "stale.txt").write_text("from an earlier attempt")
+    again = replay(crashed, run_id)
+    assert again.identical and again.result is not None
+    keep_run(again.result, copy)
+    assert not (copy / "stale.txt").exists()
+    assert json.loads((copy / "summary.json").read_text())["outcome"] == "crashed"
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 
 def test_replay_of_an_analysis_run_and_a_changed_record(tmp_path, capsys):

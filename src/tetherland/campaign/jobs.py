@@ -221,6 +221,24 @@ def fly_perturbed(
     return _with_provenance(result, {"perturbation": drawn.to_dict(), **(provenance or {})})
 
 
+def run_for_campaign(
+    plant: Scenario,
+    belief: Scenario,
+    perturbation: Perturbation,
+    method: str,
+    seed: int,
+    controller: str = "hierarchical",
+    firmware: str | None = None,
+) -> dict[str, Any]:
+    """Fly one perturbed run of ``method`` from an already drawn plant and belief (e.g.
+    with an older random source) and keep its campaign fields (:func:`campaign_fields`)."""
+    drawn = PerturbedRun(seed, plant, plant, belief, perturbation)
+    loop = firmware_loop(firmware)
+    result = fly_perturbed(drawn, method, controller=controller, inner_loop=loop,
+                           planners=worker_planners())  # fmt: skip
+    return campaign_fields(result)
+
+
 def _with_provenance(result: RunResult, extra: dict[str, Any]) -> RunResult:
     """``result`` with ``extra`` in its record's provenance and in the verdict's copy of it
     (the judge copies the record's provenance into ``summary.json``)."""

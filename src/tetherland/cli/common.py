@@ -42,6 +42,11 @@ OverwriteOption = Annotated[
     ),
 ]
 
+VideoOption = Annotated[
+    bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
+]
+McapOption = Annotated[bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")]
+
 INTERRUPTED = 130
 """Exit code after Ctrl-C or SIGTERM (128 + SIGINT)."""
 

@@ -12,9 +12,11 @@ from rich.table import Table
 from tetherland.campaign.jobs import draw_run, fly_perturbed
 from tetherland.cli.common import (
     JsonOption,
+    McapOption,
     OverwriteOption,
     ScenarioArg,
     SetOption,
+    VideoOption,
     conditions_text,
     console,
     default_output,
@@ -99,12 +101,8 @@ def mission(
     ] = None,
     overwrite: OverwriteOption = False,
     json: JsonOption = False,
-    video: Annotated[
-        bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
-    ] = False,
-    mcap: Annotated[
-        bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")
-    ] = False,
+    video: VideoOption = False,
+    mcap: McapOption = False,
     live: Annotated[
         bool, typer.Option("--live", help="Stream the mission to Foxglove while it runs.")
     ] = False,

@@ -13,7 +13,9 @@ from tetherland.campaign.replay import replay as replay_run
 from tetherland.campaign.report import CampaignReport
 from tetherland.cli.common import (
     JsonOption,
+    McapOption,
     OverwriteOption,
+    VideoOption,
     console,
     default_output,
     outcome_text,
@@ -35,12 +37,8 @@ def replay(
     ] = None,
     overwrite: OverwriteOption = False,
     json: JsonOption = False,
-    video: Annotated[
-        bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
-    ] = False,
-    mcap: Annotated[
-        bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")
-    ] = False,
+    video: VideoOption = False,
+    mcap: McapOption = False,
 ) -> None:
     """Fly run RUN_ID of a campaign again, exactly as the campaign did (its scenario and
     sweep value, seed, perturbation, wind and fault), write its run directory, and explain
