@@ -73,22 +73,25 @@ _FILES = {"map": "feasibility_map.png", "map_data": "feasibility_map.json",
 
 def _table(result: DesignResult) -> Table:
     table = Table(title=f"Designs for {result.slope_deg:g} deg, best first")
-    for name in ("#", "l [m]", "r_att z [m]", "h_A [m]", "approach elev. [deg]",
-                 "hook drop [m]", "rotor margin [N]", "clearance [cm]", "robust margin [N]",
-                 "robust clearance [cm]", "verified"):  # fmt: skip
+    verified = any(d.verified is not None for d in result.designs)
+    columns = ["#", "l [m]", "r_att z [m]", "h_A [m]", "approach elev. [deg]", "hook drop [m]",
+               "rotor margin [N] robust (nominal)", "clearance [cm] robust (nominal)"]  # fmt: skip
+    for name in columns + (["verified (95 % low)"] if verified else []):
         table.add_column(name, justify="right")
     for k, d in enumerate(result.designs, 1):
         p = d.point
         x, y, z = p.approach_A
         # elevation below the horizontal toward the surface: 90 lowers the hook, 0 is level
         elevation = round(math.degrees(math.atan2(-z, math.hypot(x, y))))  # int: no "-0"
-        table.add_row(
+        row = [
             str(k), f"{p.length:g}", f"{p.attachment[2]:g}", f"{p.h_A:g}", f"{elevation:.0f}",
-            f"{p.hook_drop:g}", f"{d.min_rotor_margin:.3f}", f"{100 * d.min_clearance:.1f}",
-            f"{d.robust_rotor_margin:.3f}", f"{100 * d.robust_clearance:.1f}",
-            "-" if d.verified is None else
-            f"{d.verified.successes}/{d.verified.runs} (>= {100 * d.verified.ci_low:.0f} %)",
-        )  # fmt: skip
+            f"{p.hook_drop:g}", f"{d.robust_rotor_margin:.3f} ({d.min_rotor_margin:.3f})",
+            f"{100 * d.robust_clearance:.1f} ({100 * d.min_clearance:.1f})",
+        ]  # fmt: skip
+        if verified:
+            v = d.verified
+            row.append("-" if v is None else f"{v.successes}/{v.runs} ({100 * v.ci_low:.0f} %)")
+        table.add_row(*row)
     return table
 
 

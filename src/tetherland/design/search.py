@@ -480,7 +480,7 @@ def _hook_score(h: _Hooking, space: DesignSpace) -> tuple[float, float]:
     return (min(h.clearance, space.target_clearance), -h.hook_drop)
 
 
-def robust(design: Design, scenario: Scenario) -> bool:
+def is_robust(design: Design, scenario: Scenario) -> bool:
     """Does ``design`` keep the control margin and ``mission.hooking.min_clearance`` when the
     belief is off by the error bounds?"""
     return (
@@ -490,11 +490,11 @@ def robust(design: Design, scenario: Scenario) -> bool:
 
 
 def rank_key(design: Design, scenario: Scenario, space: DesignSpace) -> tuple[float, ...]:
-    """Sort key of a design, best first: robust ones (:func:`robust`) first, then the larger
+    """Sort key of a design, best first: robust ones (:func:`is_robust`) first, then the larger
     robust rotor margin, then the larger robust clearance counted up to
     ``space.target_clearance``."""
     return (
-        0.0 if robust(design, scenario) else 1.0,
+        0.0 if is_robust(design, scenario) else 1.0,
         -design.robust_rotor_margin,
         -min(design.robust_clearance, space.target_clearance),
     )
