@@ -28,7 +28,8 @@ from tetherland.design.search import (
     search_designs,
 )
 from tetherland.design.space import DesignPoint, DesignSpace
-from tetherland.design.verify import Verification, rank_verified, verify_designs
+from tetherland.design.verification import Verification
+from tetherland.design.verify import rank_verified, verify_designs
 from tetherland.mission.hooking import HookingPass, hooking_pass, hooking_pass_for, pass_clearance
 
 __all__ = [

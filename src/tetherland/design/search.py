@@ -32,7 +32,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -49,6 +49,7 @@ from tetherland.config import Scenario, with_overrides
 from tetherland.design.margins import plan_thrust_range, rotor_margin
 from tetherland.design.robust import BeliefBounds, robust_pass_clearance, robust_rotor_margin
 from tetherland.design.space import DesignPoint, DesignSpace
+from tetherland.design.verification import Verification
 from tetherland.errors import ConfigError
 from tetherland.geometry import (
     LandingGeometry,
@@ -60,9 +61,6 @@ from tetherland.geometry import (
 from tetherland.mission.hooking import hooking_pass_for, pass_clearance
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.surface import Surface
-
-if TYPE_CHECKING:
-    from tetherland.design.verify import Verification
 
 _TOL = 1e-9
 

@@ -13,51 +13,20 @@ of the 95 % Wilson interval of their success rate (the campaign statistics' inte
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import replace
 
 from tetherland.campaign.executors import Executor
 from tetherland.campaign.jobs import Job, execute, lost_record
 from tetherland.campaign.spec import CampaignSpec
-from tetherland.campaign.stats import succeeded, wilson_interval
+from tetherland.campaign.stats import succeeded
 from tetherland.config import Scenario
 from tetherland.design.search import Design, rank_key
 from tetherland.design.space import DesignSpace
+from tetherland.design.verification import Verification
 from tetherland.errors import ConfigError
 
 METHOD = "tethered"
 """The method a design is for (it fixes the cable, attachment, anchor and hooking)."""
-
-
-@dataclass(frozen=True)
-class Verification:
-    """Perturbed missions flown with one design.
-
-    Attributes
-    ----------
-    runs, successes : int
-        Missions flown and missions that succeeded (a run that raised counts as failed).
-    ci_low, ci_high : float
-        95 % Wilson interval of the success rate [-].
-    seed : int
-        Base seed of the runs (a campaign's ``--seed``).
-    """
-
-    runs: int
-    successes: int
-    ci_low: float
-    ci_high: float
-    seed: int
-
-    @classmethod
-    def of(cls, successes: int, runs: int, seed: int) -> Verification:
-        lo, hi = wilson_interval(successes, runs)
-        return cls(runs, successes, lo, hi, seed)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The ``verified`` entry of ``tetherland design --json``."""
-        return {"runs": self.runs, "successes": self.successes, "ci_low": self.ci_low,
-                "ci_high": self.ci_high, "seed": self.seed}  # fmt: skip
 
 
 def verification_jobs(scenario: Scenario, runs: int, seed: int, tag: str = "") -> list[Job]:
