@@ -6,6 +6,7 @@
 60.0
 """
 
+from tetherland.config.aero import AeroConfig
 from tetherland.config.base import Section, Vec3
 from tetherland.config.control import ControllerConfig, FreeFlightGains, TetheredGains
 from tetherland.config.faults import FaultDetectionConfig, FaultKind, FaultsConfig
@@ -39,6 +40,7 @@ from tetherland.config.simulation import SimConfig
 from tetherland.config.verdict import VerdictConfig
 
 __all__ = [
+    "AeroConfig",
     "TETHER_MATERIALS",
     "AnchorConfig",
     "CableModel",

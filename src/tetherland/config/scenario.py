@@ -5,6 +5,7 @@ from __future__ import annotations
 from pydantic import Field, model_validator
 
 from tetherland import geometry as geo
+from tetherland.config.aero import AeroConfig
 from tetherland.config.base import Section
 from tetherland.config.control import ControllerConfig
 from tetherland.config.faults import FaultsConfig
@@ -43,6 +44,8 @@ class Scenario(Section):
     verdict: VerdictConfig = VerdictConfig()
     faults: FaultsConfig = FaultsConfig()
     """Injected faults (the plant's truth; the robot's belief never has them)."""
+    aero: AeroConfig = AeroConfig()
+    """Rotors near surfaces and rotor drag (the plant's truth)."""
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:
