@@ -40,8 +40,18 @@ def model(shapes, **kw) -> AeroModel:
 
 def run(m: AeroModel, qpos, v_W=(0.0, 0.0, 0.0), thrusts=(2.5, 2.5, 2.5, 2.5)):
     factors, acting, wrench = np.empty(4), np.empty(4), np.empty(6)
-    aero_into(np.asarray(qpos, float), np.asarray(v_W, float), np.asarray(thrusts, float),
-              m.rotor_centres_B, m.samples, m.shapes, m.params, factors, acting, wrench)  # fmt: skip
+    aero_into(
+        np.asarray(qpos, float),
+        np.asarray(v_W, float),
+        np.asarray(thrusts, float),
+        m.rotor_centres_B,
+        m.samples,
+        m.shapes,
+        m.params,
+        factors,
+        acting,
+        wrench,
+    )
     return factors, acting, wrench
 
 
@@ -95,9 +105,14 @@ def test_over_a_pipe_the_factor_follows_the_disk_coverage():
     # centred a off the top line: each point (x, y) of the disk is above the pipe at
     # h + r - sqrt(r^2 - y^2) for |y| < r and else sees the ground far below
     r, h, a = 0.12, 0.07, 0.05
-    pipe = pack_shape(ShapeKind.CYLINDER, (0.0, 0.0, -r), quat_to_rotmat(
-        rotmat_to_quat(np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]))),
-        (r, 5.0, 0.0))  # fmt: skip
+    pipe = pack_shape(
+        ShapeKind.CYLINDER,
+        (0.0, 0.0, -r),
+        quat_to_rotmat(
+            rotmat_to_quat(np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]))
+        ),
+        (r, 5.0, 0.0),
+    )
     m = model(np.vstack((pipe, ground_plane(-50.0))), samples=disk_samples(8, 32))
     p = np.array([0.0 - 0.2, a - 0.2, h - 0.02])
     f, _, _ = run(m, level(p))
@@ -150,7 +165,7 @@ def test_a_wall_beside_a_rotor_pulls_it_toward_the_wall():
     x_w = 0.2 + 0.15
     box = pack_shape(ShapeKind.BOX, (x_w + 0.05, 0.0, 0.0), np.eye(3), (0.05, 2.0, 2.0))
     m = model(box, ground_effect=False, wall_effect=True, wall_coefficient=0.05)
-    f, _, wrench = run(m, level((0.0, 0.0, -0.02)), thrusts=(2.0, 0.0, 0.0, 0.0))
+    _, _, wrench = run(m, level((0.0, 0.0, -0.02)), thrusts=(2.0, 0.0, 0.0, 0.0))
     # the rays nearest the normal are at +-pi/WALL_RAYS from it: d = 0.15 / cos(pi/16)
     d = 0.15 / math.cos(math.pi / WALL_RAYS)
     np.testing.assert_allclose(wrench[:3], [0.05 * 2.0 * (R / d) ** 2, 0.0, 0.0], atol=1e-14)
@@ -164,16 +179,25 @@ def test_kernel_matches_the_plain_reference(seed):
     shapes = np.vstack(
         (
             ground_plane(-0.3),
-            pack_shape(ShapeKind.BOX, rng.normal(0, 0.2, 3), quat_to_rotmat(
-                rng.normal(size=4) / 2), (0.4, 0.3, 0.05)),  # fmt: skip
-            pack_shape(ShapeKind.CYLINDER, rng.normal(0, 0.2, 3), quat_to_rotmat(
-                rng.normal(size=4) / 2), (0.15, 0.6, 0.0)),  # fmt: skip
+            pack_shape(
+                ShapeKind.BOX,
+                rng.normal(0, 0.2, 3),
+                quat_to_rotmat(rng.normal(size=4) / 2),
+                (0.4, 0.3, 0.05),
+            ),
+            pack_shape(
+                ShapeKind.CYLINDER,
+                rng.normal(0, 0.2, 3),
+                quat_to_rotmat(rng.normal(size=4) / 2),
+                (0.15, 0.6, 0.0),
+            ),
         )
     )
     for row in shapes[1:]:  # normalise the random rotations
         row[4:13] = quat_to_rotmat(rotmat_to_quat(row[4:13].reshape(3, 3))).reshape(9)
-    m = model(shapes, wall_effect=True, wall_coefficient=0.05, drag=(0.4, 0.45),
-              ceiling_coefficient=0.08)  # fmt: skip
+    m = model(
+        shapes, wall_effect=True, wall_coefficient=0.05, drag=(0.4, 0.45), ceiling_coefficient=0.08
+    )
     for _ in range(25):
         q = rng.normal(size=4)
         qpos = np.array([*rng.normal(0, 0.3, 3), *(q / np.linalg.norm(q))])

@@ -40,8 +40,8 @@ from tetherland.config.simulation import SimConfig
 from tetherland.config.verdict import VerdictConfig
 
 __all__ = [
-    "AeroConfig",
     "TETHER_MATERIALS",
+    "AeroConfig",
     "AnchorConfig",
     "CableModel",
     "ControllerConfig",

@@ -38,8 +38,8 @@ from tetherland.config import Scenario
 from tetherland.errors import SimulationError
 from tetherland.geometry import FloatArray, landed_rotation
 from tetherland.interfaces import StateEstimate
-from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.models.aero import aero_into
+from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.aero import aero_model
 from tetherland.sim.cable import Cable, make_cable
 from tetherland.sim.hook import Hook, HookState
