@@ -237,3 +237,24 @@ def test_the_runner_logs_factors_thrusts_and_drag():
     f0 = sc.vehicle.thrust_coefficient * log["rotor_speeds"] ** 2
     np.testing.assert_allclose(log["rotor_thrusts"], f0 * k, rtol=1e-12)
     assert log["drag_force_W"].shape == (len(log), 3)
+
+
+def test_the_believed_ground_effect_matches_the_plant_over_the_believed_surface():
+    from tetherland.estimation.ground_effect import BelievedGroundEffect
+
+    for name in ("slope50", "pipe60", "wall90"):
+        sc = load_scenario(name, ["aero.rotor_drag=[0, 0]"])
+        plant = Plant(sc)
+        w = hover_speed(sc)
+        landed = plant.landed_state()
+        belief = BelievedGroundEffect(sc)  # the belief equal to the truth here
+        for lift in (0.0, 0.05, 0.15):  # landed, and lifted along the surface normal
+            n = plant.layout.geometry.surface.z_S
+            state = RigidBodyState.at_rest(landed.p_W + lift * n, landed.q_WB)
+            plant.reset(state, rotor_speeds=np.full(4, w))
+            truth = float(plant.rotor_thrusts.sum())
+            f0 = np.full(4, sc.vehicle.thrust_coefficient * w * w)
+            believed = belief.total_thrust(state.p_W, state.q_WB, f0)
+            # the plant also feels the far ground (under 0.1 % of the thrust here)
+            assert believed == pytest.approx(truth, rel=1e-3)
+            assert believed > 4 * f0[0]
