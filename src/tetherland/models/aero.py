@@ -289,12 +289,38 @@ def _to_local(shapes: FloatArray, px: float, py: float, pz: float, R_WB: FloatAr
 
 
 @njit(cache=True)
+def _reachable(shapes: FloatArray, loc: FloatArray, k: int, bx: float, by: float, bz: float,
+               sign: float) -> bool:  # fmt: skip
+    """False when shape ``k`` lies wholly behind the plane through the body point
+    (bx, by, bz) normal to z_B, seen along ``sign`` z_B: no ray along sign z_B from that
+    plane can hit it (its support function along sign z_B is below the plane)."""
+    s, L = shapes[k], loc[k]
+    kind = s[0]
+    zx, zy, zz = sign * L[9], sign * L[10], sign * L[11]  # sign z_B in shape-local axes
+    # the plane point in local coordinates, and its height along sign z_B
+    lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
+    ly = L[1] + L[4] * bx + L[7] * by + L[10] * bz
+    lz = L[2] + L[5] * bx + L[8] * by + L[11] * bz
+    h0 = -(zx * lx + zy * ly + zz * lz)  # the shape centre's height along sign z_B
+    if kind == 1.0:
+        reach = h0 + s[13] * abs(zx) + s[14] * abs(zy) + s[15] * abs(zz)
+    elif kind == 2.0:
+        reach = h0 + s[13] * math.sqrt(max(0.0, 1.0 - zz * zz)) + s[14] * abs(zz)
+    else:
+        return True
+    return reach > 0.0
+
+
+@njit(cache=True)
 def _nearest(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: float,
-             sign: float, axis: int) -> float:  # fmt: skip
+             sign: float, axis: int, mask: FloatArray) -> float:  # fmt: skip
     """Shortest distance from the body point (bx, by, bz) (F_B, about the centre of mass)
-    along ``sign`` times body axis ``axis`` (0 x, 1 y, 2 z) to any shape [m]."""
+    along ``sign`` times body axis ``axis`` (0 x, 1 y, 2 z) to any shape whose ``mask``
+    entry is nonzero [m]."""
     best = _INF
     for k in range(shapes.shape[0]):
+        if mask[k] == 0.0:
+            continue
         L = loc[k]
         lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
         ly = L[1] + L[4] * bx + L[7] * by + L[10] * bz
@@ -367,8 +393,10 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
     Rm[2, 0] = s2 * (qx * qz - qw * qy)
     Rm[2, 1] = s2 * (qy * qz + qw * qx)
     Rm[2, 2] = 1.0 - s2 * (qx * qx + qy * qy)
-    loc = np.empty((shapes.shape[0], 12))
+    n_shapes = shapes.shape[0]
+    loc = np.empty((n_shapes, 12))
     _to_local(shapes, qpos[0], qpos[1], qpos[2], Rm, loc)
+    down, up = np.empty(n_shapes), np.empty(n_shapes)
     R = p[P_R]
     z_min = p[P_ZMIN]
     k_c = p[P_KC]
@@ -381,16 +409,22 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
         cx, cy, cz = centres_B[i, 0], centres_B[i, 1], centres_B[i, 2]
         k = 1.0
         if ground:
+            any_up = False
+            for s_k in range(n_shapes):  # cull shapes behind the rotor plane
+                down[s_k] = 1.0 if _reachable(shapes, loc, s_k, cx, cy, cz, -1.0) else 0.0
+                reach_up = k_c > 0.0 and _reachable(shapes, loc, s_k, cx, cy, cz, 1.0)
+                up[s_k] = 1.0 if reach_up else 0.0
+                any_up = any_up or up[s_k] != 0.0
             acc = 0.0
             for j in range(n_s):
                 bx, by = cx + R * samples[j, 0], cy + R * samples[j, 1]
                 g = 1.0
-                d = _nearest(shapes, loc, bx, by, cz, -1.0, 2)  # along the wake
+                d = _nearest(shapes, loc, bx, by, cz, -1.0, 2, down)  # along the wake
                 if d < _INF:
                     d = max(d, z_min)
                     g = 1.0 / (1.0 - 0.0625 * (R / d) ** 2)
-                if k_c > 0.0:
-                    d = _nearest(shapes, loc, bx, by, cz, 1.0, 2)  # the inflow side
+                if any_up:
+                    d = _nearest(shapes, loc, bx, by, cz, 1.0, 2, up)  # the inflow side
                     if d < _INF:
                         d = max(d, z_min)
                         g = g / (1.0 - k_c * (R / d) ** 2)
