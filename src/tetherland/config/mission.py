@@ -107,10 +107,11 @@ class MissionConfig(Section):
     contact_force: float = Field(0.15, ge=0, le=100)
     """Contact signal "surface force": the estimated external force across the cable,
     on the believed surface normal and low-passed, exceeds this [N]."""
-    ground_effect_belief: bool = False
+    ground_effect_belief: bool = True
     """The estimator multiplies the predicted rotor thrusts by the ground-effect factor of
     the believed surface at the estimated pose (the surface force and tension estimates
-    then do not read the ground effect as a push) [-]."""
+    then do not read the ground effect as a push); false: the estimators and the
+    controllers' integrals absorb it [-]."""
     contact_force_time_constant: float = Field(0.05, ge=0, le=5)
     """Low-pass time constant of the estimated surface force [s]."""
     contact_impact_force: float = Field(1.5, gt=0, le=1000)
