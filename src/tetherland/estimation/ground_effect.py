@@ -23,9 +23,8 @@ from tetherland.models.aero import (
     aero_into,
     disk_samples,
     pack_shape,
+    rotor_disks,
 )
-from tetherland.models.airframe import PROP_HEIGHT, PROP_RADIUS_FRACTION
-from tetherland.models.quadrotor import RotorLayout
 
 PATCH_HALF_THICKNESS = 0.05
 """Half thickness of the believed plane patch [m] (only its top face matters)."""
@@ -60,10 +59,10 @@ class BelievedGroundEffect:
 
     def __init__(self, scenario: Scenario) -> None:
         v = scenario.vehicle
+        centres, radius = rotor_disks(v)
         self.model = AeroModel(
-            rotor_centres_B=RotorLayout.from_config(v).positions_B
-            + np.array([0.0, 0.0, PROP_HEIGHT]),
-            radius=PROP_RADIUS_FRACTION * v.arm_length,
+            rotor_centres_B=centres,
+            radius=radius,
             samples=disk_samples(3, 8),
             shapes=believed_surface_shapes(scenario),
             ceiling_coefficient=0.0,

@@ -58,7 +58,10 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from tetherland.config import VehicleConfig
 from tetherland.geometry import FloatArray
+from tetherland.models.airframe import PROP_HEIGHT, PROP_RADIUS_FRACTION
+from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import quat_to_rotmat
 
 Z_MIN_RATIO = 0.5
@@ -138,6 +141,14 @@ class AeroModel:
         """Largest surface factor: ground and ceiling both at z = z_min [-]."""
         z2 = self.z_min_ratio**2
         return 1.0 / ((1.0 - CHEESEMAN_BENNETT / z2) * (1.0 - self.ceiling_coefficient / z2))
+
+
+def rotor_disks(vehicle: VehicleConfig, radius: float | None = None) -> tuple[FloatArray, float]:
+    """Centres of the rotor disks in F_B (4, 3) [m] and their radius [m] (by default the
+    rotor guards' radius, :data:`~tetherland.models.airframe.PROP_RADIUS_FRACTION` times
+    the arm length), the disks at the guards' height above the rotor sites."""
+    centres = RotorLayout.from_config(vehicle).positions_B + np.array([0.0, 0.0, PROP_HEIGHT])
+    return centres, (PROP_RADIUS_FRACTION * vehicle.arm_length if radius is None else radius)
 
 
 def ground_factor(z: ArrayLike, radius: float, z_min_ratio: float = Z_MIN_RATIO) -> FloatArray:

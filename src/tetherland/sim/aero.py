@@ -14,9 +14,7 @@ import numpy as np
 
 from tetherland import GRAVITY
 from tetherland.config import Scenario
-from tetherland.models.aero import AeroModel, ShapeKind, disk_samples, pack_shape
-from tetherland.models.airframe import PROP_HEIGHT, PROP_RADIUS_FRACTION
-from tetherland.models.quadrotor import RotorLayout
+from tetherland.models.aero import AeroModel, ShapeKind, disk_samples, pack_shape, rotor_disks
 from tetherland.rotations import quat_to_rotmat
 
 _KINDS = {
@@ -49,10 +47,9 @@ def aero_model(scenario: Scenario, model: mujoco.MjModel) -> AeroModel | None:
     a, v = scenario.aero, scenario.vehicle
     if not a.active:
         return None
-    rotors = RotorLayout.from_config(v)
-    radius = a.rotor_radius if a.rotor_radius is not None else PROP_RADIUS_FRACTION * v.arm_length
+    centres, radius = rotor_disks(v, a.rotor_radius)
     return AeroModel(
-        rotor_centres_B=rotors.positions_B + np.array([0.0, 0.0, PROP_HEIGHT]),
+        rotor_centres_B=centres,
         radius=radius,
         samples=disk_samples(a.disk_rings, a.disk_sectors),
         shapes=scene_shapes(model),
