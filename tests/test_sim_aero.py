@@ -258,3 +258,32 @@ def test_the_believed_ground_effect_matches_the_plant_over_the_believed_surface(
             # the plant also feels the far ground (under 0.1 % of the thrust here)
             assert believed == pytest.approx(truth, rel=1e-3)
             assert believed > 4 * f0[0]
+
+
+def test_compensation_makes_the_believed_acting_thrust_the_wanted_one():
+    from tetherland.control.ground_effect import GroundEffectCompensation
+    from tetherland.interfaces import Command, Reference, StateEstimate
+
+    sc = load_scenario("slope50", ["aero.rotor_drag=[0, 0]"])
+    plant = Plant(sc)
+    w = hover_speed(sc) * np.array([1.0, 1.02, 0.98, 1.01])
+
+    class Fixed:
+        def update(self, t, estimate, reference):
+            return Command(rotor_speeds=w.copy(), thrust=1.0)
+
+    wrapped = GroundEffectCompensation(Fixed(), sc)
+    n = plant.layout.geometry.surface.z_S
+    landed = plant.landed_state()
+    state = RigidBodyState.at_rest(landed.p_W + 0.02 * n, landed.q_WB)
+    cmd = wrapped.update(0.0, StateEstimate(t=0.0, body=state), Reference(t=0.0))
+    assert cmd.thrust == 1.0  # everything but the speeds passes through
+    k = wrapped.ground_effect.factors_at(state.p_W, state.q_WB)
+    R = PROP_RADIUS_FRACTION * sc.vehicle.arm_length
+    z = sc.vehicle.h_R + PROP_HEIGHT + 0.02  # rotor disks above the slope, along z_S
+    np.testing.assert_allclose(k, cb(z / R), rtol=1e-12)
+    np.testing.assert_allclose(cmd.rotor_speeds**2 * k, w**2, rtol=1e-12)
+    # the plant (the truth, with the far ground too) then gives the wanted thrusts
+    plant.reset(state, rotor_speeds=cmd.rotor_speeds)
+    c_f = sc.vehicle.thrust_coefficient
+    np.testing.assert_allclose(plant.rotor_thrusts, c_f * w**2, rtol=1e-3)

@@ -72,6 +72,7 @@ class BelievedGroundEffect:
         self._args = (m.rotor_centres_B, m.samples, m.shapes, m.params)
         self._qpos = np.empty(7)
         self._zero3 = np.zeros(3)
+        self._ones = np.ones(4)
         self._factors, self._acting, self._wrench = np.empty(4), np.empty(4), np.empty(6)
 
     def total_thrust(self, p_W: FloatArray, q_WB: FloatArray, thrusts: FloatArray) -> float:
@@ -83,6 +84,12 @@ class BelievedGroundEffect:
         aero_into(q, self._zero3, thrusts, *self._args, self._factors, self._acting,
                   self._wrench)  # fmt: skip
         return float(self._acting.sum())
+
+    def factors_at(self, p_W: FloatArray, q_WB: FloatArray) -> FloatArray:
+        """Believed factor of each rotor at the pose (p_W [m], q_WB [-]) [-] (a view, valid
+        until the next call)."""
+        self.total_thrust(p_W, q_WB, self._ones)
+        return self._factors
 
     @property
     def factors(self) -> FloatArray:
