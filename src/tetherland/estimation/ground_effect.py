@@ -28,6 +28,8 @@ from tetherland.models.aero import (
 
 PATCH_HALF_THICKNESS = 0.05
 """Half thickness of the believed plane patch [m] (only its top face matters)."""
+FAR_RATIO = 20.0
+"""Beyond this many rotor radii from the believed surface the factors are 1 [-]."""
 
 
 def believed_surface_shapes(scenario: Scenario) -> FloatArray:
@@ -69,6 +71,11 @@ class BelievedGroundEffect:
             thrust_coefficient=v.thrust_coefficient,
         )
         m = self.model
+        reach = float(np.max(np.linalg.norm(centres, axis=1))) + radius
+        self._far = FAR_RATIO * radius + reach
+        surf = surface_from_config(scenario)
+        self._origin, self._z_S, self._x_S = surf.origin, surf.z_S, surf.x_S
+        self._pipe_radius = surf.pipe_radius if surf.kind == "pipe" else None
         self._args = (m.rotor_centres_B, m.samples, m.shapes, m.params)
         self._qpos = np.empty(7)
         self._zero3 = np.zeros(3)
@@ -77,13 +84,32 @@ class BelievedGroundEffect:
 
     def total_thrust(self, p_W: FloatArray, q_WB: FloatArray, thrusts: FloatArray) -> float:
         """Sum of the rotor ``thrusts`` [N] (out of ground effect) times their believed
-        factors at the pose (p_W [m], q_WB [-]) [N]."""
+        factors at the pose (p_W [m], q_WB [-]) [N].
+
+        Farther than :data:`FAR_RATIO` rotor radii from the believed surface (beyond the
+        rotors' reach) the factors are taken as 1 (they differ from it by less than
+        2e-4) and the model is not evaluated.
+        """
+        if self._distance(p_W) > self._far:
+            self._factors[:] = 1.0
+            return float(np.sum(thrusts))
         q = self._qpos
         q[0:3] = p_W
         q[3:7] = q_WB
         aero_into(q, self._zero3, thrusts, *self._args, self._factors, self._acting,
                   self._wrench)  # fmt: skip
         return float(self._acting.sum())
+
+    def _distance(self, p_W: FloatArray) -> float:
+        """A lower bound of the distance from ``p_W`` to the believed surface patch: to its
+        slab, or to the pipe's infinite cylinder [m]."""
+        d = np.asarray(p_W, dtype=float) - self._origin
+        if self._pipe_radius is None:
+            return abs(float(d @ self._z_S)) - PATCH_HALF_THICKNESS * 2.0
+        r = self._pipe_radius
+        along = float(d @ self._x_S)
+        radial = d - along * self._x_S + r * self._z_S  # from the axis
+        return float(np.linalg.norm(radial)) - r  # to the infinite cylinder
 
     def factors_at(self, p_W: FloatArray, q_WB: FloatArray) -> FloatArray:
         """Believed factor of each rotor at the pose (p_W [m], q_WB [-]) [-] (a view, valid

@@ -114,7 +114,6 @@ class Plant:
         """The ``[aero]`` model (None: every effect off)."""
         self._f_base = np.zeros(4)  # thrusts c_f wbar^2 before the surface factors [N]
         self._factors = np.ones(4)  # surface factor of each rotor, last step [-]
-        self._scratch = np.zeros(14)  # for rotor_state_into
         if self.aero is not None:
             a = self.aero
             # the acting thrust may exceed f_max by the factor's bound
@@ -370,21 +369,25 @@ class Plant:
         return out[12:15]
 
     def rotor_state_into(self, out: FloatArray) -> None:
-        """Write [w (4), acting thrusts (4), surface factors (4), aero force F_W (3)] at
-        :attr:`time` into ``out[:15]`` (:data:`ROTOR_STATE_WIDTH`; no allocation)."""
+        """Write [w (4), thrusts (4), surface factors (4), aero force F_W (3)] at
+        :attr:`time` into ``out[:15]`` (:data:`ROTOR_STATE_WIDTH`; no allocation).
+
+        The thrusts are c_f w_i^2 times the factors; factors and aero force are those the
+        plant computed last (at the start of the last step, or by :meth:`reset` /
+        :meth:`forward`): one physics step old in a running loop (the step loop does not
+        evaluate the model twice).
+        """
         w = self._w
         c_f = self._c_f
-        f = [c_f * w[0] * w[0], c_f * w[1] * w[1], c_f * w[2] * w[2], c_f * w[3] * w[3]]
         if self.aero is None:
-            out[:15] = [w[0], w[1], w[2], w[3], *f, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]
+            out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0], c_f * w[1] * w[1],
+                        c_f * w[2] * w[2], c_f * w[3] * w[3], 1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
+                        0.0]  # fmt: skip
             return
-        sc = self._scratch  # [thrusts (4), acting thrusts (4), wrench (6)]
-        sc[0:4] = f
-        aero_into(self._qpos, self._qvel, sc[0:4], *self._aero_args, out[8:12], sc[4:8],
-                  sc[8:14])  # fmt: skip
-        out[0:4] = w
-        out[4:8] = sc[4:8]
-        out[12:15] = sc[8:11]
+        k, F = self._factors, self._wrench
+        out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0] * k[0], c_f * w[1] * w[1] * k[1],
+                    c_f * w[2] * w[2] * k[2], c_f * w[3] * w[3] * k[3], k[0], k[1], k[2], k[3],
+                    F[0], F[1], F[2]]  # fmt: skip
 
     # -- cable ----------------------------------------------------------------------------
 
