@@ -81,7 +81,7 @@ class ControllerConfig(Section):
 
     kind: Literal["hierarchical", "dfl"] = "hierarchical"
     """Tethered controller: hierarchical Gamma_HC^b or dynamic feedback linearisation."""
-    ground_effect_compensation: bool = False
+    ground_effect_compensation: bool = True
     """Divide each rotor's commanded speed by the square root of its ground-effect factor
     over the believed surface at the estimated pose, so that the thrust believed acting is
     the thrust wanted (false: the integrals absorb the ground effect) [-]."""
