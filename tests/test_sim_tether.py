@@ -36,9 +36,16 @@ cable compliance (``sim.cable_timeconst`` = 4 ms)."""
 def test_tethered_swing_matches_the_3d_link_model():
     """Cable engaged at the CoM (r_att = 0), constant tilted thrust: (phi, delta) follow
     models/tethered.py integrated by scipy with the same thrust vector."""
-    # the link model has no rotor drag (the aero effects are tested in test_sim_aero.py)
+    # the link model has a constant thrust: no rotor drag, no ground effect of the swing
+    # near the ground (the aero effects are tested in test_sim_aero.py)
     sc = load_scenario(
-        "flat", ["vehicle.cable_attachment=[0,0,0]", IDEAL, "aero.rotor_drag=[0, 0]"]
+        "flat",
+        [
+            "vehicle.cable_attachment=[0,0,0]",
+            IDEAL,
+            "aero.rotor_drag=[0, 0]",
+            "aero.ground_effect=false",
+        ],
     )
     plant = Plant(sc)
     geo = plant.layout.geometry
