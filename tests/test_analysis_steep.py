@@ -18,7 +18,7 @@ from tetherland.analysis import (
     tethered_slope_limit,
 )
 from tetherland.config import load_scenario
-from tetherland.geometry import Surface, surface_frame_from_slope
+from tetherland.surface import Surface, surface_frame_from_slope
 
 # Cable at the CoM, inextensible: the closed forms below are the rigid link's.
 CENTRED = (

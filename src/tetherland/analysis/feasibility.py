@@ -25,14 +25,9 @@ from tetherland.analysis.statics import (
     tethered_rest_tension,
 )
 from tetherland.config import Scenario
-from tetherland.geometry import (
-    FloatArray,
-    LandingGeometry,
-    Surface,
-    inclined_hover_direction,
-    surface_frame_from_slope,
-)
+from tetherland.geometry import FloatArray, LandingGeometry, inclined_hover_direction
 from tetherland.models.quadrotor import RotorLayout
+from tetherland.surface import Surface, surface_frame_from_slope
 
 _TOL = 1e-9
 

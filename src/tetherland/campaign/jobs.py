@@ -8,15 +8,15 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from tetherland.analysis import analyze
 from tetherland.campaign.faults import fault_time, phase_at, sample_fault
 from tetherland.campaign.perturb import Perturbation, apply_perturbation, sample_perturbation
-from tetherland.campaign.spec import RunSpec
+from tetherland.campaign.spec import RunSpec, Sweep
+from tetherland.campaign.store import INFRASTRUCTURE
 from tetherland.config import Scenario, apply_overrides, scenario_from_dict
 from tetherland.errors import TetherlandError
 from tetherland.methods import Planners
+from tetherland.randomness import RandomSource
 from tetherland.runs import run_mission
 from tetherland.sim.disturbances import WindGusts
 
@@ -29,13 +29,15 @@ class Job:
     run: RunSpec
     kind: str = "mission"
     controller: str = "hierarchical"
+    firmware: str | None = None
 
 
 def run_scenario(job: Job) -> Scenario:
     """The base scenario with the run's sweep value applied."""
     data = job.scenario
     if job.run.sweep_key is not None:
-        data = apply_overrides(data, [f"{job.run.sweep_key}={job.run.sweep_value!r}"])
+        assert job.run.sweep_value is not None
+        data = apply_overrides(data, [Sweep.override(job.run.sweep_key, job.run.sweep_value)])
     return scenario_from_dict(data, str(data.get("name", "custom")))
 
 
@@ -92,28 +94,38 @@ def run_for_campaign(
     method: str,
     seed: int,
     controller: str = "hierarchical",
+    firmware: str | None = None,
 ) -> dict[str, Any]:
     """Fly one perturbed run of ``method`` (wind gusts on the plant) and keep its verdict.
 
     ``controller`` names the tethered law; the contact-free method flies its own tracker.
+    ``firmware`` names flight firmware as the inner loop (None: tetherland's own).
     """
     if method != "tethered":
         controller = None
+    inner_loop = None
+    if firmware is not None:
+        from tetherland.firmware import BetaflightSitl
+
+        inner_loop = BetaflightSitl()
     period = 1.0 / plant.controller.rate_hz
     wind: list[WindGusts] = []
     result = run_mission(
         plant, belief, method=method, controller=controller, seed=seed,
-        planners=worker_planners(), observers=wind,
+        planners=worker_planners(), observers=wind, inner_loop=inner_loop,
         plant_setup=lambda p: wind.append(WindGusts(p, perturbation.gusts, period)),
     )  # fmt: skip
     return campaign_fields(result.summary)
 
 
-def execute(job: Job) -> dict[str, Any]:
+def execute(job: Job, random: RandomSource | None = None) -> dict[str, Any]:
     """Run one job and return its record for the results table.
 
-    Bad inputs and failures inside the run are recorded (``status = "error"``), not
-    raised, so one broken run cannot stop a campaign.
+    Every draw comes from ``random`` (default: the run seed's
+    :class:`~tetherland.randomness.RandomSource`): the perturbation, the wind, the fault,
+    and the sensor noise (``run_mission`` with the run's seed). Bad inputs and failures
+    inside the run are recorded (``status = "error"``), not raised, so one broken run
+    cannot stop a campaign.
     """
     start = time.perf_counter()
     run = job.run
@@ -127,14 +139,14 @@ def execute(job: Job) -> dict[str, Any]:
     }
     try:
         truth = run_scenario(job)
-        perturbation = sample_perturbation(truth, np.random.default_rng(run.seed))
+        random = RandomSource(run.seed) if random is None else random
+        perturbation = sample_perturbation(truth, random)
         record["perturbation"] = perturbation.to_dict()
         plant, belief = apply_perturbation(truth, perturbation)
         faults = None
         if run.fault is not None:  # its own stream: the perturbation stays that of the seed
             assert run.fault_slice is not None
-            rng = np.random.default_rng([run.seed, 15])
-            faults = sample_fault(run.fault, run.fault_slice, belief, rng)
+            faults = sample_fault(run.fault, run.fault_slice, belief, random.stream("faults"))
             plant = plant.model_copy(update={"faults": faults})
             record["fault"] = {"kind": run.fault, "t": fault_time(faults),
                                **faults.model_dump(mode="json")}  # fmt: skip
@@ -142,26 +154,28 @@ def execute(job: Job) -> dict[str, Any]:
             verdict = _analysis_verdict(plant, belief, run.method)
         else:
             verdict = run_for_campaign(
-                plant, belief, perturbation, run.method, run.seed, job.controller
+                plant, belief, perturbation, run.method, run.seed, job.controller, job.firmware
             )
             if faults is not None:
                 record["fault"]["phase"] = phase_at(verdict["phases"], fault_time(faults))
         record.update(status="ok", error=None, verdict=verdict)
-    except TetherlandError as err:
-        record.update(status="error", error=str(err), verdict={"success": False})
+    except TetherlandError as err:  # the run's own error: the same on every attempt
+        record.update(status="error", error_kind="run", error=str(err), verdict={"success": False})
     except Exception as err:
         last = traceback.format_exception_only(err)[-1].strip()
-        record.update(status="error", error=f"internal error: {last}", verdict={"success": False})
+        record.update(status="error", error_kind="run", error=f"internal error: {last}",
+                      verdict={"success": False})  # fmt: skip
     record["wall_time_s"] = time.perf_counter() - start
     return record
 
 
 def lost_record(job: Job, error: BaseException) -> dict[str, Any]:
-    """The record of a run whose worker was lost for good (the engine gave up on it)."""
+    """The record of a run whose worker was lost for good (the engine gave up on it):
+    an infrastructure error, which ``--resume`` runs again."""
     run = job.run
     return {
         "run_id": run.run_id, "method": run.method, "index": run.index, "seed": run.seed,
         "sweep_key": run.sweep_key, "sweep_value": run.sweep_value, "status": "error",
-        "error": f"worker lost: {type(error).__name__}: {error}", "verdict": {"success": False},
-        "wall_time_s": 0.0,
+        "error_kind": INFRASTRUCTURE, "error": f"worker lost: {type(error).__name__}: {error}",
+        "verdict": {"success": False}, "wall_time_s": 0.0,
     }  # fmt: skip

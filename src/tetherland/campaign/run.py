@@ -12,7 +12,7 @@ from tetherland.campaign.faults import fault_table
 from tetherland.campaign.jobs import Job, execute, lost_record
 from tetherland.campaign.spec import CampaignSpec
 from tetherland.campaign.stats import RateSummary, summarize
-from tetherland.campaign.store import ResultsStore
+from tetherland.campaign.store import ResultsStore, retryable
 from tetherland.io import atomic_write_json
 
 
@@ -26,6 +26,8 @@ class CampaignResult:
     new: int
     summary: list[RateSummary]
     interrupted: bool = False
+    lost: int = 0
+    """Runs lost to the infrastructure (their workers died more than ``retries`` times)."""
 
 
 def pending_jobs(spec: CampaignSpec, store: ResultsStore) -> tuple[list[Job], int]:
@@ -33,7 +35,9 @@ def pending_jobs(spec: CampaignSpec, store: ResultsStore) -> tuple[list[Job], in
     runs = spec.expand()
     done = store.done_ids()
     todo = [
-        Job(spec.scenario, run, spec.job, spec.controller) for run in runs if run.run_id not in done
+        Job(spec.scenario, run, spec.job, spec.controller, spec.firmware)
+        for run in runs
+        if run.run_id not in done
     ]
     return todo, len(runs)
 
@@ -64,8 +68,9 @@ def run_campaign(
     each record as soon as it finishes.
 
     ``on_start(total, already_done)`` and ``on_result(record)`` drive a progress display.
-    A KeyboardInterrupt stops cleanly: finished runs are kept, the rest can be resumed.
-    The executor is closed on return.
+    A KeyboardInterrupt stops at once: finished runs are kept, the runs in flight are
+    abandoned (their workers stopped) and can be resumed. The executor is closed on
+    return.
     """
     jobs, total = pending_jobs(spec, store)
     if on_start:
@@ -73,6 +78,7 @@ def run_campaign(
     new = 0
     interrupted = False
     seen = store.done_ids()
+    stop = executor.close
     try:
         for record in executor.map_unordered(execute, jobs, lost=lost_record):
             if record["run_id"] in seen:  # an engine that retried a lost worker's run
@@ -84,17 +90,28 @@ def run_campaign(
                 on_result(record)
     except KeyboardInterrupt:
         interrupted = True
+        stop = executor.terminate  # the runs in flight are abandoned: --resume runs them
+    except BaseException:
+        stop = executor.terminate
+        raise
     finally:
-        executor.close()
-    records = store.load()
+        stop()
+    # runs lost to the infrastructure say nothing about the mission: not in the rates,
+    # and not finished (--resume runs them again)
+    restarts = getattr(executor, "restarts", None)  # pools rebuilt after a lost worker
+    records = [r for r in store.load() if not retryable(r)]
+    finished = {r["run_id"] for r in records}
+    lost = sorted({r["run_id"] for r in store.load() if retryable(r)} - finished)
     summary = summarize(records)
     store.export_csv()
     atomic_write_json(
         store.dir / "summary.json",
         {
             "total_runs": total,
-            "finished_runs": len({r["run_id"] for r in records}),
-            "complete": len({r["run_id"] for r in records}) == total,
+            "finished_runs": len(finished),
+            "complete": len(finished) == total,
+            "lost_runs": lost,
+            **({"worker_restarts": restarts} if restarts is not None else {}),
             "rates": [s.to_dict() for s in summary],
             **({"faults": fault_table(records)} if spec.faults else {}),
             "spec": spec.to_dict(),
@@ -104,8 +121,9 @@ def run_campaign(
     return CampaignResult(
         directory=store.dir,
         total=total,
-        done=len({r["run_id"] for r in records}),
+        done=len(finished),
         new=new,
         summary=summary,
         interrupted=interrupted,
+        lost=len(lost),
     )

@@ -32,30 +32,27 @@ class AeroConfig(Section):
     ground_effect: bool = True
     """Each rotor's thrust (and drag torque) is multiplied by its surface factor: the
     Cheeseman-Bennett ground effect over the covered part of its disk, and the ceiling
-    effect on its inflow side [-]."""
+    effect on its inflow side."""
     wall_effect: bool = False
     """A wall across a rotor's disk plane draws the rotor toward it (a documented simple
-    model, see ``wall_coefficient``) [-]."""
+    model, see ``wall_coefficient``)."""
     rotor_drag: tuple[DragCoefficient, DragCoefficient] = (ROTOR_DRAG_DEFAULT, ROTOR_DRAG_DEFAULT)
     """(d_x, d_y) of the rotor drag F = -R_WB diag(d_x, d_y, 0) R_WB^T v at the hover
-    rotor speed, scaled with the mean rotor speed; [0, 0] switches it off; each in
-    [0, 10] [N s/m]."""
+    rotor speed, scaled with the mean rotor speed; [0, 0] switches it off [N s/m]."""
     rotor_radius: float | None = Field(None, gt=0, le=1)
-    """Rotor radius R; by default the rotor-guard radius, 0.4 arm_length; in (0, 1] [m]."""
+    """Rotor radius R; by default the rotor-guard radius, 0.4 arm_length [m]."""
     disk_rings: int = Field(3, ge=1, le=8)
-    """Rings of equal-area sample points over each rotor disk, in [1, 8] [-]."""
+    """Rings of equal-area sample points over each rotor disk [-]."""
     disk_sectors: int = Field(8, ge=2, le=32)
-    """Sample points per ring, in [2, 32] [-]."""
+    """Sample points per ring [-]."""
     min_distance_ratio: float = Field(0.5, ge=0.3, le=2)
     """Lower bound z_min / R of the distance used in the ground and ceiling factors (the
-    image formula has its pole at z = R/4; at the default 0.5 the bound is 4/3), in
-    [0.3, 2] [-]."""
+    image formula has its pole at z = R/4; at the default 0.5 the bound is 4/3) [-]."""
     ceiling_coefficient: float = Field(0.0625, ge=0, le=0.25)
-    """k_c of the ceiling factor 1 / (1 - k_c (R/z)^2); 1/16 mirrors the ground effect;
-    in [0, 0.25] [-]."""
+    """k_c of the ceiling factor 1 / (1 - k_c (R/z)^2); 1/16 mirrors the ground effect [-]."""
     wall_coefficient: float = Field(0.05, ge=0, le=1)
     """k_w of the wall pull k_w f (R / max(d, R))^2 (an assumption: a few percent of the
-    rotor's thrust when its disk edge touches the wall), in [0, 1] [-]."""
+    rotor's thrust when its disk edge touches the wall) [-]."""
 
     @model_validator(mode="after")
     def _bound_below_pole(self) -> AeroConfig:

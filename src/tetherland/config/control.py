@@ -84,7 +84,7 @@ class ControllerConfig(Section):
     ground_effect_compensation: bool = True
     """Divide each rotor's commanded speed by the square root of its ground-effect factor
     over the believed surface at the estimated pose, so that the thrust believed acting is
-    the thrust wanted (false: the integrals absorb the ground effect) [-]."""
+    the thrust wanted (false: the integrals absorb the ground effect)."""
     rate_hz: float = Field(500.0, gt=0, le=5000)
     """Control rate (rotor-speed commands to the ESCs, section 6.6.4) [Hz]."""
     free_flight: FreeFlightGains = FreeFlightGains()

@@ -91,14 +91,14 @@ class UkfEstimator:
             tension_time_constant = tension_filter_time_constant(self._stiffness, v.mass)
         self.tension = TensionEstimator(
             v.mass,
-            scenario.mission.tension_threshold,
-            scenario.mission.tension_dwell,
+            scenario.mission.stretch.tension_threshold,
+            scenario.mission.stretch.tension_dwell,
             tension_time_constant,
         )
         w0 = np.zeros(4) if rotor_speeds0 is None else np.asarray(rotor_speeds0, dtype=float)
         self.motors = MotorLagThrust(v.thrust_coefficient, v.motor_time_constant, w0)
         self.ground_effect = (
-            BelievedGroundEffect(scenario) if scenario.mission.ground_effect_belief else None
+            BelievedGroundEffect(scenario) if scenario.estimator.ground_effect_belief else None
         )
         """The believed ground effect on the predicted thrust (None: not modelled)."""
         self._motor_t = t0

@@ -4,7 +4,7 @@ The estimator predicts the rotors' thrust from the commanded speeds (motor lag).
 surface the rotors push harder than c_f w^2 (:mod:`tetherland.models.aero`); unmodelled,
 the extra thrust reads as an external force along z_B, i.e. as a push of the surface,
 and lowers the tension estimate by its component along the link. With
-``mission.ground_effect_belief`` the estimator multiplies each rotor's predicted thrust
+``estimator.ground_effect_belief`` the estimator multiplies each rotor's predicted thrust
 by its Cheeseman-Bennett factor over the *believed* surface patch (``[surface]`` of the
 belief: plane patch or pipe of the believed extent, no ground plane) at the *estimated*
 pose, with the believed rotor radius 0.4 arm_length (the rotor guards). Nothing here

@@ -95,6 +95,10 @@ TRUTH: tuple[Column, ...] = (
     _c("rotor_thrusts", 4, "N", "acting rotor thrusts (surface factors included)"),
     _c("ground_effect", 4, "-", "surface factor T/T_OGE of each rotor (ground, ceiling)"),
     _c("drag_force_W", 3, "N", "rotor drag (and wall pull) at the centre of mass, F_W"),
+    _c("lander_surface_forces", 4, "N", "largest normal force of the landing surface on "
+       "each lander over the physics steps since the previous control tick"),
+    _c("lander_ground_forces", 4, "N", "largest normal force of the ground (start pad) on "
+       "each lander over the physics steps since the previous control tick"),
 )
 MEASUREMENTS: tuple[Column, ...] = (
     _c("imu_specific_force_B", 3, "m/s^2", "last IMU specific force"),
