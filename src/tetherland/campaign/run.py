@@ -10,9 +10,10 @@ from typing import Any
 from tetherland.campaign.executors import Executor
 from tetherland.campaign.faults import fault_table
 from tetherland.campaign.jobs import Job, execute, lost_record
-from tetherland.campaign.spec import CampaignSpec
+from tetherland.campaign.spec import CampaignSpec, RunSpec
 from tetherland.campaign.stats import RateSummary, summarize
-from tetherland.campaign.store import ResultsStore, retryable
+from tetherland.campaign.store import KEEP_POLICIES, ResultsStore, retryable
+from tetherland.errors import ConfigError
 from tetherland.io import atomic_write_json
 
 
@@ -30,15 +31,20 @@ class CampaignResult:
     """Runs lost to the infrastructure (their workers died more than ``retries`` times)."""
 
 
-def pending_jobs(spec: CampaignSpec, store: ResultsStore) -> tuple[list[Job], int]:
+def campaign_job(spec: CampaignSpec, run: RunSpec, keep: str = "none",
+                 keep_dir: str | None = None) -> Job:  # fmt: skip
+    """The job of one run of ``spec`` (what a worker, a replay and a resume fly)."""
+    return Job(spec.scenario, run, spec.job, spec.controller, spec.firmware, keep, keep_dir)
+
+
+def pending_jobs(
+    spec: CampaignSpec, store: ResultsStore, keep: str = "none"
+) -> tuple[list[Job], int]:
     """Jobs not yet in the results table, and the campaign's total size."""
     runs = spec.expand()
     done = store.done_ids()
-    todo = [
-        Job(spec.scenario, run, spec.job, spec.controller, spec.firmware)
-        for run in runs
-        if run.run_id not in done
-    ]
+    keep_dir = str(store.runs_dir) if keep != "none" else None
+    todo = [campaign_job(spec, run, keep, keep_dir) for run in runs if run.run_id not in done]
     return todo, len(runs)
 
 
@@ -63,16 +69,21 @@ def run_campaign(
     provenance: dict[str, Any] | None = None,
     on_result: Callable[[dict[str, Any]], None] | None = None,
     on_start: Callable[[int, int], None] | None = None,
+    keep: str = "failures",
 ) -> CampaignResult:
     """Run every run of ``spec`` missing from ``store`` (see :func:`open_store`), appending
     each record as soon as it finishes.
 
     ``on_start(total, already_done)`` and ``on_result(record)`` drive a progress display.
+    ``keep`` (:data:`~tetherland.campaign.store.KEEP_POLICIES`) says which runs keep their
+    run directory in the campaign directory's ``runs/`` (default: those that failed).
     A KeyboardInterrupt stops at once: finished runs are kept, the runs in flight are
     abandoned (their workers stopped) and can be resumed. The executor is closed on
     return.
     """
-    jobs, total = pending_jobs(spec, store)
+    if keep not in KEEP_POLICIES:
+        raise ConfigError(f"--keep must be one of {', '.join(KEEP_POLICIES)} (got {keep!r})")
+    jobs, total = pending_jobs(spec, store, keep)
     if on_start:
         on_start(total, total - len(jobs))
     new = 0
@@ -111,6 +122,7 @@ def run_campaign(
             "finished_runs": len(finished),
             "complete": len(finished) == total,
             "lost_runs": lost,
+            "kept_runs": sorted(r["run_id"] for r in records if r.get("run_dir")),
             **({"worker_restarts": restarts} if restarts is not None else {}),
             "rates": [s.to_dict() for s in summary],
             **({"faults": fault_table(records)} if spec.faults else {}),

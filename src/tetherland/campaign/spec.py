@@ -139,6 +139,44 @@ class CampaignSpec:
             d["faults"], d["fault_window"] = list(self.faults), list(self.fault_window)
         return d
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CampaignSpec:
+        """Inverse of :meth:`to_dict` (a manifest's ``spec``); the fingerprint is kept.
+
+        Raises
+        ------
+        ConfigError
+            One line when ``data`` is no campaign specification.
+        """
+        try:
+            sweep, window = data.get("sweep"), data.get("fault_window", DEFAULT_WINDOW)
+            return cls(
+                scenario=dict(data["scenario"]),
+                runs=int(data["runs"]),
+                methods=tuple(data["methods"]),
+                sweep=None if sweep is None else Sweep(str(sweep["key"]),
+                                                       tuple(float(v) for v in sweep["values"])),
+                seed=int(data["seed"]),
+                job=str(data["job"]),
+                controller=str(data["controller"]),
+                extra=dict(data.get("extra", {})),
+                faults=tuple(data.get("faults", ())),
+                fault_window=(float(window[0]), float(window[1])),
+                firmware=data.get("firmware"),
+            )  # fmt: skip
+        except (KeyError, TypeError, ValueError, AttributeError) as err:
+            why = f"{type(err).__name__}: {err}"
+            raise ConfigError(f"not a campaign specification ({why})") from None
+
+    def run(self, run_id: str) -> RunSpec:
+        """The run ``run_id`` of this campaign (ConfigError naming the ids when unknown)."""
+        runs = {r.run_id: r for r in self.expand()}
+        if run_id not in runs:
+            ids = list(runs)
+            shown = ", ".join(ids[:3]) + (f", ... ({len(ids)} runs)" if len(ids) > 3 else "")
+            raise ConfigError(f"RUN_ID {run_id!r} is no run of this campaign (its runs: {shown})")
+        return runs[run_id]
+
     def expand(self) -> list[RunSpec]:
         """Every run of the campaign, in a deterministic order."""
         if self.faults:

@@ -1,12 +1,15 @@
 """The campaign directory: manifest, append-only results table, resume, one writer.
 
 ``results.jsonl`` gets one line per finished run, written and fsync'ed by the main
-process as soon as the run ends, so a crash or Ctrl-C loses nothing; a torn last line
-is discarded on reopening. ``results.csv`` is a flattened copy written atomically at the
-end (and by ``--resume``). One process at a time writes a campaign directory: it holds
-an exclusive lock on ``.lock`` there while it is open. A run recorded as an
-infrastructure error (its worker or the engine was lost: :func:`retryable`) is run again
-by ``--resume``; a run's own failure or error never is.
+process as soon as the run ends, so a crash or Ctrl-C loses nothing; a torn last line is
+discarded on reopening. ``results.csv`` is a flattened copy written atomically at the
+end (and by ``--resume``). ``runs/`` holds the run directories the campaign keeps
+(``--keep``: the failed runs by default), each written by its worker all at once (staged
+next to it, then renamed), so a run directory is whole or absent; the staging of a worker
+killed while writing is removed when the directory is opened again. One process at a
+time writes a campaign directory: it holds an exclusive lock on ``.lock`` there while it
+is open. A run recorded as an infrastructure error (its worker or the engine was lost:
+:func:`retryable`) is run again by ``--resume``; a run's own failure or error never is.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import csv
 import io
 import json
 import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +35,10 @@ MANIFEST = "campaign.json"
 RESULTS = "results.jsonl"
 LOCK = ".lock"
 """Lock file of a campaign directory (holds the writer's process id)."""
+RUNS_DIR = "runs"
+"""Folder of the kept run directories, ``runs/<run_id>``."""
+KEEP_POLICIES = ("failures", "all", "none")
+"""Which runs keep their run directory: those that did not succeed, every one, none."""
 INFRASTRUCTURE = "infrastructure"
 """``error_kind`` of a run whose worker or engine was lost (not a failure of the run)."""
 
@@ -120,8 +128,14 @@ class ResultsStore:
                 },
             )
         self._repair_tail()
+        self._remove_staging()
         if resume:
             self._drop_retryable()
+
+    def lock(self) -> None:
+        """Take the directory's lock without opening the campaign (a reader that writes
+        the campaign's figures); :class:`ConfigError` when another process holds it."""
+        self._acquire()
 
     def _acquire(self) -> None:
         if fcntl is None or self._lock is not None:
@@ -156,6 +170,20 @@ class ResultsStore:
         if len(kept) < len(records):
             text = "".join(json.dumps(to_jsonable(r), allow_nan=False) + "\n" for r in kept)
             atomic_write_text(self.results_path, text)
+
+    @property
+    def runs_dir(self) -> Path:
+        """Where the kept run directories are (``runs/<run_id>``)."""
+        return self.dir / RUNS_DIR
+
+    def _remove_staging(self) -> None:
+        """Remove the half-written run directories of workers killed while writing (the
+        lock is held: no worker of this campaign writes now)."""
+        if not self.runs_dir.is_dir():
+            return
+        for stale in self.runs_dir.glob(".*"):
+            if ".staging-" in stale.name or ".old-" in stale.name:
+                shutil.rmtree(stale, ignore_errors=True)
 
     def _repair_tail(self) -> None:
         path = self.results_path

@@ -22,13 +22,14 @@ from typer.exceptions import TyperException
 
 from tetherland import __version__
 from tetherland.cli.analyze import analyze
-from tetherland.cli.campaign import campaign
+from tetherland.cli.campaign import campaign_app
 from tetherland.cli.common import INTERRUPTED
 from tetherland.cli.design import design
 from tetherland.cli.export import export
 from tetherland.cli.judge import judge
 from tetherland.cli.mission import mission
 from tetherland.cli.plan import plan
+from tetherland.cli.replay import replay
 from tetherland.cli.scenarios import scenarios, show
 from tetherland.errors import InfeasibleError, TetherlandError
 
@@ -60,12 +61,13 @@ def _root(
 app.command()(scenarios)
 app.command()(show)
 app.command()(analyze)
-app.command()(campaign)
+app.add_typer(campaign_app)
 app.command()(design)
 app.command()(mission)
 app.command()(judge)
 app.command()(export)
 app.command()(plan)
+app.command()(replay)
 
 
 MESSAGE_CHARS = 300

@@ -42,6 +42,11 @@ OverwriteOption = Annotated[
     ),
 ]
 
+VideoOption = Annotated[
+    bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
+]
+McapOption = Annotated[bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")]
+
 INTERRUPTED = 130
 """Exit code after Ctrl-C or SIGTERM (128 + SIGINT)."""
 
@@ -103,3 +108,15 @@ def conditions_text(landing: dict) -> str:
     text = " ".join(f"{k}:{'ok' if conditions[k] else 'NO'}" for k in required)
     others = [k for k in conditions if k not in required]
     return text + (f" ({', '.join(others)} not required)" if others else "")
+
+
+def perturbation_text(p: dict) -> str:
+    """A drawn perturbation (``run.json`` provenance ``perturbation``) on one line."""
+    e = (p["anchor_error_x_S"], p["anchor_error_y_S"], p["anchor_error_z_S"])
+    return (
+        f"perturbation of seed {p['seed']}: mass x{p['mass_factor']:.3f}, thrust coefficient "
+        f"x{p['thrust_coefficient_factor']:.3f}, slope {p['slope_error_deg']:+.2f} deg, "
+        f"azimuth {p['azimuth_error_deg']:+.2f} deg, anchor [{e[0]:+.3f}, {e[1]:+.3f}, "
+        f"{e[2]:+.3f}] m, surface {p['surface_offset']:+.3f} m, noise x{p['noise_scale']:.2f}, "
+        f"{p['gust_count']} gusts up to {p['gust_peak_N']:.2f} N"
+    )

@@ -9,22 +9,27 @@ import typer
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from tetherland.campaign.jobs import draw_run, fly_perturbed
 from tetherland.cli.common import (
     JsonOption,
+    McapOption,
     OverwriteOption,
     ScenarioArg,
     SetOption,
+    VideoOption,
     conditions_text,
     console,
     default_output,
     outcome_text,
+    perturbation_text,
     resolve_scenario,
 )
 from tetherland.errors import ConfigError
 from tetherland.io import OutputDir, dumps_json
-from tetherland.methods import get_method, method_names
+from tetherland.methods import Flight, get_method, method_names
 from tetherland.runs import run_mission, save_run
 from tetherland.runs.directory import write_summary
+from tetherland.runs.explain import explain
 from tetherland.verdict import Outcome
 
 CONTROLLERS = ("hierarchical", "dfl")
@@ -56,7 +61,7 @@ def _start_live(sc: Any, speed: float, port: int, rate: float, quiet: bool) -> A
     return view
 
 
-def _add_mcap(result: Any, directory: Path, files: dict[str, Path], listed_as: Path) -> None:
+def add_mcap(result: Any, directory: Path, files: dict[str, Path], listed_as: Path) -> None:
     """Write run.mcap and list it in summary.json."""
     from tetherland.viz import run_data_from_result
     from tetherland.viz.mcap import write_mcap
@@ -75,18 +80,29 @@ def mission(
         str,
         typer.Option("--method", help=f"Landing method: {', '.join(method_names())}."),
     ] = "tethered",
-    seed: Annotated[int, typer.Option("--seed", help="Seed of sensor noise and disturbances.")] = 0,
+    seed: Annotated[
+        int,
+        typer.Option(
+            "--seed",
+            help="Seed of the sensor noise (alone it varies nothing else; add --perturb).",
+        ),
+    ] = 0,
+    perturb: Annotated[
+        bool,
+        typer.Option(
+            "--perturb",
+            help="Also draw the campaign's perturbation for --seed (model, surface and "
+            "anchor belief errors, noise scale, wind gusts), exactly as a campaign run with "
+            "that seed; recorded in run.json.",
+        ),
+    ] = False,
     out: Annotated[
         Path | None, typer.Option("--out", help="Output directory (default out/<name>/mission).")
     ] = None,
     overwrite: OverwriteOption = False,
     json: JsonOption = False,
-    video: Annotated[
-        bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
-    ] = False,
-    mcap: Annotated[
-        bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")
-    ] = False,
+    video: VideoOption = False,
+    mcap: McapOption = False,
     live: Annotated[
         bool, typer.Option("--live", help="Stream the mission to Foxglove while it runs.")
     ] = False,
@@ -110,8 +126,9 @@ def mission(
     Writes the log, summary.json, the figure 6.5 plots and the 3D path (and an mp4 with
     --video, run.mcap for Foxglove or Rerun with --mcap) into --out, all at once when the
     run ends; an existing run there is replaced as a whole only with --overwrite. --live
-    streams the run to Foxglove while it flies. Exit code 0 when the mission succeeded, 1
-    when it failed;
+    streams the run to Foxglove while it flies. --seed alone varies only the sensor noise
+    (the robot believes the scenario exactly, no wind): --perturb flies the campaign's
+    perturbation of that seed. Exit code 0 when the mission succeeded, 1 when it failed;
     a mission that cannot be planned (a slope the vehicle cannot reach) prints one line with
     the reason, writes no results and exits 1.
     """
@@ -142,12 +159,20 @@ def mission(
             phase = getattr(holder.get("reference"), "phase", None)
             return phase.name.lower() if phase is not None else ""
 
-        result = run_mission(
-            sc, method=how.name, controller=controller, seed=seed,
-            observers=[_ProgressObserver(progress, task, phase_of), *([view] if view else [])],
-            on_flight=lambda flight: holder.update(reference=flight.reference),
-            inner_loop=inner_loop,
-        )  # fmt: skip
+        def on_flight(flight: Flight) -> None:
+            holder.update(reference=flight.reference)
+
+        observers = [_ProgressObserver(progress, task, phase_of), *([view] if view else [])]
+        if perturb:  # the campaign's draw for this seed, flown as the campaign flies it
+            result = fly_perturbed(
+                draw_run(sc, seed), how.name, controller=controller, inner_loop=inner_loop,
+                observers=observers, on_flight=on_flight,
+            )  # fmt: skip
+        else:
+            result = run_mission(
+                sc, method=how.name, controller=controller, seed=seed, observers=observers,
+                on_flight=on_flight, inner_loop=inner_loop,
+            )  # fmt: skip
         if view is not None:
             view.finish(result.summary)
             view.close()
@@ -161,15 +186,15 @@ def mission(
         with target.staging() as staging:
             files = save_run(result, staging, video=video, listed_as=target.path)
             if mcap and result.log is not None:
-                _add_mcap(result, staging, files, target.path)
+                add_mcap(result, staging, files, target.path)
         files = {k: target.path / v.name for k, v in files.items()}
         summary = result.summary
+        failures = [f.to_dict() for f in explain(summary, result.log, result.record)]
     if json:
-        typer.echo(
-            dumps_json({**summary, "files": {k: str(v) for k, v in files.items()}}), nl=False
-        )
+        files_doc = {k: str(v) for k, v in files.items()}
+        typer.echo(dumps_json({**summary, "failures": failures, "files": files_doc}), nl=False)
     else:
-        _print_summary(summary, files)
+        _print_summary(summary, files, failures)
     if not summary["success"]:
         raise typer.Exit(1)
 
@@ -185,7 +210,7 @@ def _firmware(name: str | None) -> Any:
     return BetaflightSitl()
 
 
-def _print_summary(summary: dict, files: dict[str, Path]) -> None:
+def _print_summary(summary: dict, files: dict[str, Path], failures: list[dict]) -> None:
     import math
 
     landing = summary.get("landing", {})
@@ -194,8 +219,13 @@ def _print_summary(summary: dict, files: dict[str, Path]) -> None:
         f"[bold]{summary['scenario']}[/bold] ({summary['method']}): {outcome_text(summary)}, "
         f"{summary['sim_time_s']:.1f} s simulated, {rtf:.1f}x real time"
     )
+    perturbation = summary.get("provenance", {}).get("perturbation")
+    if perturbation is not None:
+        console.print(perturbation_text(perturbation), markup=False, highlight=False)
     if not summary["success"]:
-        console.print(f"reason: {summary['reason']}")
+        console.print(f"reason: {summary['reason']}", markup=False, highlight=False)
+        for failure in failures:
+            console.print(f"  {failure['message']}", markup=False, highlight=False)
     table = Table(title="Landing (plant truth at touchdown)")
     table.add_column("measure")
     table.add_column("value")

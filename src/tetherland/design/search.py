@@ -1,6 +1,8 @@
 """Search cable length, attachment offset, anchor height and hooking approach for a slope.
 
-Three stages, cheapest first:
+Hover first: a vehicle that cannot hover in free flight with the control margin
+(:func:`tetherland.analysis.free_hover`) has no design; nothing else is searched. Then
+three stages, cheapest first:
 
 1. **Analysis** on the whole grid of (l, r_att,z, h_A): the landed inclined hover of
    :func:`tetherland.analysis.landed_hover` (rotor floor and ceiling with the control
@@ -35,6 +37,7 @@ from tetherland.analysis import (
     LandedHover,
     SlopeLimit,
     VehicleLimits,
+    free_hover,
     landed_hover,
     tethered_slope_limit,
 )
@@ -59,6 +62,9 @@ _TOL = 1e-9
 class DesignLimit(enum.Enum):
     """The stage at which every candidate of a design search failed."""
 
+    CANNOT_HOVER = "cannot_hover"
+    """The vehicle cannot hover in free flight with the control margin: checked before
+    any candidate (:attr:`~tetherland.analysis.Infeasibility.CANNOT_HOVER`)."""
     LANDED_HOVER = "landed_hover"
     """The analysis: no candidate holds the landed hover (see ``analysis_binding``)."""
     HOOKING_CLEARANCE = "hooking_clearance"
@@ -261,7 +267,8 @@ def search_designs(
     base = design_base(scenario, slope_deg)
     B = float(base.surface.slope_deg)
 
-    candidates = _analysis_stage(base, space)
+    hover = free_hover(VehicleLimits.from_scenario(base))
+    candidates = _analysis_stage(base, space) if hover.ok else []
     feasible = sorted((c for c in candidates if c.hover.feasible), key=lambda c: -c.landed_margin)
 
     def result(
@@ -279,6 +286,9 @@ def search_designs(
             candidates=counted, planned=planned, wall_time_s=time.perf_counter() - t0,
         )  # fmt: skip
 
+    if not hover.ok:
+        reason = f"no design lands on {B:g} deg: {hover.message}"
+        return result((), DesignLimit.CANNOT_HOVER, None, reason, 0, 0)
     if not feasible:
         limit, binding, reason = _no_landed_hover(base, space, candidates)
         return result((), limit, binding, reason, len(candidates), 0)
