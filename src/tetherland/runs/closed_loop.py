@@ -15,6 +15,7 @@ from typing import Any, Protocol
 
 from tetherland.config import Scenario
 from tetherland.control.ground_effect import GroundEffectCompensation
+from tetherland.control.rotor_drag import RotorDragCompensation
 from tetherland.errors import InfeasibleError
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import FloatArray
@@ -185,6 +186,8 @@ def run_mission(
     controller_ = flight.controller
     if belief.controller.ground_effect_compensation:
         controller_ = GroundEffectCompensation(controller_, belief)
+    if any(d > 0.0 for d in belief.controller.rotor_drag):
+        controller_ = RotorDragCompensation(controller_, belief)
     runner = Runner(
         scenario, controller_,
         estimator=estimator(belief, flight.initial_state, 0.0, flight.rotor_speeds),
