@@ -26,6 +26,7 @@ import numpy as np
 
 from tetherland import GRAVITY
 from tetherland.config import Scenario
+from tetherland.control.ground_effect import GroundEffectCompensation
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command, Controller, Reference, StateEstimate
 from tetherland.rotations import quat_to_rotmat
@@ -84,3 +85,15 @@ class RotorDragCompensation:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.inner, name)
+
+
+def with_aero_belief(controller: Controller, belief: Scenario) -> Controller:
+    """``controller`` as a mission composes it: wrapped in the believed ground-effect
+    compensation (``controller.ground_effect_compensation``) and the believed rotor-drag
+    feed-forward (``controller.rotor_drag`` not zero), each only when switched on."""
+    out: Controller = controller
+    if belief.controller.ground_effect_compensation:
+        out = GroundEffectCompensation(out, belief)
+    if any(d > 0.0 for d in belief.controller.rotor_drag):
+        out = RotorDragCompensation(out, belief)
+    return out

@@ -14,8 +14,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 from tetherland.config import Scenario
-from tetherland.control.ground_effect import GroundEffectCompensation
-from tetherland.control.rotor_drag import RotorDragCompensation
+from tetherland.control.rotor_drag import with_aero_belief
 from tetherland.errors import InfeasibleError
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import FloatArray
@@ -183,11 +182,7 @@ def run_mission(
     flight = how.fly(plan, belief, controller)
     if on_flight is not None:
         on_flight(flight)
-    controller_ = flight.controller
-    if belief.controller.ground_effect_compensation:
-        controller_ = GroundEffectCompensation(controller_, belief)
-    if any(d > 0.0 for d in belief.controller.rotor_drag):
-        controller_ = RotorDragCompensation(controller_, belief)
+    controller_ = with_aero_belief(flight.controller, belief)
     runner = Runner(
         scenario, controller_,
         estimator=estimator(belief, flight.initial_state, 0.0, flight.rotor_speeds),
