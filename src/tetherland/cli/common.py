@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -22,11 +22,8 @@ from rich.progress import (
 from tetherland.config import Scenario, load_scenario
 from tetherland.config.checks import check_name
 from tetherland.errors import ConfigError
-from tetherland.sim.render import DEFAULT_FPS, DEFAULT_SIZE
+from tetherland.sim.video import DEFAULT_FPS, DEFAULT_SIZE, FrameProgress, VideoOptions
 from tetherland.verdict import Outcome
-
-if TYPE_CHECKING:
-    from tetherland.sim.render import FrameProgress, VideoOptions
 
 ScenarioArg = Annotated[
     str,
@@ -88,8 +85,6 @@ def video_options(fps: float, size: str) -> VideoOptions:
     ConfigError
         One line naming the option and its allowed range.
     """
-    from tetherland.sim.render import VideoOptions
-
     try:
         width, height = VideoOptions.parse_size(size)
         return VideoOptions(fps=fps, width=width, height=height)

@@ -21,7 +21,7 @@ from tetherland.sim import SimLog
 from tetherland.verdict import RECORD_FILE, RunRecord, RunRecordError, Verdict, judge
 
 if TYPE_CHECKING:
-    from tetherland.sim.render import FrameProgress, VideoOptions
+    from tetherland.sim.video import FrameProgress, VideoOptions
 
 LOG_FILE = "log.npz"
 SUMMARY_FILE = "summary.json"

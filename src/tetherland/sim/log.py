@@ -261,9 +261,9 @@ class SimLog:
         path = Path(path)
         if path.suffix != ".npz":
             raise ValueError(f"log files end in .npz, got '{path.name}'")
+        components = np.ascontiguousarray(self.matrix.T)  # each row one time series
         arrays: dict[str, np.ndarray] = {}
         schema = []
-        components = np.ascontiguousarray(self.matrix.T)  # each row one time series
         for c in self.columns:
             stored = to_storage(components[self._slices[c.name]], c.storage)
             arrays[c.name] = encode(stored)
