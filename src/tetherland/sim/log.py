@@ -86,8 +86,9 @@ class Column:
         return Precision.FLOAT64 if self.unit == "s" else Precision.FLOAT32
 
 
-def _c(name: str, width: int, unit: str, doc: str, integer: bool = False) -> Column:
-    return Column(name, width, unit, doc, integer)
+def _c(name: str, width: int, unit: str, doc: str, integer: bool = False,
+       precision: Precision | None = None) -> Column:  # fmt: skip
+    return Column(name, width, unit, doc, integer, precision)
 
 
 def _robot_side(columns: tuple[Column, ...]) -> tuple[Column, ...]:
@@ -168,7 +169,7 @@ tension against ``planner.min_tension``): stored in float64."""
 def diagnostic_columns(keys: Iterable[str]) -> tuple[Column, ...]:
     """Columns ``diag.<key>`` for the controller diagnostics to record."""
     return tuple(
-        Column(f"diag.{k}", 1, "-", f"controller diagnostic '{k}'", precision=Precision.FLOAT64)
+        _c(f"diag.{k}", 1, "-", f"controller diagnostic '{k}'", precision=Precision.FLOAT64)
         if k in EXACT_DIAGNOSTICS
         else _robot_side((_c(f"diag.{k}", 1, "-", f"controller diagnostic '{k}'"),))[0]
         for k in keys
