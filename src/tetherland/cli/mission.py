@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -220,7 +221,9 @@ def _firmware(name: str | None) -> Any:
     return BetaflightSitl()
 
 
-def _print_summary(summary: dict, files: dict[str, Path], failures: list[dict]) -> None:
+def _print_summary(
+    summary: dict, files: dict[str, Path], failures: Sequence[dict] = ()
+) -> None:
     import math
 
     landing = summary.get("landing", {})
