@@ -7,7 +7,7 @@ together (getrusage), which does not depend on the load. Run:
 .venv/bin/python benchmarks/bench_campaign.py [runs]
 
 Before (commit d57bf1a, the same script with PYTHONPATH pointing at that checkout's src/)
-and after on this machine, measured back to back: see BEFORE below and the README.
+and after on this machine, measured back to back: see BEFORE below and CHANGELOG.md.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from tetherland.config import load_scenario
 
 BEFORE = {"commit": "d57bf1a", "cpu_s_per_run": {"tethered": 17.3, "free-flight": 5.9}}
 """CPU seconds per slope50 mission job at d57bf1a (mean of 3 seeds, both methods, the
-README's campaign configuration; measured back to back with the after-numbers)."""
+campaign configuration of docs/results.md; measured back to back with the after-numbers)."""
 
 
 def _cpu_seconds() -> float:
