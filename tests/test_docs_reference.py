@@ -51,10 +51,13 @@ def test_every_scenario_field_has_one_row_with_its_unit_range_and_default():
 def test_every_log_column_has_its_unit_and_shape():
     rows = _rows(docs_reference.log_reference())
     for c in BASE_COLUMNS + DERIVED:
-        _, shape, unit, kind, meaning = rows[c.name]
+        _, shape, unit, kind, stored, meaning = rows[c.name]
         assert shape == ("(n,)" if c.width == 1 else f"(n, {c.width})")
         assert unit == c.unit and kind == ("integer" if c.integer else "float") and meaning
+        assert stored == c.storage.description  # the precision the file keeps
     assert rows["p_W"][1:3] == ["(n, 3)", "m"]
+    assert rows["t"][4] == "float64 (exact)" and rows["p_W"][4] == "float32, 24 bits (rel. 6.0e-08)"
+    assert rows["est_p_W"][4] == "float32, 16 bits (rel. 1.5e-05)"
 
 
 def test_the_generator_writes_the_pages_and_reports_stale_ones(tmp_path: Path, capsys):

@@ -25,6 +25,7 @@ from tetherland.methods.tethered import DIAGNOSTICS
 from tetherland.sim.log import (
     DERIVED,
     ESTIMATE,
+    EXACT_DIAGNOSTICS,
     MEASUREMENTS,
     REFERENCE_COMMAND,
     SCALARS,
@@ -139,7 +140,8 @@ def scenario_reference(model: type[BaseModel] = Scenario) -> str:
 def _column_row(c: Column) -> str:
     shape = "(n,)" if c.width == 1 else f"(n, {c.width})"
     kind = "integer" if c.integer else "float"
-    return f"| `{c.name}` | {shape} | {c.unit} | {kind} | {_markdown(c.doc)} |"
+    stored = c.storage.description
+    return f"| `{c.name}` | {shape} | {c.unit} | {kind} | {stored} | {_markdown(c.doc)} |"
 
 
 def log_reference() -> str:
@@ -151,15 +153,25 @@ def log_reference() -> str:
         "",
         "A run log (`log.npz`, `tetherland.sim.SimLog`) has one row per control tick. Each",
         "column group below is one array of the `.npz` file, of shape `(n,)` for a scalar or",
-        "`(n, width)`, n the number of ticks; `log[name]` gives the same array. Integer",
-        "columns are stored as integers unless they hold NaN; NaN marks a value that was not",
-        "available (no mocap sample yet, no bias estimate). The file also holds",
-        "`__metadata__`, a JSON document with the provenance (scenario, seed, version,",
+        "`(n, width)`, n the number of ticks; `log[name]` gives it as float64. NaN marks a",
+        "value that was not available (no mocap sample yet, no bias estimate). The file also",
+        "holds `__metadata__`, a JSON document with the provenance (scenario, seed, version,",
         "commit), the rates, the events and this schema.",
+        "",
+        "*Stored* is the precision a column keeps on disk (rel.: the largest relative",
+        "rounding error): times in float64, integer codes exactly, the plant's truth in",
+        "float32, what the robot measured, believed and commanded rounded to 16 significant",
+        "bits. A column declared without a precision gets float32 (integer codes and times in",
+        "`s`: exact). Each column is then encoded without further loss (bit patterns XORed",
+        "with the previous tick's, bytes shuffled, Zstandard): read the file with",
+        "`SimLog.load`. A run is judged, drawn and exported from the log at these precisions,",
+        "so `tetherland judge` on the saved run gives the verdict the run reported. Logs",
+        "written before (format 1, plain float64 arrays) still load.",
     ]
     for title, summary, columns in LOG_GROUPS:
         lines += ["", f"## {title}", "", summary, ""]
-        lines += ["| Column | Shape | Unit | Type | Meaning |", "|---|---|---|---|---|"]
+        lines += ["| Column | Shape | Unit | Type | Stored | Meaning |",
+                  "|---|---|---|---|---|---|"]  # fmt: skip
         lines += [_column_row(c) for c in columns]
     methods = (("tethered", DIAGNOSTICS), ("free-flight", FreeFlightTracker.diagnostic_keys))
     lines += [
@@ -167,7 +179,9 @@ def log_reference() -> str:
         "## Controller diagnostics",
         "",
         "Columns `diag.<key>`, shape `(n,)`, one per diagnostic the method's controller",
-        "reports (NaN on ticks it does not):",
+        "reports (NaN on ticks it does not), stored rounded to 16 significant bits except",
+        ", ".join(f"`diag.{k}`" for k in sorted(EXACT_DIAGNOSTICS))
+        + " (float64: the judge compares it with a bound the plan may meet exactly):",
         "",
         "| Method | Columns |",
         "|---|---|",

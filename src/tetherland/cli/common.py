@@ -9,10 +9,20 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    Progress,
+    SpinnerColumn,
+    TaskID,
+    TaskProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+)
 
 from tetherland.config import Scenario, load_scenario
 from tetherland.config.checks import check_name
 from tetherland.errors import ConfigError
+from tetherland.sim.video import DEFAULT_FPS, DEFAULT_SIZE, FrameProgress, VideoOptions
 from tetherland.verdict import Outcome
 
 ScenarioArg = Annotated[
@@ -45,6 +55,16 @@ OverwriteOption = Annotated[
 VideoOption = Annotated[
     bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
 ]
+DEFAULT_VIDEO_SIZE = f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}"
+VIDEO_FPS = DEFAULT_FPS
+VideoFpsOption = Annotated[
+    float, typer.Option("--video-fps", help="With --video: frames per second (1-60).")
+]
+VideoSizeOption = Annotated[
+    str,
+    typer.Option("--video-size", help="With --video: WIDTHxHEIGHT in pixels, even numbers.",
+                 metavar="WxH"),
+]  # fmt: skip
 McapOption = Annotated[bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")]
 
 INTERRUPTED = 130
@@ -55,6 +75,44 @@ OUTPUT_ROOT = Path("out")
 
 console = Console()
 err_console = Console(stderr=True)
+
+
+def video_options(fps: float, size: str) -> VideoOptions:
+    """The video options of ``--video-fps`` and ``--video-size``.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the option and its allowed range.
+    """
+    try:
+        width, height = VideoOptions.parse_size(size)
+        return VideoOptions(fps=fps, width=width, height=height)
+    except ValueError as err:
+        option = "--video-fps" if "fps" in str(err) else "--video-size"
+        raise ConfigError(f"{option}: {err}") from None
+
+
+def run_progress(quiet: bool) -> Progress:
+    """The transient progress display of a run: a line per task (the flight with the
+    simulated time and phase, the video with a bar); nothing when ``quiet`` (--json)."""
+    return Progress(
+        SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), TaskProgressColumn(),
+        TimeElapsedColumn(), console=console, transient=True, disable=quiet,
+    )  # fmt: skip
+
+
+def frame_progress(progress: Progress) -> FrameProgress:
+    """A video frame callback that shows a bar ``rendering video`` in ``progress``."""
+    task: TaskID | None = None
+
+    def on_frame(done: int, total: int) -> None:
+        nonlocal task
+        if task is None:
+            task = progress.add_task("rendering video", total=total)
+        progress.update(task, completed=done)
+
+    return on_frame
 
 
 def resolve_scenario(source: str, overrides: list[str] | None) -> Scenario:

@@ -2,28 +2,35 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+from rich.progress import Progress
 from rich.table import Table
 
 from tetherland.campaign.jobs import draw_run, fly_perturbed
 from tetherland.cli.common import (
+    DEFAULT_VIDEO_SIZE,
+    VIDEO_FPS,
     JsonOption,
     McapOption,
     OverwriteOption,
     ScenarioArg,
     SetOption,
+    VideoFpsOption,
     VideoOption,
+    VideoSizeOption,
     conditions_text,
     console,
     default_output,
+    frame_progress,
     outcome_text,
     perturbation_text,
     resolve_scenario,
+    run_progress,
+    video_options,
 )
 from tetherland.errors import ConfigError
 from tetherland.io import OutputDir, dumps_json
@@ -103,6 +110,8 @@ def mission(
     overwrite: OverwriteOption = False,
     json: JsonOption = False,
     video: VideoOption = False,
+    video_fps: VideoFpsOption = VIDEO_FPS,
+    video_size: VideoSizeOption = DEFAULT_VIDEO_SIZE,
     mcap: McapOption = False,
     live: Annotated[
         bool, typer.Option("--live", help="Stream the mission to Foxglove while it runs.")
@@ -125,13 +134,13 @@ def mission(
     """Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, controllers, supervisor).
 
     Writes the log, summary.json, the figure 6.5 plots and the 3D path (and an mp4 with
-    --video, run.mcap for Foxglove or Rerun with --mcap) into --out, all at once when the
-    run ends; an existing run there is replaced as a whole only with --overwrite. --live
-    streams the run to Foxglove while it flies. --seed alone varies only the sensor noise
-    (the robot believes the scenario exactly, no wind): --perturb flies the campaign's
-    perturbation of that seed. Exit code 0 when the mission succeeded, 1 when it failed;
-    a mission that cannot be planned (a slope the vehicle cannot reach) prints one line with
-    the reason, writes no results and exits 1.
+    --video, at --video-fps and --video-size, run.mcap for Foxglove or Rerun with --mcap)
+    into --out, all at once when the run ends; an existing run there is replaced as a whole
+    only with --overwrite. --live streams the run to Foxglove while it flies. --seed alone
+    varies only the sensor noise (the robot believes the scenario exactly, no wind):
+    --perturb flies the campaign's perturbation of that seed. Exit code 0 when the mission
+    succeeded, 1 when it failed; a mission that cannot be planned (a slope the vehicle
+    cannot reach) prints one line with the reason, writes no results and exits 1.
     """
     sc = resolve_scenario(scenario, overrides)
     how = get_method(method, "--method")
@@ -142,6 +151,7 @@ def mission(
     if seed < 0:
         raise ConfigError(f"--seed must be >= 0 (got {seed})")
     inner_loop = _firmware(firmware)
+    frames = video_options(video_fps, video_size)  # checked before anything flies
     if mcap:
         from tetherland.optional import require
 
@@ -149,10 +159,7 @@ def mission(
     default = "mission" if how.name == "tethered" else "perching"
     target = OutputDir(out or default_output(sc.name, default), overwrite=overwrite)
     view = _start_live(sc, live_speed, live_port, live_rate, json) if live else None
-    with Progress(
-        SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
-        console=console, transient=True, disable=json,
-    ) as progress:  # fmt: skip
+    with run_progress(json) as progress:
         task = progress.add_task("planning", total=None)
         holder: dict[str, Any] = {}
 
@@ -185,7 +192,10 @@ def mission(
             raise typer.Exit(1)
         progress.update(task, description="writing results")
         with target.staging() as staging:
-            files = save_run(result, staging, video=video, listed_as=target.path)
+            files = save_run(
+                result, staging, video=video, listed_as=target.path, video_options=frames,
+                on_frame=frame_progress(progress),
+            )  # fmt: skip
             if mcap and result.log is not None:
                 add_mcap(result, staging, files, target.path)
         files = {k: target.path / v.name for k, v in files.items()}

@@ -6,20 +6,26 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
 from tetherland.campaign.replay import Replay
 from tetherland.campaign.replay import replay as replay_run
 from tetherland.campaign.report import CampaignReport
 from tetherland.cli.common import (
+    DEFAULT_VIDEO_SIZE,
+    VIDEO_FPS,
     JsonOption,
     McapOption,
     OverwriteOption,
+    VideoFpsOption,
     VideoOption,
+    VideoSizeOption,
     console,
     default_output,
+    frame_progress,
     outcome_text,
     perturbation_text,
+    run_progress,
+    video_options,
 )
 from tetherland.cli.mission import add_mcap
 from tetherland.io import OutputDir, dumps_json
@@ -38,6 +44,8 @@ def replay(
     overwrite: OverwriteOption = False,
     json: JsonOption = False,
     video: VideoOption = False,
+    video_fps: VideoFpsOption = VIDEO_FPS,
+    video_size: VideoSizeOption = DEFAULT_VIDEO_SIZE,
     mcap: McapOption = False,
 ) -> None:
     """Fly run RUN_ID of a campaign again, exactly as the campaign did (its scenario and
@@ -50,6 +58,7 @@ def replay(
     """
     campaign = CampaignReport.load(directory)  # one line if it holds no campaign
     campaign.spec.run(run_id)  # ... or no such run, before anything is written
+    frames = video_options(video_fps, video_size)
     if mcap:
         from tetherland.optional import require
 
@@ -58,19 +67,19 @@ def replay(
     target = None
     if campaign.spec.job == "mission":
         target = OutputDir(out or default_output(name, f"replay-{run_id}"), overwrite=overwrite)
-    with Progress(
-        SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
-        console=console, transient=True, disable=json,
-    ) as progress:  # fmt: skip
+    files: dict[str, Path] = {}
+    with run_progress(json) as progress:
         progress.add_task(f"replaying {run_id}", total=None)
         result = replay_run(directory, run_id)
-    files: dict[str, Path] = {}
-    if target is not None and result.result is not None:
-        with target.staging() as staging:
-            files = save_run(result.result, staging, video=video, listed_as=target.path)
-            if mcap and result.result.log is not None:
-                add_mcap(result.result, staging, files, target.path)
-        files = {k: target.path / v.name for k, v in files.items()}
+        if target is not None and result.result is not None:
+            with target.staging() as staging:
+                files = save_run(
+                    result.result, staging, video=video, listed_as=target.path,
+                    video_options=frames, on_frame=frame_progress(progress),
+                )  # fmt: skip
+                if mcap and result.result.log is not None:
+                    add_mcap(result.result, staging, files, target.path)
+            files = {k: target.path / v.name for k, v in files.items()}
     if json:
         doc = {
             "run_id": run_id, "identical": result.identical,

@@ -194,6 +194,9 @@ def run_mission(
     log = runner.run(flight.duration, initial_state=flight.initial_state,
                      rotor_speeds=flight.rotor_speeds)  # fmt: skip
     wall = time.perf_counter() - wall0
+    # judged (and drawn, exported) as the log file holds it: `judge` on the saved run
+    # gives this verdict exactly
+    log = log.at_storage_precision()
     t_end = float(log["t"][-1]) if len(log) else 0.0
     record = how.record(plan, flight, t_end, replace(base, wall_time_s=wall))
     return RunResult(how.name, record, judge(log, record), log, plan, flight, scenario, belief)

@@ -12,12 +12,16 @@ from __future__ import annotations
 import zipfile
 import zlib
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tetherland.io import atomic_write_json, to_jsonable
 from tetherland.methods import get_method
 from tetherland.runs.closed_loop import RunResult
 from tetherland.sim import SimLog
 from tetherland.verdict import RECORD_FILE, RunRecord, RunRecordError, Verdict, judge
+
+if TYPE_CHECKING:
+    from tetherland.sim.video import FrameProgress, VideoOptions
 
 LOG_FILE = "log.npz"
 SUMMARY_FILE = "summary.json"
@@ -29,8 +33,13 @@ def save_run(
     *,
     video: bool = False,
     listed_as: str | Path | None = None,
+    video_options: VideoOptions | None = None,
+    on_frame: FrameProgress | None = None,
 ) -> dict[str, Path]:
     """Write every file of ``result`` into ``directory`` (which must exist and be writable).
+
+    With ``video``, ``mission.mp4`` is rendered with ``video_options`` (default
+    :class:`~tetherland.sim.render.VideoOptions`), calling ``on_frame`` after each frame.
 
     Returns the written files by role; ``summary.json`` lists them too, under
     ``listed_as`` (default ``directory``): the directory they will live in when
@@ -52,8 +61,9 @@ def save_run(
             from tetherland.sim.render import render_log
 
             files["video"] = render_log(
-                result.log, out / "mission.mp4", scenario=result.plant_scenario
-            ).path
+                result.log, out / "mission.mp4", scenario=result.plant_scenario,
+                options=video_options, progress=on_frame,
+            ).path  # fmt: skip
     write_summary(result.summary, files, listed_as if listed_as is not None else out)
     return files
 

@@ -6,6 +6,13 @@ is first imported, so the variable must be set before. Videos are written with
 imageio-ffmpeg, atomically. The camera frames the slope, the anchor, the landing point,
 the start pad and the flown path, seen from the side of the slope's fall line. The
 engaged cable is the tendon; a disengaged hook is drawn from the attachment point to the hook point.
+
+A video from a log draws the logged poses at the video's frame times only (one
+renderer, frames piped to ffmpeg as they are drawn). Without a GPU, OpenGL rasterises on
+the CPU (Mesa llvmpipe): shadows, reflections, the skybox and multisampling would cost
+4-6x the plain image, so videos leave them out unless ``detail`` is asked for; the sky
+is then filled in where nothing was drawn (the pixels left at the cleared black: every
+lit surface has some ambient light).
 """
 
 from __future__ import annotations
@@ -26,18 +33,33 @@ from tetherland.io import atomic_path
 from tetherland.sim.log import SimLog
 from tetherland.sim.mjcf import SceneLayout
 from tetherland.sim.plant import Plant
+from tetherland.sim.video import (
+    DEFAULT_FPS,
+    DEFAULT_SIZE,
+    FPS_RANGE,
+    SIZE_RANGE,
+    FrameProgress,
+    VideoOptions,
+)
 
-DEFAULT_FPS = 30
-DEFAULT_SIZE = (640, 480)
-"""Video width and height [px] (multiples of 16 for the H.264 encoder)."""
+_ENCODER_PARAMS = ["-preset", "veryfast"]
+"""x264: about half the CPU of the default preset, files a few percent larger."""
 CAMERA_AZIMUTH_OFFSET_DEG = 30.0
 """Camera heading: looking along y_A, turned this much to face the slope."""
 CAMERA_ELEVATION_DEG = -18.0
 _HOOK_RGBA = np.array([0.95, 0.85, 0.2, 1.0], dtype=np.float32)
+_SKY_RGB = np.array([196, 212, 240], dtype=np.uint8)
+"""Sky colour of a plain image (between the skybox's horizon and zenith colours)."""
+_COSTLY_FLAGS = (
+    mujoco.mjtRndFlag.mjRND_SHADOW,
+    mujoco.mjtRndFlag.mjRND_REFLECTION,
+    mujoco.mjtRndFlag.mjRND_SKYBOX,
+)
 
 
 class RenderUnavailableError(TetherlandError, RuntimeError):
     """No OpenGL context can be created (offscreen) or no display exists (viewer)."""
+
 
 
 @dataclass(frozen=True)
@@ -91,6 +113,9 @@ class SceneRenderer:
         Image size [px].
     camera : mujoco.MjvCamera, optional
         Default: :func:`framing_camera`.
+    detail : bool
+        Draw shadows, reflections, the skybox and multisampled edges (several times the
+        cost of the plain image without a GPU).
 
     Raises
     ------
@@ -104,10 +129,15 @@ class SceneRenderer:
         width: int = DEFAULT_SIZE[0],
         height: int = DEFAULT_SIZE[1],
         camera: mujoco.MjvCamera | None = None,
+        detail: bool = False,
     ) -> None:
         self.plant = plant
         self.camera = framing_camera(plant.layout) if camera is None else camera
+        self.detail = detail
         _check_offscreen_backend()
+        quality = plant.model.vis.quality
+        samples = quality.offsamples
+        quality.offsamples = samples if detail else 0  # read when the context is made
         try:
             self._renderer = mujoco.Renderer(plant.model, height=height, width=width, max_geom=500)
         except Exception as err:  # GL backends raise a variety of types
@@ -116,6 +146,8 @@ class SceneRenderer:
                 f"cannot create an offscreen OpenGL context (MUJOCO_GL={gl}): {err}. On a "
                 "machine without a display, start Python with MUJOCO_GL=egl (or osmesa)"
             ) from None
+        finally:
+            quality.offsamples = samples
         self._opt = mujoco.MjvOption()
         self._opt.geomgroup[:] = [1, 1, 1, 0, 0, 0]  # collision-only (3) and sites hidden
         self._opt.sitegroup[:] = [1, 0, 0, 0, 0, 0]
@@ -136,9 +168,16 @@ class SceneRenderer:
         plant = self.plant
         r = self._renderer
         r.update_scene(plant.data, camera=self.camera, scene_option=self._opt)
+        if not self.detail:
+            flags = r.scene.flags
+            for flag in _COSTLY_FLAGS:
+                flags[flag] = 0
         if not plant.cable_engaged:
             self._draw_hook()
-        return r.render().copy()
+        image = r.render().copy()
+        if not self.detail:
+            image[~image.any(axis=2)] = _SKY_RGB
+        return image
 
     def _draw_hook(self) -> None:
         scene = self._renderer.scene
@@ -189,17 +228,26 @@ def _frame_rows(t: FloatArray, fps: float, speed: float) -> FloatArray:
     return np.clip(np.searchsorted(t, times + 1e-9, side="right") - 1, 0, len(t) - 1)
 
 
+def _video_writer(path: str | Path, fps: float):
+    import imageio.v2 as imageio
+
+    return imageio.get_writer(
+        path, format="FFMPEG", fps=fps, codec="libx264", quality=7, macro_block_size=2,
+        ffmpeg_params=_ENCODER_PARAMS,
+    )  # fmt: skip
+
+
 def render_log(
     log: SimLog,
     path: str | Path,
     *,
     scenario: Scenario | None = None,
-    fps: float = DEFAULT_FPS,
-    speed: float = 1.0,
-    width: int = DEFAULT_SIZE[0],
-    height: int = DEFAULT_SIZE[1],
+    options: VideoOptions | None = None,
+    progress: FrameProgress | None = None,
+    detail: bool = False,
 ) -> VideoInfo:
-    """Replay a log into an mp4 (one frame per 1/fps of video, ``speed`` x real time).
+    """Replay a log into an mp4: the logged pose at each frame time (one frame per
+    1/fps of video, ``options.speed`` x real time), never the ticks in between.
 
     Parameters
     ----------
@@ -209,28 +257,34 @@ def render_log(
         Output ``.mp4`` file, written atomically.
     scenario
         Default: the scenario recorded in the log.
+    options
+        Frame rate, size and speed (default :class:`VideoOptions`).
+    progress
+        Called after each frame with (frames done, frames in all).
+    detail
+        See :class:`SceneRenderer`.
     """
-    import imageio.v2 as imageio
-
-    if fps <= 0 or speed <= 0:
-        raise ValueError("fps and speed must be positive")
+    opts = VideoOptions() if options is None else options
     scenario = scenario_of_log(log) if scenario is None else scenario
     plant = Plant(scenario)
-    rows = _frame_rows(log.t, fps, speed)
+    rows = _frame_rows(log.t, opts.fps, opts.speed)
     qpos = np.column_stack((log["p_W"], log["q_WB"]))
     hook = log["hook"]
     camera = framing_camera(plant.layout, log["p_W"])
-    with SceneRenderer(plant, width, height, camera) as renderer, atomic_path(path) as tmp:
-        writer = imageio.get_writer(
-            tmp, format="FFMPEG", fps=fps, codec="libx264", quality=7, macro_block_size=16
-        )
+    with (
+        SceneRenderer(plant, opts.width, opts.height, camera, detail) as renderer,
+        atomic_path(path) as tmp,
+    ):
+        writer = _video_writer(tmp, opts.fps)
         try:
-            for i in rows:
+            for done, i in enumerate(rows, start=1):
                 plant.show_pose(qpos[i], bool(hook[i] == 1))
                 writer.append_data(renderer.render())
+                if progress is not None:
+                    progress(done, len(rows))
         finally:
             writer.close()
-    return VideoInfo(Path(path), len(rows), fps, width, height)
+    return VideoInfo(Path(path), len(rows), opts.fps, opts.width, opts.height)
 
 
 class VideoRecorder:
@@ -251,16 +305,12 @@ class VideoRecorder:
         height: int = DEFAULT_SIZE[1],
         camera: mujoco.MjvCamera | None = None,
     ) -> None:
-        import imageio.v2 as imageio
-
         self.path = Path(path)
         self.fps, self._period = fps, speed / fps
         self._renderer = SceneRenderer(plant, width, height, camera)
         self._tmp_ctx = atomic_path(self.path)
         self._tmp = self._tmp_ctx.__enter__()
-        self._writer = imageio.get_writer(
-            self._tmp, format="FFMPEG", fps=fps, codec="libx264", quality=7, macro_block_size=16
-        )
+        self._writer = _video_writer(self._tmp, fps)
         self._next = 0.0
         self.frames = 0
         self._size = (width, height)
@@ -353,7 +403,7 @@ def main(argv: list[str] | None = None) -> int:
             view_log(log, speed=args.speed)
             return 0
         out = args.output or args.log.with_suffix(".mp4")
-        info = render_log(log, out, fps=args.fps, speed=args.speed)
+        info = render_log(log, out, options=VideoOptions(fps=args.fps, speed=args.speed))
     except (TetherlandError, OSError, ValueError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
@@ -366,9 +416,15 @@ if __name__ == "__main__":
 
 
 __all__ = [
+    "DEFAULT_FPS",
+    "DEFAULT_SIZE",
+    "FPS_RANGE",
+    "SIZE_RANGE",
+    "FrameProgress",
     "RenderUnavailableError",
     "SceneRenderer",
     "VideoInfo",
+    "VideoOptions",
     "VideoRecorder",
     "framing_camera",
     "has_display",

@@ -136,8 +136,8 @@ def tick_series(
     Parameters
     ----------
     log : SimLog
-        Rows with at least the runner's base columns (the derived link angles are
-        recomputed from the pose, so a live row without them works the same).
+        Rows with at least the runner's base columns (the derived link angles are taken
+        as the log holds them, or recomputed from the pose for a live row without them).
     scenario : Scenario
         Geometry (anchor, cable attachment) and the rotor thrust coefficient.
     nominal : NominalValues, optional
@@ -151,7 +151,10 @@ def tick_series(
     r_att = np.asarray(v.cable_attachment, dtype=float)
     nominal = nominal or NominalValues.empty(n)
     q, p = log["q_WB"], log["p_W"]
-    phi, delta = link_angles_from_log(log, p_A=geo.p_A, R_WA=geo.R_WA, r_att_B=r_att)
+    if "link_phi" in log and "link_delta" in log:
+        phi, delta = log["link_phi"], log["link_delta"]
+    else:
+        phi, delta = link_angles_from_log(log, p_A=geo.p_A, R_WA=geo.R_WA, r_att_B=r_att)
     _, theta, psi = robot_angles(q, geo.R_WA, phi, delta)
     est_link = log["est_link"]
     est_q = log["est_q_WB"]
