@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
+import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -44,7 +45,7 @@ from tetherland.models.planar import (
     parametric_rk4_step,
     planar_flat_inputs,
 )
-from tetherland.planning import codec
+from tetherland.planning import codec, kernels
 from tetherland.planning.shooting import DENSE_STEP, HeldInputMotion, HeldInputSimulator
 from tetherland.planning.spline import rest_to_rest
 
@@ -159,16 +160,56 @@ class TrajectorySamples:
         )  # fmt: skip
 
 
+@functools.cache
+def _planar_step() -> ca.Function:
+    """The CasADi RK4 step of (6.20) (built once per process)."""
+    return parametric_rk4_step()
+
+
 class PlanarSimulator(HeldInputSimulator):
     """Integrates (6.20) with f'' held on each interval, in fixed RK4 substeps.
 
-    ``run``/``restart`` take the model constants ``PlanarParams.coefficients``. The
-    CasADi chains are compiled once per length and reused (keep one simulator for
-    repeated plans, as :class:`~tetherland.planning.Planner` does).
+    ``run``/``restart`` take the model constants ``PlanarParams.coefficients`` and run
+    the compiled kernels :func:`~tetherland.planning.kernels.held_input_run` and
+    :func:`~tetherland.planning.kernels.held_input_restart`; the CasADi chains of the
+    base class on the same RK4 step are their reference.
     """
 
     def __init__(self) -> None:
-        super().__init__(parametric_rk4_step())
+        super().__init__(_planar_step())
+
+    def run(
+        self, c: FloatArray, times: FloatArray, x0: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        h = np.ascontiguousarray(np.diff(times), dtype=float)
+        return kernels.held_input_run(
+            np.ascontiguousarray(x0, dtype=float), np.ascontiguousarray(U, dtype=float), h,
+            sub, np.ascontiguousarray(c, dtype=float),
+        )  # fmt: skip
+
+    def restart(
+        self, c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        h = np.ascontiguousarray(np.diff(times), dtype=float)
+        return kernels.held_input_restart(
+            np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(U, dtype=float), h,
+            sub, np.ascontiguousarray(c, dtype=float),
+        )  # fmt: skip
+
+
+class _CompiledRhs:
+    """The rotor-form right-hand side (6.20) of :func:`kernels.rotor_rhs_columns` as a
+    :data:`~tetherland.planning.shooting.NumpyRhs` (the reference is
+    :meth:`ExtendedPlanarModel.rhs`)."""
+
+    def __init__(self, coefficients: FloatArray) -> None:
+        self.c = np.ascontiguousarray(coefficients, dtype=float)
+
+    def __call__(self, x: FloatArray, u: FloatArray) -> FloatArray:
+        """x' (12, n) of states (12, n) under inputs (4, n)."""
+        return kernels.rotor_rhs_columns(
+            np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(u, dtype=float), self.c
+        )
 
 
 class Trajectory(ABC):
@@ -212,7 +253,6 @@ class Trajectory(ABC):
             x[outside, 2:4] = 0.0
             x[outside, 8:12] = 0.0
             u[outside] = 0.0
-        d = self.model.derivatives(x.T)
         return TrajectorySamples(
             t=t,
             phi=phi,
@@ -222,8 +262,25 @@ class Trajectory(ABC):
             thrust_rates=x[:, 8:12],
             thrust_accels=u,
             f_R=x[:, 4:8].sum(axis=1),
-            tension=np.asarray(d["tension"]),
+            tension=np.asarray(self.model.tension(x.T)),
         )
+
+    def states_at(self, times: ArrayLike) -> FloatArray:
+        """Rotor-form extended states (n, 12) at ``times`` [s], held outside [0, T] (rates
+        zero): the states of :meth:`sample` without the output's higher derivatives (what
+        the checks need)."""
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        x = self._states(np.clip(t, 0.0, self.duration))
+        outside = (t < 0.0) | (t > self.duration)
+        if np.any(outside):
+            x[outside, 2:4] = 0.0
+            x[outside, 8:12] = 0.0
+        return x
+
+    def _states(self, t: FloatArray) -> FloatArray:
+        """States (n, 12) for times in [0, T] (a kind may do this cheaper than
+        :meth:`_evaluate`)."""
+        return self._evaluate(t)[2]
 
     def output(self, t: float) -> OutputDerivatives:
         """y^bd(t) = [phi, 0, theta_A, psi*] with derivatives (4th order for phi, delta)."""
@@ -315,8 +372,8 @@ class ShootingTrajectory(Trajectory):
         # Dense table: the state at every substep of every interval (substeps no longer
         # than DENSE_STEP), integrated from the node states with the input held.
         self._motion = _motion or HeldInputMotion(
-            simulator or PlanarSimulator(), self.params.coefficients, self.model.rhs,
-            times, X, U, substeps,
+            simulator or PlanarSimulator(), self.params.coefficients,
+            _CompiledRhs(self.params.coefficients), times, X, U, substeps,
         )  # fmt: skip
         self.times, self.X, self.U = self._motion.times, self._motion.X, self._motion.U
 
@@ -334,7 +391,7 @@ class ShootingTrajectory(Trajectory):
         params = meta.params
         motion = HeldInputMotion.simulate(
             simulator or PlanarSimulator(), params.coefficients,
-            ExtendedPlanarModel(params).rhs, times, x0, U,
+            _CompiledRhs(params.coefficients), times, x0, U,
         )  # fmt: skip
         return cls(meta, motion.times, motion.X, motion.U, _motion=motion)
 
@@ -344,6 +401,9 @@ class ShootingTrajectory(Trajectory):
         phi = np.stack((x[0], x[2], d["phi_ddot"], d["phi_dddot"], d["phi_ddddot"]), axis=1)
         theta = np.stack((x[1], x[3], d["theta_ddot"], d["theta_dddot"], d["theta_ddddot"]), axis=1)
         return phi, theta, x.T.copy(), u.T.copy()
+
+    def _states(self, t: FloatArray) -> FloatArray:
+        return self._motion.states(t)[0].T.copy()
 
     def _rows(self) -> FloatArray:
         return self.times
