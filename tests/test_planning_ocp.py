@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -16,6 +18,7 @@ from tetherland.planning import (
     SolverSettings,
     SolveStatus,
     build_ocp,
+    stagewise,
 )
 
 SOLVERS = ("fatrop", "ipopt")
@@ -135,17 +138,23 @@ def test_problem_validation():
         )  # fmt: skip
 
 
+@pytest.mark.skipif(not stagewise.available(), reason="no C compiler")
 def test_jit_compiled_solver_finds_the_same_optimum(tmp_path, monkeypatch):
-    """SolverSettings.jit compiles the NLP's functions to C: same iterates, same optimum,
-    and no compiler files left in the working directory."""
-    monkeypatch.chdir(tmp_path)
+    """SolverSettings.jit compiles the NLP's interval functions to C: same iterates, same
+    optimum, no compiler files left in the working directory (the library goes to the
+    cache directory)."""
+    work, cache = tmp_path / "work", tmp_path / "cache"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    monkeypatch.setenv(stagewise.CACHE_ENV, str(cache))
     tr = MultipleShooting(20, "rk4", 1)
-    plain = OcpSolver(tr, SolverSettings("fatrop", tol=1e-9)).solve(double_integrator(v_max=1.3))
-    jit = OcpSolver(tr, SolverSettings("fatrop", tol=1e-9, jit=True)).solve(
-        double_integrator(v_max=1.3)
-    )
+    settings = SolverSettings("fatrop", tol=1e-9, jit=False)
+    plain = OcpSolver(tr, settings).solve(double_integrator(v_max=1.3))
+    solver = OcpSolver(tr, replace(settings, jit=True))
+    jit = solver.solve(double_integrator(v_max=1.3))
+    assert solver.compiled and len(list(cache.iterdir())) == 1
     assert plain.success and jit.success
     assert jit.iterations == plain.iterations
     np.testing.assert_allclose(jit.U, plain.U, atol=1e-10)
     assert jit.X[1:-1, 1].max() <= 1.3 + 1e-6
-    assert list(tmp_path.iterdir()) == []
+    assert list(work.iterdir()) == []
