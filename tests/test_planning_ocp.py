@@ -138,6 +138,29 @@ def test_problem_validation():
         )  # fmt: skip
 
 
+def test_with_numbers_validates_what_it_changes():
+    """with_numbers checks the numbers it is given (their sizes, finiteness, the bounds
+    they pair with) and keeps the statement."""
+    problem = double_integrator(v_max=1.3)
+    other = problem.with_numbers(x0=[0.5, 0.0], duration=2.0)
+    assert other.structure_key == problem.structure_key
+    np.testing.assert_array_equal(other.x0, [0.5, 0.0])
+    assert other.duration == 2.0 and problem.duration == 1.0
+    for numbers, match in (
+        ({"x0": [0.0, np.nan]}, "NaN"),
+        ({"x0": [0.0]}, "x0 must have 2"),
+        ({"duration": -1.0}, "duration"),
+        ({"x_lb": [2.0, 2.0], "x_ub": [1.0, 1.0]}, "x_lb > x_ub"),
+        ({"u_lb": [1.0], "u_ub": [0.0]}, "u_lb > u_ub"),
+        ({"path_lb": [2.0]}, "path_lb > path_ub"),
+        ({"p_value": [1.0, np.inf]}, "finite"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            problem.with_numbers(**numbers)
+    with pytest.raises(TypeError, match="unexpected"):
+        problem.with_numbers(x=[0.0])
+
+
 @pytest.mark.skipif(not stagewise.available(), reason="no C compiler")
 def test_jit_compiled_solver_finds_the_same_optimum(tmp_path, monkeypatch):
     """SolverSettings.jit compiles the NLP's interval functions to C: same iterates, same

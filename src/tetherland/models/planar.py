@@ -251,10 +251,7 @@ def planar_terms(
         "theta_ddot": ddtheta,
         "phi_dddot": -a1 * sp * dphi - a2 * ss * ds * F + a2 * cs * dF,
         "theta_dddot": dtau / c.inertia,
-        "tension": F * ss
-        - c.mass * c.gravity * sp
-        + c.mass * c.length * dphi**2
-        + c.mass * (a * dtheta**2 + b * ddtheta),  # (4.21)
+        "tension": _tension(F, ss, sp, dphi, dtheta, ddtheta, a, b, c),
     }
     if ddF is not None:
         dds = ddphi + ddtheta
@@ -268,6 +265,28 @@ def planar_terms(
         )
         out["theta_ddddot"] = ddtau / c.inertia
     return out
+
+
+def _tension(
+    F: Any, ss: Any, sp: Any, dphi: Any, dtheta: Any, ddtheta: Any, a: Any, b: Any, c: Any
+) -> Any:
+    """f_L (4.21) from f_R, sin(s), sin(phi), the rates, theta_A'' and the arms (a, b)."""
+    return (
+        F * ss
+        - c.mass * c.gravity * sp
+        + c.mass * c.length * dphi**2
+        + c.mass * (a * dtheta**2 + b * ddtheta)
+    )
+
+
+def planar_tension(
+    phi: Any, theta: Any, dphi: Any, dtheta: Any, F: Any, tau: Any, c: Any, ops: SimpleNamespace
+) -> Any:
+    """The tension f_L (4.21) of :func:`planar_terms` alone (no jerks or snaps) [N]."""
+    s = phi + theta
+    cs, ss = ops.cos(s), ops.sin(s)
+    a, b = _arms(cs, ss, c.offset)
+    return _tension(F, ss, ops.sin(phi), dphi, dtheta, tau / c.inertia, a, b, c)
 
 
 def offset_arms(phi: Any, theta: Any, r0: tuple[Any, Any], ops: SimpleNamespace) -> tuple[Any, Any]:
@@ -539,7 +558,11 @@ class ExtendedPlanarModel:
         closed form, exact with the attachment offset (what :meth:`derivatives` returns as
         ``tension``, without the jerks and snaps)."""
         x = np.asarray(x, dtype=float)
-        return rotor_form_terms(x, None, self.params, NUMPY)["tension"]
+        p = self.params
+        f, row = x[THRUSTS], p.torque_row
+        F = f[0] + f[1] + f[2] + f[3]
+        tau = row[0] * f[0] + row[1] * f[1] + row[2] * f[2] + row[3] * f[3]
+        return planar_tension(x[0], x[1], x[2], x[3], F, tau, p, NUMPY)
 
     def wrench(self, x: ArrayLike) -> FloatArray:
         """[f_R, tau_y, f_R', tau_y'] of a rotor-form state [N, N m, N/s, N m/s]."""

@@ -176,7 +176,7 @@ class ManeuverSpec:
         """f_L at the start: of the start hover, or of ``start_state`` [N] (computed once)."""
         if self.start_state is None:
             return self.hover("start")[1]
-        return float(self.model.derivatives(self.start_state)["tension"])
+        return float(self.model.tension(self.start_state))
 
     def remainder(self, x0: ArrayLike, elapsed: float) -> ManeuverSpec:
         """The rest of this maneuver from the state ``x0`` reached ``elapsed`` s after its
