@@ -7,6 +7,7 @@ import pytest
 
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
+from tetherland.models.integrators import rk4
 from tetherland.models.planar import ExtendedPlanarModel, offset_derivatives, parametric_rk4_step
 from tetherland.planning import (
     ManeuverSpec,
@@ -14,7 +15,6 @@ from tetherland.planning import (
     PlanStatus,
     PolynomialTrajectory,
     ShootingTrajectory,
-    kernels,
     load_trajectory,
     trajectory_from_csv,
 )
@@ -142,8 +142,9 @@ def test_derivatives_are_consistent_with_finite_differences(ocp, spline, rng):
 
 def test_compiled_resimulation_equals_the_casadi_chains(rng):
     """The planner's re-simulation kernels (through all intervals, and restarted at every
-    node) follow the CasADi RK4 chains of the same model step by step, and the compiled
-    right-hand side is the model's numpy one (offset included)."""
+    node) follow the CasADi RK4 chains of the same model step by step, and its compiled
+    single steps are the generic RK4 on the model's numpy right-hand side (offset
+    included)."""
     params = ManeuverSpec.from_scenario(SCENARIO).params
     assert params.has_offset
     model = ExtendedPlanarModel(params)
@@ -160,10 +161,9 @@ def test_compiled_resimulation_equals_the_casadi_chains(rng):
     ):
         assert a.shape == (N, sub, 12)
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
-    x = X.T
-    u = rng.normal(scale=5.0, size=(4, N + 1))
-    np.testing.assert_allclose(kernels.rotor_rhs_columns(x, u, c), model.rhs(x, u), rtol=1e-13,
-                               atol=1e-13)  # fmt: skip
+    x, u, h = X.T, rng.normal(scale=5.0, size=(4, N + 1)), rng.uniform(0.0, 2e-3, N + 1)
+    np.testing.assert_allclose(fast.advance(c, model.rhs, x, u, h), rk4(model.rhs, x, u, h),
+                               rtol=1e-13, atol=1e-13)  # fmt: skip
 
 
 def test_check_samples_are_the_trajectorys_samples(ocp, rng):

@@ -160,14 +160,18 @@ class PlanarParams:
         )
 
     @classmethod
-    def from_scenario(cls, scenario: Scenario, heading: float = 0.0) -> PlanarParams:
+    def from_scenario(
+        cls, scenario: Scenario, heading: float = 0.0, geometry: LandingGeometry | None = None
+    ) -> PlanarParams:
         """The scenario's vehicle on its taut link of length l + s: the cable stretched by
         the landed hover's tension (:attr:`LandingGeometry.link_length`, docs/theory.md
-        section 4.2; l for an inextensible cable)."""
+        section 4.2; l for an inextensible cable). ``geometry``: the scenario's
+        :class:`LandingGeometry` when the caller has it (computed otherwise)."""
         v = scenario.vehicle
+        geometry = geometry or LandingGeometry.from_scenario(scenario)
         return cls.from_matrices(
             v.mass,
-            LandingGeometry.from_scenario(scenario).link_length,
+            geometry.link_length,
             v.inertia,
             RotorLayout.from_config(v).allocation,
             heading,

@@ -8,8 +8,8 @@ with the input held, in the project's one RK4 (:func:`tetherland.models.integrat
 * :func:`held_input_run` and :func:`held_input_restart`: the state after every substep of
   every interval, integrated through all intervals from the initial state (the planner's
   independent re-simulation) or restarted at every node (a solution read from a file);
-* :func:`rotor_rhs_columns`: the right-hand side for many states at once (the partial
-  RK4 step of a dense sample).
+* :func:`rk4_rows`: one RK4 step from each of many states (the partial step of a dense
+  sample).
 
 Each costs microseconds where the same integration through CasADi or numpy costs
 milliseconds of conversions and small-array overhead. The plain references are the
@@ -121,16 +121,12 @@ def interval_ends(
 
 
 @njit(cache=True)
-def rotor_rhs_columns(x: np.ndarray, u: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """x' (12, n) of the states ``x`` (12, n) under the inputs ``u`` (4, n) (rotor form)."""
-    n = x.shape[1]
-    out = np.empty((12, n))
-    xi, ui, oi = np.empty(12), np.empty(4), np.empty(12)
-    for j in range(n):
-        xi[:] = x[:, j]
-        ui[:] = u[:, j]
-        _rotor_rhs(xi, ui, c, oi)
-        out[:, j] = oi
+def rk4_rows(x: np.ndarray, u: np.ndarray, h: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """One RK4 step of length h[i] [s] from every state x[i] (n, 12) under u[i] (n, 4)."""
+    out = x.copy()
+    work = np.empty((5, 12))
+    for i in range(x.shape[0]):
+        _rk4_into(out[i], u[i], h[i], c, work)
     return out
 
 

@@ -195,9 +195,12 @@ class ReplanSettings:
         )  # fmt: skip
 
 
-def trajectory_meta(scenario: Scenario, spec: ManeuverSpec) -> TrajectoryMeta:
-    """The :class:`TrajectoryMeta` of a scenario's maneuver."""
-    geo = LandingGeometry.from_scenario(scenario)
+def trajectory_meta(
+    scenario: Scenario, spec: ManeuverSpec, geometry: LandingGeometry | None = None
+) -> TrajectoryMeta:
+    """The :class:`TrajectoryMeta` of a scenario's maneuver (``geometry``: the scenario's
+    :class:`LandingGeometry` when the caller has it)."""
+    geo = geometry or LandingGeometry.from_scenario(scenario)
     p = spec.params
     return TrajectoryMeta(
         scenario=scenario.name,
@@ -332,8 +335,9 @@ class Planner:
         """
         cfg = scenario.planner
         method = method or cfg.method
-        spec = ManeuverSpec.from_scenario(scenario, maneuver)
-        meta = trajectory_meta(scenario, spec)
+        geometry = LandingGeometry.from_scenario(scenario)
+        spec = ManeuverSpec.from_scenario(scenario, maneuver, geometry)
+        meta = trajectory_meta(scenario, spec, geometry)
         base = PlanResult(
             status=PlanStatus.FAILED, message="", maneuver=spec.maneuver, method=method, spec=spec
         )

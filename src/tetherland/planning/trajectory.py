@@ -46,7 +46,12 @@ from tetherland.models.planar import (
     planar_flat_inputs,
 )
 from tetherland.planning import codec, kernels
-from tetherland.planning.shooting import DENSE_STEP, HeldInputMotion, HeldInputSimulator
+from tetherland.planning.shooting import (
+    DENSE_STEP,
+    HeldInputMotion,
+    HeldInputSimulator,
+    NumpyRhs,
+)
 from tetherland.planning.spline import rest_to_rest
 
 FORMAT_VERSION = codec.FORMAT_VERSION
@@ -169,10 +174,11 @@ def _planar_step() -> ca.Function:
 class PlanarSimulator(HeldInputSimulator):
     """Integrates (6.20) with f'' held on each interval, in fixed RK4 substeps.
 
-    ``run``/``restart`` take the model constants ``PlanarParams.coefficients`` and run
-    the compiled kernels :func:`~tetherland.planning.kernels.held_input_run` and
-    :func:`~tetherland.planning.kernels.held_input_restart`; the CasADi chains of the
-    base class on the same RK4 step are their reference.
+    ``run``/``restart``/``advance`` take the model constants ``PlanarParams.coefficients``
+    and run the compiled kernels :func:`~tetherland.planning.kernels.held_input_run`,
+    :func:`~tetherland.planning.kernels.held_input_restart` and
+    :func:`~tetherland.planning.kernels.rk4_rows`; the CasADi chains of the base class on
+    the same RK4 step, and the model's numpy right-hand side, are their references.
     """
 
     def __init__(self) -> None:
@@ -187,6 +193,14 @@ class PlanarSimulator(HeldInputSimulator):
             sub, np.ascontiguousarray(c, dtype=float),
         )  # fmt: skip
 
+    def advance(
+        self, c: FloatArray, rhs: NumpyRhs, x: FloatArray, u: FloatArray, h: FloatArray
+    ) -> FloatArray:
+        return kernels.rk4_rows(
+            np.ascontiguousarray(x.T, dtype=float), np.ascontiguousarray(u.T, dtype=float),
+            np.ascontiguousarray(h, dtype=float), np.ascontiguousarray(c, dtype=float),
+        ).T  # fmt: skip
+
     def restart(
         self, c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
     ) -> FloatArray:
@@ -195,21 +209,6 @@ class PlanarSimulator(HeldInputSimulator):
             np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(U, dtype=float), h,
             sub, np.ascontiguousarray(c, dtype=float),
         )  # fmt: skip
-
-
-class _CompiledRhs:
-    """The rotor-form right-hand side (6.20) of :func:`kernels.rotor_rhs_columns` as a
-    :data:`~tetherland.planning.shooting.NumpyRhs` (the reference is
-    :meth:`ExtendedPlanarModel.rhs`)."""
-
-    def __init__(self, coefficients: FloatArray) -> None:
-        self.c = np.ascontiguousarray(coefficients, dtype=float)
-
-    def __call__(self, x: FloatArray, u: FloatArray) -> FloatArray:
-        """x' (12, n) of states (12, n) under inputs (4, n)."""
-        return kernels.rotor_rhs_columns(
-            np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(u, dtype=float), self.c
-        )
 
 
 class Trajectory(ABC):
@@ -372,8 +371,8 @@ class ShootingTrajectory(Trajectory):
         # Dense table: the state at every substep of every interval (substeps no longer
         # than DENSE_STEP), integrated from the node states with the input held.
         self._motion = _motion or HeldInputMotion(
-            simulator or PlanarSimulator(), self.params.coefficients,
-            _CompiledRhs(self.params.coefficients), times, X, U, substeps,
+            simulator or PlanarSimulator(), self.params.coefficients, self.model.rhs,
+            times, X, U, substeps,
         )  # fmt: skip
         self.times, self.X, self.U = self._motion.times, self._motion.X, self._motion.U
 
@@ -391,7 +390,7 @@ class ShootingTrajectory(Trajectory):
         params = meta.params
         motion = HeldInputMotion.simulate(
             simulator or PlanarSimulator(), params.coefficients,
-            _CompiledRhs(params.coefficients), times, x0, U,
+            ExtendedPlanarModel(params).rhs, times, x0, U,
         )  # fmt: skip
         return cls(meta, motion.times, motion.X, motion.U, _motion=motion)
 
