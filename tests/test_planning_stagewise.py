@@ -144,6 +144,19 @@ def test_landing_plan_equals_an_ipopt_solve_of_the_plain_statement():
     assert plan.verification.min_tension == pytest.approx(again.min_tension, abs=1e-4)
 
 
+def test_an_unwritable_cache_falls_back_to_casadis_functions(tmp_path, monkeypatch):
+    """A cache directory that cannot be created (here: below a file) costs a warning, not
+    the plan."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    monkeypatch.setenv(stagewise.CACHE_ENV, str(blocker / "cache"))
+    solver = OcpSolver(MultipleShooting(7, "rk4", 1), SolverSettings("fatrop"))
+    with pytest.warns(UserWarning, match="compiled NLP functions unavailable"):
+        sol = solver.solve(_double_integrator())
+    assert sol.success
+    np.testing.assert_allclose(sol.X[-1], [1.0, 0.0], atol=1e-8)
+
+
 def test_without_the_compiler_the_solver_evaluates_casadis_functions(monkeypatch):
     monkeypatch.setattr(stagewise, "available", lambda: False)
     solver = OcpSolver(MultipleShooting(20, "rk4", 1), SolverSettings("fatrop"))

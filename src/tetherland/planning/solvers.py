@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import enum
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -294,7 +295,7 @@ class OcpSolver:
         self._solvers: dict[tuple[str, bool], ca.Function] = {}
         self._bounds: dict[tuple[str, bytes], dict[str, FloatArray]] = {}
         self._calls: dict[tuple[str, bool], _BufferedCall] = {}
-        self._libraries: dict[str, Path] = {}
+        self._libraries: dict[str, Path | None] = {}
 
     def transcript(self, problem: OcpProblem) -> Transcript:
         """The (cached) transcript of ``problem``'s structure."""
@@ -315,17 +316,29 @@ class OcpSolver:
         t0 = time.perf_counter()
         opts = self.settings.options(transcript, warm)
         name = f"ocp_{self.settings.name}"
-        if self.compiled:
-            if transcript.structure_key not in self._libraries:
-                self._libraries[transcript.structure_key] = stagewise.library(transcript)
+        library = self._library(transcript) if self.compiled else None
+        if library is not None:
             del opts["expand"]  # a library holds no expressions
-            lib = str(self._libraries[transcript.structure_key])
-            solver = ca.nlpsol(name, self.settings.name, lib, opts)
+            solver = ca.nlpsol(name, self.settings.name, str(library), opts)
         else:
             solver = ca.nlpsol(name, self.settings.name, transcript.nlp, opts)
         self._solvers[key] = solver
         self._calls[key] = _BufferedCall(solver)
         return solver, time.perf_counter() - t0
+
+    def _library(self, transcript: Transcript) -> Path | None:
+        """The compiled NLP of the transcript, or None (with a warning) when it cannot be
+        built: the solver then evaluates CasADi's own functions."""
+        key = transcript.structure_key
+        if key not in self._libraries:
+            try:
+                self._libraries[key] = stagewise.library(transcript)
+            except (OSError, RuntimeError) as err:
+                warnings.warn(
+                    f"compiled NLP functions unavailable ({err}); using CasADi's", stacklevel=3
+                )
+                self._libraries[key] = None
+        return self._libraries[key]
 
     def prepare(self, problem: OcpProblem, warm: bool = False) -> float:
         """Build (or find) the solver for ``problem``'s structure; returns the build time [s]."""
