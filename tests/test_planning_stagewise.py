@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 
 from tetherland.config import load_scenario
+from tetherland.models.planar import parametric_rk4_step
 from tetherland.planning import ManeuverSpec, Planner, build_ocp, stagewise
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.planner import trajectory_meta
+from tetherland.planning.shooting import HeldInputSimulator
 from tetherland.planning.solvers import OcpSolver, SolverSettings
 from tetherland.planning.transcription import MultipleShooting
 from tetherland.planning.verify import verify
@@ -122,6 +124,33 @@ def test_compiled_fatrop_takes_the_plain_statements_iterates(extra):
     np.testing.assert_allclose(compiled.X, plain.X, rtol=0, atol=1e-9 * np.abs(plain.X).max())
     np.testing.assert_allclose(compiled.U, plain.U, rtol=0, atol=1e-9 * np.abs(plain.U).max())
     assert compiled.cost == pytest.approx(plain.cost, rel=1e-12)
+
+
+@needs_compiler
+def test_plan_equals_the_plan_of_casadis_functions_and_chains(monkeypatch):
+    """The landing plan as the planner now makes it (compiled NLP functions, compiled
+    re-simulation) against the same plan with CasADi's own NLP functions and the CasADi
+    RK4 chains for the re-simulation (the evaluation before this change): the same
+    iterations, nodes, dense trajectory and check to rounding."""
+    sc = load_scenario("slope50")
+    fast = Planner()
+    plan = fast.plan(sc)
+    monkeypatch.setattr(stagewise, "available", lambda: False)
+    reference = Planner()
+    reference.simulator = HeldInputSimulator(parametric_rk4_step())  # type: ignore[assignment]
+    before = reference.plan(sc)
+    assert plan.success and before.success
+    assert plan.iterations == before.iterations
+    for a, b in ((plan.solution.X, before.solution.X), (plan.solution.U, before.solution.U)):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * np.abs(b).max())
+    t = np.linspace(0.0, plan.spec.duration, 801)
+    np.testing.assert_allclose(plan.trajectory.states_at(t), before.trajectory.states_at(t),
+                               rtol=1e-9, atol=1e-9)  # fmt: skip
+    v, w = plan.verification, before.verification
+    assert v.ok and w.ok
+    for name in ("min_tension", "tension_margin", "min_rotor_thrust", "max_rotor_thrust",
+                 "surface_margin"):  # fmt: skip
+        assert getattr(v, name) == pytest.approx(getattr(w, name), abs=1e-9)
 
 
 def test_landing_plan_equals_an_ipopt_solve_of_the_plain_statement():
