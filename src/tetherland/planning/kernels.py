@@ -5,9 +5,9 @@ with the input held, in the project's one RK4 (:func:`tetherland.models.integrat
 
 * :func:`interval_ends`: every shooting interval from its node, the shooting gaps of the
   online re-plan's node check (:func:`tetherland.planning.verify.verify_nodes`);
-* :func:`held_input_run` and :func:`held_input_restart`: the state after every substep of
-  every interval, integrated through all intervals from the initial state (the planner's
-  independent re-simulation) or restarted at every node (a solution read from a file);
+* :func:`held_input`: the state after every substep of every interval, integrated
+  through all intervals from the initial state (the planner's independent
+  re-simulation) or restarted at every node (a solution read from a file);
 * :func:`rk4_rows`: one RK4 step from each of many states (the partial step of a dense
   sample).
 
@@ -75,35 +75,20 @@ def _rk4_into(x: np.ndarray, u: np.ndarray, h: float, c: np.ndarray, work: np.nd
 
 
 @njit(cache=True)
-def held_input_restart(
-    X: np.ndarray, U: np.ndarray, h: np.ndarray, sub: int, c: np.ndarray
+def held_input(
+    X: np.ndarray, U: np.ndarray, h: np.ndarray, sub: int, c: np.ndarray, through: bool
 ) -> np.ndarray:
     """States (N, sub, 12) after every one of ``sub`` equal RK4 substeps of every interval
-    k, started at its node X[k] with U[k] held for h[k] [s] (c = ``PlanarParams.coefficients``)."""
+    k with U[k] held for h[k] [s] (c = ``PlanarParams.coefficients``): each interval
+    started at its node X[k], or ``through`` all intervals from X[0] (each starting where
+    the previous one ended)."""
     N = U.shape[0]
     ends = np.empty((N, sub, 12))
     work = np.empty((5, 12))
-    x = np.empty(12)
+    x = X[0].copy()
     for k in range(N):
-        x[:] = X[k]
-        dt = h[k] / sub
-        for j in range(sub):
-            _rk4_into(x, U[k], dt, c, work)
-            ends[k, j] = x
-    return ends
-
-
-@njit(cache=True)
-def held_input_run(
-    x0: np.ndarray, U: np.ndarray, h: np.ndarray, sub: int, c: np.ndarray
-) -> np.ndarray:
-    """:func:`held_input_restart` integrated through all intervals from ``x0`` (each
-    interval starts where the previous one ended)."""
-    N = U.shape[0]
-    ends = np.empty((N, sub, 12))
-    work = np.empty((5, 12))
-    x = x0.copy()
-    for k in range(N):
+        if not through:
+            x[:] = X[k]
         dt = h[k] / sub
         for j in range(sub):
             _rk4_into(x, U[k], dt, c, work)
@@ -117,7 +102,7 @@ def interval_ends(
 ) -> np.ndarray:
     """States (N, 12) at the end of every interval k, from X[k] with U[k] held for h[k]
     in ``steps`` RK4 steps (rotor form; c = ``PlanarParams.coefficients``)."""
-    return held_input_restart(X, U, h, steps, c)[:, steps - 1].copy()
+    return held_input(X, U, h, steps, c, False)[:, steps - 1].copy()
 
 
 @njit(cache=True)

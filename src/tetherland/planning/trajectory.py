@@ -175,8 +175,7 @@ class PlanarSimulator(HeldInputSimulator):
     """Integrates (6.20) with f'' held on each interval, in fixed RK4 substeps.
 
     ``run``/``restart``/``advance`` take the model constants ``PlanarParams.coefficients``
-    and run the compiled kernels :func:`~tetherland.planning.kernels.held_input_run`,
-    :func:`~tetherland.planning.kernels.held_input_restart` and
+    and run the compiled kernels :func:`~tetherland.planning.kernels.held_input` and
     :func:`~tetherland.planning.kernels.rk4_rows`; the CasADi chains of the base class on
     the same RK4 step, and the model's numpy right-hand side, are their references.
     """
@@ -187,11 +186,21 @@ class PlanarSimulator(HeldInputSimulator):
     def run(
         self, c: FloatArray, times: FloatArray, x0: FloatArray, U: FloatArray, sub: int
     ) -> FloatArray:
-        h = np.ascontiguousarray(np.diff(times), dtype=float)
-        return kernels.held_input_run(
-            np.ascontiguousarray(x0, dtype=float), np.ascontiguousarray(U, dtype=float), h,
-            sub, np.ascontiguousarray(c, dtype=float),
-        )  # fmt: skip
+        return self._held(c, times, np.asarray(x0)[None, :], U, sub, through=True)
+
+    def restart(
+        self, c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        return self._held(c, times, X, U, sub, through=False)
+
+    @staticmethod
+    def _held(
+        c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int, through: bool
+    ) -> FloatArray:
+        def arr(a: ArrayLike) -> FloatArray:
+            return np.ascontiguousarray(a, dtype=float)
+
+        return kernels.held_input(arr(X), arr(U), arr(np.diff(times)), sub, arr(c), through)
 
     def advance(
         self, c: FloatArray, rhs: NumpyRhs, x: FloatArray, u: FloatArray, h: FloatArray
@@ -200,15 +209,6 @@ class PlanarSimulator(HeldInputSimulator):
             np.ascontiguousarray(x.T, dtype=float), np.ascontiguousarray(u.T, dtype=float),
             np.ascontiguousarray(h, dtype=float), np.ascontiguousarray(c, dtype=float),
         ).T  # fmt: skip
-
-    def restart(
-        self, c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
-    ) -> FloatArray:
-        h = np.ascontiguousarray(np.diff(times), dtype=float)
-        return kernels.held_input_restart(
-            np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(U, dtype=float), h,
-            sub, np.ascontiguousarray(c, dtype=float),
-        )  # fmt: skip
 
 
 class Trajectory(ABC):
