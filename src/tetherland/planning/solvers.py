@@ -4,6 +4,11 @@
 for every later problem of the same structure (same symbolic statement, transcription and
 solver settings): only numbers change between solves. A solve can be warm-started from
 a previous :class:`OcpSolution` (primal values, and the multipliers for IPOPT).
+
+fatrop evaluates the NLP through its interval functions compiled to C
+(:mod:`.stagewise`, :attr:`SolverSettings.jit`); IPOPT, the fallback, through CasADi's
+own functions of the flat NLP (the plain statement). Both are called on numpy arrays
+(CasADi's buffer interface), without converting the numbers to CasADi matrices.
 """
 
 from __future__ import annotations

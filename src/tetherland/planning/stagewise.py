@@ -16,15 +16,16 @@ are built from the derivatives of *one* interval, evaluated for all intervals by
 * ``terminal(x, p) -> (E, h)`` likewise.
 
 The stage-wise NLP (gaps, initial state, path constraints, terminal constraints; see
-:mod:`.transcription`) is block-sparse with dense blocks per interval: the Jacobian's
-blocks [-dF/dz, I] and dg/dz, the Hessian block-diagonal in the z_k. The functions
-carry the names and signatures of CasADi's ``nlpsol`` (``nlp``, ``nlp_f``, ``nlp_g``,
-``nlp_grad_f``, ``nlp_jac_g``, ``nlp_hess_l`` with the gradient of the Lagrangian as
-fatrop needs it), so that a library of them *is* the NLP for
-``casadi.nlpsol(name, "fatrop", library)``. The generated C holds each interval
-function once and a loop over the intervals, so it compiles in seconds whatever N; the
-library is kept in :func:`cache_dir` under the hash of its source, so a structure is
-compiled once per machine.
+:mod:`.transcription`) is block-sparse: the Jacobian has the blocks [-dF/dz, I] and
+dg/dz per interval with their structural zeros (the pattern of CasADi's own Jacobian,
+so fatrop detects the same stages), the Hessian dense blocks on the diagonal, one per
+z_k. The functions carry the names and signatures of CasADi's ``nlpsol`` (``nlp``,
+``nlp_f``, ``nlp_g``, ``nlp_grad_f``, ``nlp_jac_g``, ``nlp_hess_l`` with the gradient of
+the Lagrangian as fatrop needs it, ``nlp_grad`` for the multipliers after a solve), so
+that a library of them *is* the NLP for ``casadi.nlpsol(name, "fatrop", library)``.
+The generated C holds each interval function once and a loop over the intervals, so it
+compiles in seconds whatever N; the library is kept in :func:`cache_dir` under the hash
+of its source, so a structure is compiled once per machine.
 
 :func:`functions` are MX functions that also run without a compiler (CasADi's virtual
 machine, slower than the flat SX functions); tests check them against CasADi's own
@@ -48,7 +49,8 @@ from tetherland.planning.transcription import Transcript
 
 COMPILER = "gcc"
 FLAGS = ("-O2", "-fPIC", "-shared")
-"""C compiler and flags of the library (gcc ``-O2``: about 2 s for the landing OCP)."""
+"""C compiler and flags of the library (gcc ``-O2``: about 1.5 s of CPU for the landing
+OCP, any N)."""
 CACHE_ENV = "TETHERLAND_CACHE_DIR"
 """Environment variable naming the cache directory (default: ``~/.cache/tetherland``)."""
 
@@ -68,9 +70,13 @@ def cache_dir() -> Path:
     return Path(base) / "tetherland"
 
 
-def _sx_function(name: str, inputs: dict[str, ca.SX], outputs: list[ca.SX]) -> ca.Function:
-    """An SX function with dense outputs that share their common subexpressions."""
-    out = ca.cse([ca.densify(o) for o in outputs])
+def _sx_function(
+    name: str, inputs: dict[str, ca.SX], outputs: list[ca.SX], sparse: int = 0
+) -> ca.Function:
+    """An SX function whose outputs share their common subexpressions, dense but for the
+    last ``sparse`` ones (which keep their structural zeros)."""
+    n = len(outputs) - sparse
+    out = ca.cse([ca.densify(o) for o in outputs[:n]] + outputs[n:])
     return ca.Function(
         name, list(inputs.values()), out, list(inputs), [f"o{i}" for i in range(len(out))]
     )
@@ -78,7 +84,7 @@ def _sx_function(name: str, inputs: dict[str, ca.SX], outputs: list[ca.SX]) -> c
 
 def _interval_functions(tr: Transcript) -> dict[str, ca.Function]:
     """The SX functions of one interval and of the terminal node with their derivatives
-    (z = (x, u); Jacobians and Hessians dense)."""
+    (z = (x, u); the Jacobians with their structural zeros, the Hessians dense)."""
     S, E = tr.stage, tr.terminal
     x, u = ca.SX.sym("x", tr.nx), ca.SX.sym("u", tr.nu)
     t, p, T = ca.SX.sym("t"), ca.SX.sym("p", S.size1_in(3)), ca.SX.sym("T")
@@ -93,10 +99,12 @@ def _interval_functions(tr: Transcript) -> dict[str, ca.Function]:
     lam = {"lam_f": lam_f, "lam_gap": lam_gap, "lam_path": lam_path}
     node = {"x": x, "p": p}
     return {
-        "stage_jac": _sx_function("stage_jac", stage, [F, g, ca.jacobian(F, z), ca.jacobian(g, z)]),
+        "stage_jac": _sx_function(
+            "stage_jac", stage, [F, g, ca.jacobian(F, z), ca.jacobian(g, z)], sparse=2
+        ),
         "stage_grad": _sx_function("stage_grad", stage, [ca.gradient(L, z)]),
         "stage_lag": _sx_function("stage_lag", {**stage, **lam}, [grad, H]),
-        "terminal_jac": _sx_function("terminal_jac", node, [h, ca.jacobian(h, x)]),
+        "terminal_jac": _sx_function("terminal_jac", node, [h, ca.jacobian(h, x)], sparse=1),
         "terminal_grad": _sx_function("terminal_grad", node, [ca.gradient(E_cost, x)]),
         "terminal_lag": _sx_function(
             "terminal_lag", {**node, "lam_f": lam_f, "lam_h": lam_h}, [grad_N, H_N]
@@ -112,7 +120,7 @@ def functions(tr: Transcript) -> dict[str, ca.Function]:
     N, nx, nu = tr.nodes, tr.nx, tr.nu
     nz = nx + nu
     S, E = tr.stage, tr.terminal
-    n_p, ng, nh = S.size1_in(3), S.size1_out(2), E.size1_out(1)
+    n_p, ng = S.size1_in(3), S.size1_out(2)
     fs = _interval_functions(tr)
     w, P = ca.MX.sym("x", tr.n_w), ca.MX.sym("p", n_p + 1 + nx)
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(tr.equality))
@@ -133,11 +141,11 @@ def functions(tr: Transcript) -> dict[str, ca.Function]:
     E_cost, h = E(x_N, p)
     f, g = ca.sum2(L) + E_cost, rows(F, path, h)
     grad_f = ca.vertcat(ca.vec(fs["stage_grad"].map(N)(*args)), fs["terminal_grad"](x_N, p))
-    # Jacobian: the dense blocks' values gathered into compressed-column order
+    # Jacobian: the blocks' nonzeros gathered into compressed-column order
     F_j, path_j, JF, Jg = fs["stage_jac"].map(N)(*args)
     h_j, Jh = fs["terminal_jac"](x_N, p)
-    pattern, order = _jacobian_pattern(tr, ng, nh)
-    values = [ca.vec(-JF), ca.vec(Jg[:, nz:]), ca.vec(Jh), ca.DM.ones((N + 1) * nx)]
+    pattern, order = _jacobian_pattern(tr, fs)
+    values = [-JF.nz[:], Jg[:, nz:].nz[:], Jh.nz[:], ca.DM.ones((N + 1) * nx)]
     jac = ca.sparsity_cast(ca.vertcat(*values)[order.tolist()], pattern)
     # Hessian of lam_f f + lam_g . g: block-diagonal in the z_k and x_N
     end = 2 * nx + (N - 1) * (nx + ng)
@@ -181,12 +189,16 @@ def functions(tr: Transcript) -> dict[str, ca.Function]:
     }
 
 
-def _jacobian_pattern(tr: Transcript, ng: int, nh: int) -> tuple[ca.Sparsity, np.ndarray]:
-    """The constraint Jacobian's sparsity (dense blocks) and the permutation that puts the
-    values [vec(-dF/dz) per interval, vec(dg/dz) for intervals 1.., vec(dh/dx_N), ones]
-    into its compressed-column order."""
+def _jacobian_pattern(
+    tr: Transcript, fs: dict[str, ca.Function]
+) -> tuple[ca.Sparsity, np.ndarray]:
+    """The constraint Jacobian's sparsity and the permutation that puts the values
+    [nonzeros of -dF/dz per interval, of dg/dz for intervals 1.., of dh/dx_N, ones (the
+    identities)] into its compressed-column order."""
     N, nx, nu = tr.nodes, tr.nx, tr.nu
     nz = nx + nu
+    JF, Jg = fs["stage_jac"].sparsity_out(2), fs["stage_jac"].sparsity_out(3)
+    Jh = fs["terminal_jac"].sparsity_out(1)
     # row offsets of the blocks
     gap_row, path_row = np.zeros(N, dtype=int), np.zeros(N, dtype=int)
     row = 0
@@ -198,20 +210,20 @@ def _jacobian_pattern(tr: Transcript, ng: int, nh: int) -> tuple[ca.Sparsity, np
             row += nx
         else:
             path_row[k] = row
-            row += ng
+            row += Jg.size1()
     term_row = row
     rows, cols = [], []
 
-    def block(r0: int, c0: int, nr: int, nc: int) -> None:
-        r, c = np.meshgrid(np.arange(nr), np.arange(nc), indexing="ij")
-        rows.append((r0 + r).reshape(-1, order="F"))
-        cols.append((c0 + c).reshape(-1, order="F"))
+    def block(r0: int, c0: int, sp: ca.Sparsity) -> None:
+        r, c = sp.get_triplet()  # in compressed-column order
+        rows.append(r0 + np.asarray(r, dtype=int))
+        cols.append(c0 + np.asarray(c, dtype=int))
 
     for k in range(N):
-        block(gap_row[k], k * nz, nx, nz)
+        block(gap_row[k], k * nz, JF)
     for k in range(1, N):
-        block(path_row[k], k * nz, ng, nz)
-    block(term_row, N * nz, nh, nx)
+        block(path_row[k], k * nz, Jg)
+    block(term_row, N * nz, Jh)
     eye = np.arange(nx)
     for k in range(N):  # gap_k: + x_{k+1}
         rows.append(gap_row[k] + eye)
