@@ -7,7 +7,7 @@ SCENARIO ?= slope50
 OUT    ?= out/$(SCENARIO)/mission
 JOBS   ?= 2
 
-.PHONY: demo test test-fast lint bench clean help
+.PHONY: demo test test-fast lint bench reference clean help
 
 help:
 	@echo "make demo   - the main job: the full simulated mission on '$(SCENARIO)' (outputs in $(OUT))"
@@ -15,6 +15,7 @@ help:
 	@echo "make test-fast - the suite without tests marked slow"
 	@echo "make bench  - print benchmark numbers"
 	@echo "make lint   - ruff"
+	@echo "make reference - regenerate docs/reference/ (scenario fields, log columns) from the code"
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -23,7 +24,7 @@ $(STAMP): pyproject.toml
 	@touch $(STAMP)
 
 demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/tetherland mission $(SCENARIO) --out $(OUT)
+	MPLBACKEND=Agg $(BIN)/tetherland mission $(SCENARIO) --out $(OUT) --overwrite
 
 test: $(STAMP)
 	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS)
@@ -36,6 +37,9 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	@for b in benchmarks/bench_*.py; do echo "== $$b"; MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python $$b || exit 1; done
+
+reference: $(STAMP)
+	$(BIN)/python -m tetherland.docs_reference
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .ruff_cache .hypothesis

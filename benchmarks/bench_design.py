@@ -24,7 +24,7 @@ from tetherland.config import load_scenario
 from tetherland.design import feasibility_map, search_designs
 from tetherland.planning import Planner
 
-RELAXED = ["mission.hook_overshoot=0.05", "tether.capture_radius=0.05"]
+RELAXED = ["mission.hooking.overshoot=0.05", "tether.capture_radius=0.05"]
 CASES = ((50.0, []), (80.0, []), (90.0, []), (90.0, RELAXED), (94.0, RELAXED))
 
 

@@ -81,7 +81,8 @@ def main() -> None:
     planners = Planners()
     # first run in a process: numba loads its cached kernels (see bench_control_estimation)
     t0 = time.perf_counter()
-    run_mission(with_overrides(scenario, ["mission.max_duration=1"]), planners=planners)
+    short = ["mission.abort_time=0.5", "mission.safe_hover_time=0.5"]  # a 1 s run
+    run_mission(with_overrides(scenario, short), planners=planners)
     print(f"warm-up (kernel loading, planner compilation): {time.perf_counter() - t0:.2f} s")
     for controller in controllers:
         rtfs = []

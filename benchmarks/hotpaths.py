@@ -104,7 +104,8 @@ def main() -> None:
 
         planners = Planners()
         sc = load_scenario("slope50")
-        run_mission(with_overrides(sc, ["mission.max_duration=2"]), planners=planners)  # warm-up
+        short = ["mission.abort_time=1", "mission.safe_hover_time=1"]  # a 2 s warm-up run
+        run_mission(with_overrides(sc, short), planners=planners)
         run = Runner.run
         logs = []
 

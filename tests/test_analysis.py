@@ -34,13 +34,8 @@ from tetherland.analysis import (
 )
 from tetherland.config import load_scenario
 from tetherland.errors import SingularityError
-from tetherland.geometry import (
-    Surface,
-    inclined_hover_direction,
-    link_direction,
-    normal_from_slope,
-    surface_frame,
-)
+from tetherland.geometry import inclined_hover_direction, link_direction
+from tetherland.surface import Surface, normal_from_slope, surface_frame
 
 
 def plane(beta_deg: float, mu: float = 0.6, f_N_min: float = 0.0) -> Surface:

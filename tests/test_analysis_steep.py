@@ -18,7 +18,7 @@ from tetherland.analysis import (
     tethered_slope_limit,
 )
 from tetherland.config import load_scenario
-from tetherland.geometry import Surface, surface_frame_from_slope
+from tetherland.surface import Surface, surface_frame_from_slope
 
 # Cable at the CoM, inextensible: the closed forms below are the rigid link's.
 CENTRED = (
@@ -127,9 +127,19 @@ def test_adhesive_pad_holds_the_rest_but_no_hover_exists():
 
 
 def test_binding_reason_rotor_ceiling():
-    t = analyze(load_scenario("slope50", ["surface.slope_deg=10", "vehicle.f_max=2.5"])).tethered
-    assert t.binding is Infeasibility.ROTOR_CEILING
-    assert t.hover_thrust / 4 > 2.5 - 0.25
+    """The landed hover needs more than the free hover's m g where 0 < beta < 2 gamma
+    (cos(beta - gamma)/cos(gamma) > 1), most at beta = gamma: m g / cos(gamma). Rotors whose
+    ceiling f_max - margin lies halfway between m g/4 and m g/(4 cos(gamma)) hover in free
+    flight but not landed there."""
+    gamma = analyze(_scenario(50.0, 0.25)).tethered.gamma
+    m_g = 1.0 * g
+    ceiling = 0.5 * (m_g / 4 + m_g / (4 * math.cos(gamma)))
+    sc = _scenario(math.degrees(gamma), 0.25, f"vehicle.f_max={ceiling + 0.25}")
+    result = analyze(sc)
+    t = result.tethered
+    assert result.hover.ok and t.binding is Infeasibility.ROTOR_CEILING
+    assert t.hover_thrust == pytest.approx(m_g / math.cos(gamma), rel=1e-9)
+    assert t.hover_thrust / 4 > ceiling > m_g / 4
 
 
 def test_binding_reason_offset_torque():

@@ -1,9 +1,11 @@
-"""The import graph is one-way, and the mission logic runs without the simulator.
+"""The import graph is one-way, the simulator knows no robot logic, and the mission logic
+runs without the simulator.
 
-The graph is read from the source (every ``import`` statement, including those inside
-functions; typing-only imports under ``if TYPE_CHECKING:`` are not part of the runtime
-graph). Importing ``a.b.c`` counts as importing its packages ``a.b`` too, since Python
-runs their ``__init__`` first.
+The graph is read from the source: every ``import`` statement, including those inside
+functions and the typing-only ones under ``if TYPE_CHECKING:`` (a cycle hidden behind a
+type hint is still two modules that each need the other to be understood). Importing
+``a.b.c`` counts as importing its packages ``a.b`` too, since Python runs their
+``__init__`` first.
 """
 
 from __future__ import annotations
@@ -35,11 +37,13 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
-def _imports(tree: ast.AST) -> set[str]:
+def _imports(tree: ast.AST, *, type_checking: bool = True) -> set[str]:
+    """Modules imported anywhere in ``tree``; with ``type_checking=False`` not those under
+    ``if TYPE_CHECKING:`` (the runtime imports only)."""
     found: set[str] = set()
 
     def visit(node: ast.AST) -> None:
-        if isinstance(node, ast.If) and _is_type_checking(node):
+        if not type_checking and isinstance(node, ast.If) and _is_type_checking(node):
             for child in node.orelse:
                 visit(child)
             return
@@ -55,13 +59,14 @@ def _imports(tree: ast.AST) -> set[str]:
     return found
 
 
-def import_graph() -> dict[str, set[str]]:
-    """Module -> the tetherland modules it imports (with their parent packages)."""
+def import_graph(*, type_checking: bool = True) -> dict[str, set[str]]:
+    """Module -> the tetherland modules it imports (with their parent packages), typing-only
+    imports included unless ``type_checking`` is False."""
     modules = _modules()
     graph: dict[str, set[str]] = {}
     for name, path in modules.items():
         targets: set[str] = set()
-        for imported in _imports(ast.parse(path.read_text())):
+        for imported in _imports(ast.parse(path.read_text()), type_checking=type_checking):
             parts = imported.split(".")
             for i in range(2, len(parts) + 1):
                 target = ".".join(parts[:i])
@@ -113,6 +118,27 @@ def test_the_cycle_finder_finds_a_cycle():
     assert cycles({"a": {"b"}, "b": set()}) == []
 
 
+def _reachable(graph: dict[str, set[str]], start: list[str]) -> set[str]:
+    seen: set[str] = set()
+    stack = list(start)
+    while stack:
+        for target in graph.get(stack.pop(), ()):
+            if target not in seen:
+                seen.add(target)
+                stack.append(target)
+    return seen
+
+
+def test_typing_only_imports_are_part_of_the_graph():
+    code = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from tetherland.x import Y\n"
+    tree = ast.parse(code)
+    assert "tetherland.x" in _imports(tree)
+    assert "tetherland.x" not in _imports(tree, type_checking=False)
+    runtime, full = import_graph(type_checking=False), import_graph()
+    assert all(runtime[m] <= full[m] for m in runtime)
+    assert any(runtime[m] < full[m] for m in runtime)  # the package has typing-only imports
+
+
 def test_the_module_import_graph_has_no_cycles():
     graph = import_graph()
     assert len(graph) > 50  # the whole package was read
@@ -139,3 +165,18 @@ def test_robot_side_packages_do_not_import_mujoco(package):
     code = f"import sys, {package}; print('mujoco' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+ROBOT_PACKAGES = ("mission", "planning", "control", "estimation")
+
+
+def test_the_simulator_imports_no_robot_logic():
+    """sim/ (the plant, sensors, faults, the runner) reaches none of the robot's packages,
+    directly or through anything it imports: the world the robot is judged in knows nothing
+    of its decisions."""
+    graph = import_graph()
+    sim = [m for m in graph if m == "tetherland.sim" or m.startswith("tetherland.sim.")]
+    assert len(sim) > 10  # every module of the simulator was read
+    reached = {m.split(".")[1] for m in _reachable(graph, sim)}
+    assert "models" in reached and "config" in reached  # the vehicle model and the scenario
+    assert reached.isdisjoint(ROBOT_PACKAGES), sorted(reached & set(ROBOT_PACKAGES))

@@ -31,6 +31,7 @@ from tetherland.campaign.executors import DaskExecutor, InlineExecutor, LocalPoo
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry
+from tetherland.randomness import RandomSource
 
 EXE = str(Path(sys.executable).with_name("tetherland"))
 
@@ -86,6 +87,22 @@ def test_unknown_method_and_bad_counts_are_rejected():
         make_executor("mpi", 2)
 
 
+def test_firmware_campaigns_are_checked_and_reach_every_job(tmp_path: Path):
+    with pytest.raises(ConfigError, match="--firmware must be one of betaflight"):
+        CampaignSpec(scenario={}, runs=1, firmware="px4")
+    with pytest.raises(ConfigError, match="--firmware flies missions"):
+        CampaignSpec(scenario={}, runs=1, firmware="betaflight", job="analysis")
+    own = CampaignSpec(scenario={}, runs=2, methods=("tethered",))
+    fw = CampaignSpec(scenario={}, runs=2, methods=("tethered",), firmware="betaflight")
+    assert "firmware" not in own.to_dict()  # campaigns without firmware keep their fingerprint
+    assert fw.fingerprint() != own.fingerprint()  # --resume never mixes the two
+    assert [r.seed for r in fw.expand()] == [r.seed for r in own.expand()]  # the same runs
+    from tetherland.campaign.run import pending_jobs
+
+    jobs, total = pending_jobs(fw, open_store(fw, tmp_path / "fw"))
+    assert total == 2 and {job.firmware for job in jobs} == {"betaflight"}
+
+
 @pytest.mark.parametrize(
     ("k", "n", "lo", "hi"),
     [
@@ -139,16 +156,16 @@ def test_summary_counts_each_run_once_and_errors_as_failures():
 
 
 def test_perturbations_are_seeded_and_within_ranges(slope50):
-    p1 = sample_perturbation(slope50, np.random.default_rng(3))
-    assert p1 == sample_perturbation(slope50, np.random.default_rng(3))
-    assert p1 != sample_perturbation(slope50, np.random.default_rng(4))
+    p1 = sample_perturbation(slope50, RandomSource(3))
+    assert p1 == sample_perturbation(slope50, RandomSource(3))
+    assert p1 != sample_perturbation(slope50, RandomSource(4))
     c = slope50.perturbation
-    assert abs(p1.mass_factor - 1) <= c.mass_rel and abs(p1.slope_error_deg) <= c.slope_deg
+    assert abs(p1.mass_factor - 1) <= c.mass_rel and abs(p1.slope_error_deg) <= c.slope_error_deg
     assert c.noise_scale_min <= p1.noise_scale <= c.noise_scale_max
 
 
 def test_belief_differs_from_truth_and_stays_consistent(slope50):
-    p = sample_perturbation(slope50, np.random.default_rng(11))
+    p = sample_perturbation(slope50, RandomSource(11))
     plant, belief = apply_perturbation(slope50, p)
     assert plant.vehicle == slope50.vehicle  # the plant keeps the true model
     assert belief.vehicle.mass == pytest.approx(slope50.vehicle.mass * p.mass_factor)
@@ -159,6 +176,70 @@ def test_belief_differs_from_truth_and_stays_consistent(slope50):
     )
     assert g_belief.surface.height(g_belief.p_A) == pytest.approx(slope50.anchor.h_A, abs=1e-9)
     assert 0 < np.linalg.norm(g_belief.p_A - g_true.p_A) < 0.1
+
+
+@pytest.mark.parametrize("name", ["slope50", "pipe60"])
+def test_belief_errors_are_drawn_in_every_direction_within_their_bounds(name):
+    """Over 400 seeds: the anchor error along x_S, y_S and z_S (h_A), the surface offset
+    along its normal and a pipe's radius error stay within their half-widths (defaults
+    1 cm, 5 mm, 2 mm), take both signs and fill the range (uniform draws: the largest of
+    400 is within 1 % of the bound with probability 1 - 0.99^400 > 0.98; the seeds are
+    fixed, so the check is exact)."""
+    truth = load_scenario(name)
+    c = truth.perturbation
+    assert (c.anchor_error, c.surface_offset_error, c.pipe_radius_error) == (0.01, 0.005, 0.002)
+    draws = [sample_perturbation(truth, RandomSource(seed)) for seed in range(400)]
+    columns = {
+        "anchor_x": ([p.anchor_error_S[0] for p in draws], c.anchor_error),
+        "anchor_y": ([p.anchor_error_S[1] for p in draws], c.anchor_error),
+        "anchor_h": ([p.anchor_error_S[2] for p in draws], c.anchor_error),
+        "surface": ([p.surface_offset for p in draws], c.surface_offset_error),
+        "pipe": ([p.pipe_radius_error for p in draws], c.pipe_radius_error),
+    }
+    for what, (values, bound) in columns.items():
+        v = np.asarray(values)
+        if what == "pipe" and name != "pipe60":
+            assert not np.any(v)  # a plane has no radius to get wrong
+            continue
+        assert np.all(np.abs(v) <= bound), what
+        assert v.min() < -0.99 * bound and v.max() > 0.99 * bound, what
+    # every draw is recorded with the run (results.jsonl keeps Perturbation.to_dict())
+    record = draws[0].to_dict()
+    assert {"anchor_error_x_S", "anchor_error_y_S", "anchor_error_z_S", "surface_offset",
+            "pipe_radius_error"} <= set(record)  # fmt: skip
+    assert record["anchor_error_z_S"] == draws[0].anchor_error_S[2]
+
+
+@pytest.mark.parametrize("e_h", [0.004, -0.004])
+def test_belief_differs_from_truth_as_drawn_and_the_plant_keeps_the_truth(e_h):
+    """pipe60 (h_A = 0) with only position errors: the believed top line is 3 mm out along
+    z_S, the radius 2 mm short, the anchor 6 mm down-slope, 5 mm sideways and e_h above the
+    believed surface (a negative height is believed zero: never behind the surface)."""
+    truth = load_scenario("pipe60")
+    assert truth.anchor.h_A == 0.0
+    p = Perturbation(anchor_error_S=(0.006, -0.005, e_h), surface_offset=0.003,
+                     pipe_radius_error=-0.002)  # fmt: skip
+    plant, belief = apply_perturbation(truth, p)
+    g_true, g_belief = LandingGeometry.from_scenario(truth), LandingGeometry.from_scenario(belief)
+    s_true, s_belief = g_true.surface, g_belief.surface
+    np.testing.assert_allclose(s_belief.R_WS, s_true.R_WS, atol=1e-12)  # no tilt drawn
+    assert s_belief.height(s_true.origin) == pytest.approx(-0.003, abs=1e-12)
+    assert belief.surface.pipe_radius == pytest.approx(truth.surface.pipe_radius - 0.002)
+    h_A = max(e_h, 0.0)
+    assert belief.anchor.h_A == pytest.approx(h_A)
+    assert s_belief.height(g_belief.p_A) == pytest.approx(h_A, abs=1e-12)
+    d = g_belief.p_A - g_true.p_A
+    np.testing.assert_allclose(
+        [d @ s_true.x_S, d @ s_true.y_S, d @ s_true.z_S], [0.006, -0.005, 0.003 + h_A],
+        atol=1e-12,
+    )  # fmt: skip
+    # the plant simulates the truth: surface, radius and anchor as given
+    assert plant.surface == truth.surface and plant.anchor == truth.anchor
+    from tetherland.sim import Plant
+
+    model = Plant(plant).model
+    assert model.geom("surface").size[0] == pytest.approx(truth.surface.pipe_radius)
+    np.testing.assert_allclose(model.site("anchor").pos, g_true.p_A, atol=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -187,8 +268,8 @@ def test_believed_slope_is_not_clamped_at_vertical(name, error_deg):
 
 def test_torn_last_line_is_discarded(tmp_path: Path):
     spec = analysis_spec(runs=1, sweep=None)
-    store = open_store(spec, tmp_path)
-    store.append({"run_id": "x", "method": "tethered"})
+    with open_store(spec, tmp_path) as store:
+        store.append({"run_id": "x", "method": "tethered"})
     with open(store.results_path, "a") as fh:
         fh.write('{"run_id": "torn", "meth')
     store = open_store(spec, tmp_path, resume=True)

@@ -119,7 +119,7 @@ def test_mission_plan_refuses_a_hook_drop_too_short_for_the_slope():
     wp = plan.waypoints
     check = hooking_clearance(
         ok, plan.geometry.surface, (wp.hook_start, wp.hook_end), wp.yaw,
-        ok.mission.hooking_clearance,
+        ok.mission.hooking.min_clearance,
     )  # fmt: skip
     assert check.ok and plan.clearance.ok
     assert check.clearance_m == pytest.approx(plan.clearance.clearance_m)

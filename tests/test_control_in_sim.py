@@ -14,10 +14,10 @@ from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Reference
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
+from tetherland.planning.start import plan_start_state
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
 from tetherland.sim import Plant, Runner
-from tetherland.sim.start import plan_start_state
 from tetherland.state import RigidBodyState
 
 pytestmark = pytest.mark.slow

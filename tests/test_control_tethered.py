@@ -182,8 +182,9 @@ def test_dfl_integral_removes_the_offset_of_a_mass_error(scenario, plans, integr
     """A controller believing 5 % too much mass: the integral removes the steady error."""
     traj = plans["landing"]
     track = TrajectoryTrack(traj, 0.0, 500.0)
+    flag = "true" if integral else "false"  # TOML booleans (strict types)
     believed = load_scenario(
-        "slope50", [*CENTRED, "vehicle.mass=1.05", f"controller.tethered.dfl_integral={integral}"]
+        "slope50", [*CENTRED, "vehicle.mass=1.05", f"controller.tethered.dfl_integral={flag}"]
     )
     ctrl = DflController(believed)
     run = simulate_tethered(scenario, ctrl, track.reference, start_state(traj), traj.duration + 6.0)

@@ -27,6 +27,7 @@ from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, StateEstimate
 from tetherland.mission import Phase
 from tetherland.mission.faults import FaultMonitor
+from tetherland.randomness import RandomSource
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.faults import faulty_belief, mocap_outage
 from tetherland.sim.hook import Hook, HookEventKind
@@ -216,7 +217,7 @@ def test_rotor_rule_ignores_the_cable_torque_and_sees_a_missing_rotor(slope50):
     assert found is not None and found.kind is FaultKind.ROTOR
     # it took the low-pass to 1/1.5 of the step (ln 3 time constants) plus the dwell
     cfg = slope50.mission.detection
-    expected = cfg.rotor_filter_time * math.log(3.0) + cfg.rotor_dwell
+    expected = cfg.rotor_torque_time_constant * math.log(3.0) + cfg.rotor_dwell
     assert found.t - 10.0 == pytest.approx(expected, abs=0.01)
     assert mon.cable_torque_B(_hover_estimate(slope50, 0.0, l, 0.0)) == pytest.approx(0.0)
 
@@ -291,10 +292,9 @@ def test_fault_campaign_draws_each_kind_across_the_window(slope50):
         times = []
         for r in mine:
             # as a campaign job draws it: on the perturbed belief of the run's seed
-            _, belief = apply_perturbation(
-                slope50, sample_perturbation(slope50, np.random.default_rng(r.seed))
-            )
-            f = sample_fault(kind, r.fault_slice, belief, np.random.default_rng([r.seed, 15]))
+            random = RandomSource(r.seed)
+            _, belief = apply_perturbation(slope50, sample_perturbation(slope50, random))
+            f = sample_fault(kind, r.fault_slice, belief, random.stream("faults"))
             assert [k.value for k in f.kinds()] == [kind]
             t = fault_time(f)
             if kind in ("anchor", "jam"):

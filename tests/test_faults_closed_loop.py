@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from legacy_random import LegacySource
 from tetherland.config import load_scenario
 from tetherland.runs import run_mission
 from tetherland.verdict import Outcome, RunRecord, judge
@@ -156,7 +157,8 @@ def test_fault_campaign_crashes_now_end_in_a_safe_stop(run_id, phase, reason):
     it crashed and now, with the landing timed differently (lateral release), just before it."""
     from tetherland.campaign.jobs import execute
 
-    record = execute(fault_campaign_job(run_id))
+    job = fault_campaign_job(run_id)
+    record = execute(job, LegacySource(job.run.seed))  # as the campaign drew it
     assert record["status"] == "ok", record["error"]
     assert record["fault"]["phase"] in phase
     verdict = record["verdict"]

@@ -11,7 +11,6 @@ from hypothesis import strategies as st
 
 from tetherland.errors import SingularityError
 from tetherland.geometry import (
-    Surface,
     anchor_for_landing_point,
     anchor_frame,
     hover_cosine,
@@ -22,11 +21,14 @@ from tetherland.geometry import (
     link_direction,
     link_frame,
     link_jacobian,
+    theta_A_from_z_B,
+)
+from tetherland.surface import (
+    Surface,
     normal_from_slope,
     pipe_sag,
     surface_frame,
     surface_frame_from_slope,
-    theta_A_from_z_B,
 )
 
 angles = st.floats(-math.pi, math.pi, allow_nan=False)

@@ -8,13 +8,14 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import tetherland.gym as tg
+from tetherland.config import with_overrides
 from tetherland.errors import ConfigError
-from tetherland.gym.env import OBSERVATION, Outcome, TetheredEnv, estimate_of
+from tetherland.gym.env import OBSERVATION, PRIVILEGED_INFO, Outcome, TetheredEnv, estimate_of
 
 
 @pytest.fixture(scope="module")
 def env():
-    e = gym.make(tg.LANDING_ID)
+    e = gym.make(tg.LANDING_ID, privileged=True)  # the tests read the truth in info
     yield e
     e.close()
 
@@ -120,7 +121,7 @@ def test_the_expert_lands_with_conditions_1_to_5(env, seed):
 
 @pytest.mark.slow
 def test_the_expert_takes_off_to_the_end_hover():
-    env = gym.make(tg.TAKEOFF_ID)
+    env = gym.make(tg.TAKEOFF_ID, privileged=True)
     expert = tg.ExpertPolicy.for_env(env)
     obs, _ = env.reset(seed=0)
     expert.reset()
@@ -150,7 +151,7 @@ def test_idle_rotors_fail_with_a_slack_cable_or_a_crash(env):
 def test_the_expert_lands_under_the_campaign_perturbations():
     """The estimator believes a perturbed vehicle, surface and anchor; the expert still
     meets (1)-(5) (touchdown before the planned end, found by the guarded rule)."""
-    env = gym.make(tg.LANDING_ID, randomize=True)
+    env = gym.make(tg.LANDING_ID, randomize=True, privileged=True)
     info = fly_expert(env, 1)
     assert info["outcome"] == Outcome.LANDED, info
     assert info["t_L"] < env.unwrapped.plan.duration  # the surface was not where believed
@@ -158,7 +159,7 @@ def test_the_expert_lands_under_the_campaign_perturbations():
 
 
 def test_randomised_perturbations_come_from_the_seed():
-    env = TetheredEnv("slope50", randomize=True)
+    env = TetheredEnv("slope50", randomize=True, privileged=True)
     _, a = env.reset(seed=5)
     _, b = env.reset(seed=5)
     _, c = env.reset(seed=6)
@@ -169,6 +170,57 @@ def test_randomised_perturbations_come_from_the_seed():
     ) or env.belief.vehicle.mass == pytest.approx(
         env.scenario.vehicle.mass * c["perturbation"]["mass_factor"]
     )
+    env.close()
+
+
+def test_info_has_no_truth_unless_privileged():
+    """An agent's info: time, outcome, the judged conditions; the true tension and the
+    drawn perturbation only for a privileged env (debugging, asymmetric actor-critic)."""
+    public = TetheredEnv("slope50", randomize=True)
+    privileged = TetheredEnv("slope50", randomize=True, privileged=True,
+                             planner=public.planner)  # fmt: skip
+    a = public.planned_action()
+    for env in (public, privileged):
+        _, info = env.reset(seed=5)
+        infos = [info] + [env.step(a)[4] for _ in range(5)]
+        env.close()
+        keys = set().union(*infos)
+        if env is public:
+            assert keys == {"t", "seed", "outcome"}
+            assert not keys & set(PRIVILEGED_INFO)
+        else:
+            assert keys == {"t", "seed", "outcome", "tension", "perturbation"}
+            assert infos[0]["perturbation"]["mass_factor"] != 1.0
+            assert infos[-1]["tension"] == privileged._plant.tension > 0.0
+    # the landing's end: conditions are public, the judge's measures and times are not
+    shown = public._shown({"t": 1.0, "outcome": "landed", "conditions": {"1": True},
+                           "measures": {"speed": 0.01}, "t_L": 0.5, "t_rest": 0.6,
+                           "tension": 2.0})  # fmt: skip
+    assert shown == {"t": 1.0, "outcome": "landed", "conditions": {"1": True}}
+
+
+def test_the_expert_plans_on_the_belief_not_the_truth():
+    """Changing only the truth of a perturbed env leaves the expert's plan and actions
+    unchanged; an expert given the truth would have planned otherwise. At the next reset
+    the expert takes up the newly drawn belief."""
+    env = TetheredEnv("slope50", randomize=True)
+    obs, _ = env.reset(seed=2)
+    assert env.belief != env.scenario
+    expert = tg.ExpertPolicy.for_env(env)
+    expert.reset()
+    assert expert.scenario == env.belief
+    plan, action = expert.plan.to_csv(), expert(obs)
+    env.scenario = with_overrides(env.scenario, ["surface.slope_deg=55", "vehicle.mass=1.1"])
+    other = tg.ExpertPolicy.for_env(env)
+    other.reset()
+    assert other.plan.to_csv() == plan
+    np.testing.assert_array_equal(other(obs), action)
+    on_truth = tg.ExpertPolicy(env.scenario, planner=env.planner)
+    assert on_truth.plan.to_csv() != plan  # the test would see an expert reading the truth
+    assert tg.ExpertPolicy(env.belief, planner=env.planner).plan.to_csv() == plan
+    env.reset(seed=3)  # another draw: the expert re-plans on it
+    expert.reset()
+    assert expert.scenario == env.belief and expert.plan.to_csv() != plan
     env.close()
 
 

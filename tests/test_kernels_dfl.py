@@ -10,9 +10,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tetherland.config import load_scenario
-from tetherland.control import DflController, dfl_kernels
-from tetherland.control.dfl_model import dfl_function
-from tetherland.control.dfl_terms import dfl_terms_into
+from tetherland.control import DflController
+from tetherland.control.kernels import dfl as dfl_kernels
+from tetherland.control.kernels.dfl_model import dfl_function
+from tetherland.control.kernels.dfl_terms import dfl_terms_into
 from tetherland.rotations import exp_so3, rotmat_to_quat
 
 SEEDS = st.integers(0, 2**32 - 1)
@@ -59,20 +60,22 @@ def test_compiled_dfl_matches_the_reference(controller, seed, first, taut):
     q = rotmat_to_quat(controller.R_WA @ R_AB)
     Y = np.vstack((x[[0, 1, 4, 6]] + rng.normal(0, 0.1, 4), rng.normal(0, 1, (4, 4))))
     state = dfl_kernels.dfl_state()
-    state[0], state[1] = x[10], x[11]
+    state[dfl_kernels.STATE_THRUST], state[dfl_kernels.STATE_THRUST_RATE] = x[10], x[11]
     if not first:  # an earlier update: its time, input and integrals
-        state[2], state[3:7], state[7:11] = 0.998, rng.normal(0, 1, 4), rng.normal(0, 0.1, 4)
+        state[dfl_kernels.STATE_T_LAST] = 0.998
+        state[dfl_kernels.STATE_U] = rng.normal(0, 1, 4)
+        state[dfl_kernels.STATE_INTEGRAL] = rng.normal(0, 0.1, 4)
     tension = rng.uniform(0, 8) if taut else 0.0
     s_ref = state.copy()
     mixer = controller.mixer
     expected = dfl_kernels.dfl_reference(1.0, link, q, x[7:10], Y, tension, s_ref,
                                      controller._par, mixer.layout, mixer.rotors)  # fmt: skip
-    out = np.empty(dfl_kernels.DFL_OUT_WIDTH)
+    out = np.empty(dfl_kernels.OUT_WIDTH)
     dfl_kernels.dfl_into(
         1.0, link, q, x[7:10], Y, tension, state, controller._par, mixer.packed, out
     )
-    ratio = dfl_kernels.DFL_RATIO
+    ratio = dfl_kernels.OUT_RATIO
     np.testing.assert_allclose(out[ratio], expected[ratio], rtol=1e-9, atol=1e-12)
-    assert out[dfl_kernels.DFL_SINGULAR] == expected[dfl_kernels.DFL_SINGULAR]
+    assert out[dfl_kernels.OUT_SINGULAR] == expected[dfl_kernels.OUT_SINGULAR]
     np.testing.assert_allclose(out, expected, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(state, s_ref, rtol=1e-9, atol=1e-9)

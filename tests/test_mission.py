@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from legacy_random import LegacySource
 from tetherland.config import load_scenario, scenario_from_dict, with_overrides
 from tetherland.geometry import LandingGeometry
 from tetherland.mission import TRANSITIONS, Phase
@@ -113,7 +114,7 @@ def test_abort_during_tethered_landing_ends_in_a_safe_state(slope50_run):
 def test_missed_hook_is_retried_then_aborted():
     """A belief with the anchor 0.25 m off (capture radius 0.1 m): every pass misses, the
     supervisor sees no tension when stretching, retries, and aborts after the attempts."""
-    truth = with_overrides(load_scenario("slope50"), ["mission.max_hook_attempts=2"])
+    truth = with_overrides(load_scenario("slope50"), ["mission.hooking.max_attempts=2"])
     geo = LandingGeometry.from_scenario(truth)
     data = truth.model_dump(mode="python")
     off = geo.p_A + 0.25 * geo.surface.y_S  # believed anchor, on the surface, 25 cm aside
@@ -150,8 +151,8 @@ def test_landing_is_robust_to_belief_errors():
 
 def test_a_lagging_link_far_above_the_surface_is_not_taken_for_contact():
     """Campaign run (20 deg, seed 1920885107): a gust and a +5 % mass error made the link
-    lag its reference by more than contact_error_deg near the end of the plan, 5 cm above
-    the surface. Early contact is only believed within contact_gate_deg of phi*."""
+    lag its reference by more than contact.link_lag_deg near the end of the plan, 5 cm above
+    the surface. Early contact is only believed within contact.gate_deg of phi*."""
     from tetherland.campaign.jobs import run_for_campaign
     from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
 
@@ -159,7 +160,7 @@ def test_a_lagging_link_far_above_the_surface_is_not_taken_for_contact():
     truth = load_scenario(
         "slope50", ["surface.slope_deg=20", "tether.length=1.2", "tether.hook_drop=1.0"]
     )
-    perturbation = sample_perturbation(truth, np.random.default_rng(seed))
+    perturbation = sample_perturbation(truth, LegacySource(seed))  # as the campaign drew it
     assert perturbation.mass_factor > 1.04  # the case is the one described above
     plant, belief = apply_perturbation(truth, perturbation)
     verdict = run_for_campaign(plant, belief, perturbation, "tethered", seed)
@@ -177,7 +178,7 @@ def test_release_on_a_wall_with_a_light_believed_mass_does_not_swing_into_it():
 
     seed = 2429995221
     truth = load_scenario("wall90")
-    p = sample_perturbation(truth, np.random.default_rng(seed))
+    p = sample_perturbation(truth, LegacySource(seed))  # as the campaign drew it
     assert p.mass_factor == pytest.approx(0.962, abs=1e-3)  # the premise
     plant, belief = apply_perturbation(truth, p)
     verdict = run_for_campaign(plant, belief, p, "tethered", seed)
@@ -197,13 +198,14 @@ def test_flat_mission_lands_although_the_cable_slackens_on_the_ground():
 
 def _wall90_campaign_run(seed: int):
     """The wall90 campaign's run with per-run ``seed`` (base seed 2026), flown exactly as
-    the campaign flies it (perturbed plant and belief, wind gusts), with its full log."""
+    the campaign flew it (perturbed plant and belief, wind gusts, drawn before the named
+    random streams: :mod:`legacy_random`), with its full log."""
     from tetherland.campaign.jobs import worker_planners
     from tetherland.campaign.perturb import apply_perturbation, sample_perturbation
     from tetherland.sim.disturbances import WindGusts
 
     truth = load_scenario("wall90")
-    p = sample_perturbation(truth, np.random.default_rng(seed))
+    p = sample_perturbation(truth, LegacySource(seed))
     plant, belief = apply_perturbation(truth, p)
     period = 1.0 / plant.controller.rate_hz
     wind: list[WindGusts] = []
@@ -219,7 +221,7 @@ def test_the_unhooking_pass_keeps_off_the_wall():
     """wall90 campaign run 735627880 (tethered-base-00005; the believed wall 0.9 deg off
     and the anchor 6 mm): after a good landing the old reverse pass, 3.5 cm from the
     believed wall at the end of the hooking pass, swung the rotor guards into the wall
-    (23 N at t = 32.5 s). Backing off to mission.unhook_depth first, the frame does not
+    (23 N at t = 32.5 s). Backing off to mission.hooking.unhook_depth first, the frame does not
     touch it at all and the mission ends on the pad."""
     p, result = _wall90_campaign_run(735627880)
     assert abs(p.slope_error_deg) > 0.9  # the premise
@@ -272,7 +274,7 @@ def test_the_landers_pressed_on_a_wall_are_taken_for_contact():
     """wall90 campaign run 375278728 (tethered-base-00056): the landers pressed on the wall
     while the vehicle crept up it at 0.5-1.1 deg/s of link elevation, so the link never
     'stalled' (|rate| < 0.5 deg/s) and the search ended in a safe stop. The creeping link
-    counts as held (mission.contact_creep_rate_deg): contact is confirmed in the guarded
+    counts as held (mission.contact.creep_rate_deg_s): contact is confirmed in the guarded
     descent and the landing meets conditions 1-5."""
     _, result = _wall90_campaign_run(375278728)
     check_success(result)

@@ -12,7 +12,7 @@ from tetherland.control.feedforward import attitude_feedforward
 from tetherland.control.tracking import FreeFlightTracker
 from tetherland.errors import TetherlandError
 from tetherland.interfaces import Controller, ControlMode, Reference, ReferenceSource, StateEstimate
-from tetherland.perching import LanderGeometry, PerchingReference, PerchPhase
+from tetherland.methods.contact_free import LanderGeometry, PerchingReference, PerchPhase
 from tetherland.planning.perching import PerchingPlanner
 from tetherland.rotations import exp_so3, rotation_from_z_and_yaw, rotmat_to_quat, vee
 from tetherland.state import RigidBodyState

@@ -211,10 +211,10 @@ def test_explicit_start_point(planner):
     geo = LandingGeometry.from_scenario(_scenario(30.0))
     x_A = geo.R_WA[:, 0]
     start = geo.p_L + 0.6 * x_A + np.array([0.0, 0.0, 0.5])  # downhill and up, in the plane
-    sc = _scenario(30.0, f"perching.start_position=[{start[0]}, {start[1]}, {start[2]}]")
+    sc = _scenario(30.0, f"perching.hover_position=[{start[0]}, {start[1]}, {start[2]}]")
     traj = planner.plan(sc).require()
     np.testing.assert_allclose(traj.flat_outputs(0.0)[0], start, atol=1e-12)
     off = start + 0.1 * geo.R_WA[:, 1]
-    bad = _scenario(30.0, f"perching.start_position=[{off[0]}, {off[1]}, {off[2]}]")
+    bad = _scenario(30.0, f"perching.hover_position=[{off[0]}, {off[1]}, {off[2]}]")
     with pytest.raises(ConfigError, match="off the vertical plane"):
         planner.plan(bad)

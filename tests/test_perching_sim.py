@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from tetherland import GRAVITY
 from tetherland.analysis import analyze
 from tetherland.config import load_scenario
 from tetherland.interfaces import ControlMode
@@ -75,7 +76,15 @@ def test_perch_on_slope50_slides_off_after_motors_off(run50):
     # ... and slid down once the motors were off: failure for the chapter's reason (6.7)
     assert landing["slip_m"] > 0.05
     assert not landing["conditions"]["5"] and not s["success"]
-    assert s["outcome"] == "landing_conditions" and "5" in s["reason"]
+    assert "landing condition(s)" in s["reason"] and "(5) slip" in s["reason"]
+    # at g (sin 50 - 0.6 cos 50) = 3.7 m/s^2 it leaves the 3 m patch sqrt(2 * 3 / 3.7) =
+    # 1.3 s into the 1.5 s rest and falls onto the ground: the frame hits it (a crash)
+    a = GRAVITY * (math.sin(math.radians(50)) - 0.6 * math.cos(math.radians(50)))
+    t_off = math.sqrt(2 * run50.plant_scenario.surface.extent / a)
+    log = run50.log
+    crash = log["t"][np.argmax(log["frame_force"] > 0.0)]
+    assert s["outcome"] == "crashed"
+    assert crash - landing["rest_interval_s"][0] == pytest.approx(t_off, rel=0.2)
 
 
 def test_both_methods_share_the_summary_layout(run20):

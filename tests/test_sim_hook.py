@@ -159,7 +159,7 @@ def test_teleporting_is_not_a_crossing(plant):
 
 _WALL_DESIGN = [
     "tether.length=0.4", "vehicle.cable_attachment=[0,0,0]", "anchor.h_A=0",
-    "tether.hook_drop=0.34", "tether.capture_radius=0.05", "mission.hook_overshoot=0.05",
+    "tether.hook_drop=0.34", "tether.capture_radius=0.05", "mission.hooking.overshoot=0.05",
 ]  # fmt: skip
 
 
@@ -184,7 +184,7 @@ def directed_plant(request):
 
 def _fly_pass(plant: Plant, across: float, speed: float = 0.3) -> tuple[float, np.ndarray]:
     """Level at hover thrust, the hook point from 0.1 m before the capture disk to
-    ``mission.hook_overshoot`` beyond it along n, ``across`` off the anchor along y_A.
+    ``mission.hooking.overshoot`` beyond it along n, ``across`` off the anchor along y_A.
     Returns the largest frame and lander contact force during the pass [N] and n_W."""
     sc = plant.scenario
     geo = plant.layout.geometry
@@ -198,7 +198,7 @@ def _fly_pass(plant: Plant, across: float, speed: float = 0.3) -> tuple[float, n
     plant.reset(RigidBodyState(p_com, speed * n_W, q, np.zeros(3)), rotor_speeds=np.full(4, w))
     np.testing.assert_allclose(plant.hook.hook_point(plant.attachment_point()), hook0, atol=1e-12)
     touch = 0.0
-    for _ in range(round((0.1 + sc.mission.hook_overshoot) / speed / plant.dt)):
+    for _ in range(round((0.1 + sc.mission.hooking.overshoot) / speed / plant.dt)):
         plant.step()
         touch = max(touch, plant.frame_contact_force + float(np.sum(plant.lander_forces)))
     return touch, n_W
@@ -257,8 +257,8 @@ def test_a_pass_beside_the_capture_disk_misses_along_any_direction(directed_plan
 
 
 def test_hook_point_leads_the_attachment_along_n():
-    """The plant's hook model is mission.hooking's: hook = attachment + hook_drop n."""
-    from tetherland.mission.hooking import hook_offset
+    """The plant's hook model is the one of models.hook: hook = attachment + hook_drop n."""
+    from tetherland.models.hook import hook_offset
 
     n = np.array([-3.0, 0.0, 4.0])  # not unit: the model normalises it
     hook = Hook([1.0, 2.0, 3.0], n, capture_radius=0.05, hook_drop=0.3)

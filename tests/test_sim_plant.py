@@ -13,7 +13,7 @@ from tetherland.config import load_scenario
 from tetherland.errors import SimulationError
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import quat_to_rotmat
-from tetherland.sim.mjcf import SceneLayout, build_mjcf
+from tetherland.sim.mjcf import SENSOR_SLICES, SceneLayout, build_mjcf
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
@@ -73,6 +73,32 @@ def test_lander_tips_form_the_landers_plane(plant, scenario):
     tips = np.array(tips)
     np.testing.assert_allclose(tips[:, 2], -v.h_R, atol=1e-12)
     np.testing.assert_allclose(np.abs(tips[:, :2]), v.lander_half_width, atol=1e-12)
+
+
+def test_the_plant_and_the_robot_place_the_landers_where_the_airframe_says(plant, scenario):
+    """One statement of the lander tips (models.airframe), in one order, for the plant's
+    geoms and touch zones, the robot's contact rule and the contact-free method."""
+    from tetherland.methods.contact_free import LanderGeometry
+    from tetherland.mission.contact import ContactGeometry
+    from tetherland.models.airframe import lander_centres_B, lander_tips_B
+
+    v = scenario.vehicle
+    w, r = v.lander_half_width, v.lander_radius
+    tips = lander_tips_B(w, v.h_R)
+    # lander 0 front left (+x, +y), then counter-clockwise seen from above, 90 deg apart
+    azimuths = np.degrees(np.unwrap(np.arctan2(tips[:, 1], tips[:, 0])))
+    np.testing.assert_allclose(azimuths, [45.0, 135.0, 225.0, 315.0], atol=1e-12)
+    np.testing.assert_allclose(np.hypot(tips[:, 0], tips[:, 1]), math.sqrt(2) * w, rtol=1e-15)
+    np.testing.assert_array_equal(tips[:, 2], -v.h_R)
+    np.testing.assert_allclose(lander_centres_B(w, v.h_R, r) - tips, [[0.0, 0.0, r]] * 4,
+                               atol=1e-15)  # fmt: skip
+    for i, tip in enumerate(tips):
+        centre = plant.model.geom(f"lander{i}").pos
+        np.testing.assert_allclose(centre - [0.0, 0.0, r], tip, atol=1e-12)
+        np.testing.assert_array_equal(plant.model.site(f"lander{i}_zone").pos, centre)
+    np.testing.assert_array_equal(ContactGeometry.from_scenario(scenario).tips_B, tips)
+    lander_geometry = LanderGeometry.create(w, v.h_R, [0.0, 0.0, 1.0], [0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(lander_geometry.tips_B, tips)
 
 
 def test_hover_speeds_keep_the_vehicle_still(plant, scenario):
@@ -217,3 +243,50 @@ def test_thrust_impulse_follows_the_continuous_motor_lag(plant, scenario):
     integral = w_c**2 * (T - 2 * tau * (1 - e1) + 0.5 * tau * (1 - e2))
     expected = 4 * c_f / v.mass * integral - GRAVITY * T
     assert plant.state().v_W[2] == pytest.approx(expected, rel=1e-3)
+
+
+@pytest.mark.parametrize("where", ["surface", "pad"])
+def test_lander_contact_forces_are_split_by_what_they_touch(where):
+    """At rest with the motors off, the landers' normal forces sum to the weight's normal
+    component, m g cos(beta) on a 20 deg slope (friction 0.6 > tan 20 deg holds it) and
+    m g on the start pad, all on that partner and none on the other."""
+    sc = load_scenario("slope50", ["surface.slope_deg=20"])
+    plant = Plant(sc)
+    plant.reset(plant.landed_state() if where == "surface" else None)
+    plant.step(800)  # settle
+    peaks = np.zeros(8)
+    plant.contact_peaks_into(peaks)
+    plant.step(1)
+    plant.contact_peaks_into(peaks)  # one physics step: the forces at rest
+    surface, ground = peaks[:4], peaks[4:]
+    weight = sc.vehicle.mass * GRAVITY
+    if where == "surface":
+        assert surface.sum() == pytest.approx(weight * math.cos(math.radians(20)), rel=1e-3)
+        assert np.all(surface > 0.0) and not np.any(ground)
+    else:
+        assert ground.sum() == pytest.approx(weight, rel=1e-3)
+        assert np.all(ground > 0.0) and not np.any(surface)
+    np.testing.assert_allclose(plant.lander_forces, surface + ground, rtol=1e-9)
+
+
+def test_lander_contact_peaks_are_taken_at_every_physics_step(scenario):
+    """Dropped 2 cm onto the pad, the impact's force varies from step to step: the peak
+    read after 10 steps is the largest of the 10 per-step normal forces, and reading
+    starts over."""
+    plant = Plant(scenario)
+    s = plant.start_state()
+    plant.reset(RigidBodyState.at_rest(s.p_W + np.array([0.0, 0.0, 0.02]), s.q_WB))
+    plant.step(60)  # just before the impact (free fall of 2 cm: 64 ms)
+    peaks = np.zeros(8)
+    plant.contact_peaks_into(peaks)
+    first, last = SENSOR_SLICES["lander0_ground"], SENSOR_SLICES["lander3_ground"]
+    ground = np.s_[first.start : last.stop : 3]  # the ground sensors' normal entries
+    per_step = []
+    for _ in range(10):
+        plant.step(1)
+        per_step.append(plant.sensordata[ground].copy())
+    plant.contact_peaks_into(peaks)
+    np.testing.assert_array_equal(peaks[4:], np.max(per_step, axis=0))
+    assert np.max(per_step) > np.max(per_step[-1])  # the peak is not the last step's value
+    plant.contact_peaks_into(peaks)
+    assert not np.any(peaks)

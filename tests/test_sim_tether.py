@@ -30,7 +30,7 @@ SWING_RATE_TOL = 2e-3
 """Angular-rate error [rad/s]; measured 6e-4."""
 SWING_TENSION_TOL = 0.15
 """Tension error [N] (2-3 % of the 4.4-8 N swing tension); measured 0.06 N, from the
-cable compliance (``sim.cable_timeconst`` = 4 ms)."""
+cable compliance (``sim.cable_time_constant`` = 4 ms)."""
 
 
 def test_tethered_swing_matches_the_3d_link_model():

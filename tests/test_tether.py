@@ -38,6 +38,7 @@ from tetherland.geometry import (
 )
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
+from tetherland.planning.start import plan_start_state
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_multiply, quat_to_rotmat, rotvec_to_quat
 from tetherland.runs import run_mission
@@ -51,7 +52,6 @@ from tetherland.sim.mjcf import (
 )
 from tetherland.sim.plant import Plant
 from tetherland.sim.runner import Runner
-from tetherland.sim.start import plan_start_state
 from tetherland.state import RigidBodyState, link_kernel
 
 AT_COM = "vehicle.cable_attachment=[0,0,0]"

@@ -1,5 +1,5 @@
-"""The unhooking pass (issue 11): no deeper than ``mission.unhook_depth``, away from the
-surface first, and clear of the believed and of a perturbed surface."""
+"""The unhooking pass (issue 11): no deeper than ``mission.hooking.unhook_depth``, away from
+the surface first, and clear of the believed and of a perturbed surface."""
 
 from __future__ import annotations
 
@@ -12,10 +12,11 @@ import pytest
 from tetherland.analysis.clearance import level_vehicle_distance
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
-from tetherland.geometry import LandingGeometry, link_direction, surface_frame_from_slope
+from tetherland.geometry import LandingGeometry, link_direction
 from tetherland.mission.hooking import hooking_pass, unhooking_path
 from tetherland.mission.plan import free_flight_legs, plan_mission
 from tetherland.sim.plant import Plant
+from tetherland.surface import surface_frame_from_slope
 
 NAMES = ("wall90", "overhang93", "slope50", "pipe60")
 
@@ -35,19 +36,19 @@ def _hook_depth(scenario, geo, p_W) -> float:
 @pytest.mark.parametrize("name", NAMES)
 def test_the_entry_lies_on_the_pass_axis_at_the_unhook_depth(name):
     """The hook point at the entry is unhook_depth beyond the anchor along n (clipped to
-    the overshoot), at the end of the pass hook_overshoot; both on the pass's axis."""
+    the overshoot), at the end of the pass overshoot; both on the pass's axis."""
     sc = load_scenario(name)
     geo = LandingGeometry.from_scenario(sc)
     hp = hooking_pass(sc, geo)
     cfg = sc.mission
-    depth = min(cfg.unhook_depth, cfg.hook_overshoot)
-    entry = hp.entry(cfg.unhook_depth, cfg.hook_overshoot)
-    assert _hook_depth(sc, geo, hp.p_end_W) == pytest.approx(cfg.hook_overshoot, abs=1e-12)
+    depth = min(cfg.hooking.unhook_depth, cfg.hooking.overshoot)
+    entry = hp.entry(cfg.hooking.unhook_depth, cfg.hooking.overshoot)
+    assert _hook_depth(sc, geo, hp.p_end_W) == pytest.approx(cfg.hooking.overshoot, abs=1e-12)
     assert _hook_depth(sc, geo, entry) == pytest.approx(depth, abs=1e-12)
     off_axis = np.cross(entry - hp.p_start_W, hp.n_W)
     assert np.linalg.norm(off_axis) == pytest.approx(0.0, abs=1e-12)
     # clipped: never beyond the end of the pass
-    np.testing.assert_allclose(hp.entry(10.0, cfg.hook_overshoot), hp.p_end_W, atol=1e-12)
+    np.testing.assert_allclose(hp.entry(10.0, cfg.hooking.overshoot), hp.p_end_W, atol=1e-12)
 
 
 def test_the_path_backs_off_along_the_approach_direction_first():
@@ -57,7 +58,7 @@ def test_the_path_backs_off_along_the_approach_direction_first():
     sc = load_scenario("wall90")
     geo = LandingGeometry.from_scenario(sc)
     hp = hooking_pass(sc, geo)
-    entry = hp.entry(sc.mission.unhook_depth, sc.mission.hook_overshoot)
+    entry = hp.entry(sc.mission.hooking.unhook_depth, sc.mission.hooking.overshoot)
     n = hp.n_W
     across = np.cross(n, [0.0, 1.0, 0.0])
     across /= np.linalg.norm(across)
@@ -86,10 +87,10 @@ def _perturbed(surface, slope_error: float, shift: float):
 
 def test_the_unhooking_pass_keeps_the_belief_errors_clearance_on_a_wall():
     """wall90: on a wall with the horizontal approach n = -z_S, backing off from the end of
-    the pass (hook_overshoot beyond the anchor) to the entry (unhook_depth beyond it) adds
-    exactly hook_overshoot - unhook_depth of clearance. With the campaign's belief errors
+    the pass (overshoot beyond the anchor) to the entry (unhook_depth beyond it) adds
+    exactly overshoot - unhook_depth of clearance. With the campaign's belief errors
     (the wall 1 deg off and 1 cm nearer) the reverse pass keeps more than
-    mission.hooking_clearance from the perturbed wall at every corner (a plane's distance
+    mission.hooking.min_clearance from the perturbed wall at every corner (a plane's distance
     is linear along each straight leg), where the old end of the pass did not (for the
     wall leaning toward the vehicle)."""
     sc = load_scenario("wall90")
@@ -97,8 +98,8 @@ def test_the_unhooking_pass_keeps_the_belief_errors_clearance_on_a_wall():
     geo = LandingGeometry.from_scenario(sc)
     hp = hooking_pass(sc, geo)
     assert hp.n_W @ geo.surface.z_S == pytest.approx(-1.0, abs=1e-12)  # the premise
-    entry = hp.entry(cfg.unhook_depth, cfg.hook_overshoot)
-    gain = cfg.hook_overshoot - cfg.unhook_depth
+    entry = hp.entry(cfg.hooking.unhook_depth, cfg.hooking.overshoot)
+    gain = cfg.hooking.overshoot - cfg.hooking.unhook_depth
     d_end = level_vehicle_distance(sc, geo.surface, hp.p_end_W, hp.yaw)
     d_entry = level_vehicle_distance(sc, geo.surface, entry, hp.yaw)
     assert d_entry - d_end == pytest.approx(gain, abs=1e-9)
@@ -117,17 +118,17 @@ def test_the_unhooking_pass_keeps_the_belief_errors_clearance_on_a_wall():
         d_path = min(level_vehicle_distance(sc, wrong, p, hp.yaw) for p in release_leg)
         d_old = level_vehicle_distance(sc, wrong, hp.p_end_W, hp.yaw)
         old.append(d_old)
-        assert d_path >= cfg.hooking_clearance
+        assert d_path >= cfg.hooking.min_clearance
         # a rigid translation by v changes a plane distance by v.z_S
         d_entry = level_vehicle_distance(sc, wrong, entry, hp.yaw)
         assert d_entry == pytest.approx(d_old - gain * float(hp.n_W @ wrong.z_S), abs=1e-9)
     # the wall leaning toward the vehicle: the old reverse pass's end was too close
-    assert min(old) < cfg.hooking_clearance
+    assert min(old) < cfg.hooking.min_clearance
 
 
 def test_unhook_depth_is_validated():
-    with pytest.raises(ConfigError, match=r"mission\.unhook_depth"):
-        load_scenario("wall90", ["mission.unhook_depth=0"])
+    with pytest.raises(ConfigError, match=r"mission\.hooking\.unhook_depth"):
+        load_scenario("wall90", ["mission.hooking.unhook_depth=0"])
 
 
 def test_the_back_off_keeps_the_hooked_cable_slack():

@@ -67,11 +67,12 @@ def test_an_aborted_run_is_judged_aborted_not_crashed(short_tethered):
 
 
 def test_the_judge_measures_touchdown_at_the_first_contact_force(perched):
-    """t_L is the first tick whose lander force exceeds verdict.contact_force; the speed
-    of condition (3) is the true speed of the tick before."""
+    """t_L is the first tick at which the landing surface presses a lander above
+    verdict.touchdown_force (peak over the tick's physics steps); the speed of condition (3)
+    is the true speed of the tick before."""
     log, s = perched.log, perched.summary
-    force = np.maximum(log["lander_forces"].max(axis=1), log["frame_force"])
-    limit = perched.plant_scenario.verdict.contact_force
+    force = log["lander_surface_forces"].max(axis=1)
+    limit = perched.plant_scenario.verdict.touchdown_force
     k = int(np.flatnonzero(force > limit)[0])
     assert s["landing"]["t_L"] == pytest.approx(log["t"][k])
     assert s["landing"]["touchdown_speed_mps"] == pytest.approx(
@@ -84,7 +85,7 @@ def test_a_tighter_tolerance_in_the_truth_changes_the_verdict(perched):
     position tolerance below the measured error fails condition (1)."""
     err = perched.summary["landing"]["position_error_m"]
     truth = dict(perched.record.truth)
-    truth["verdict"] = {**truth["verdict"], "position_m": 0.5 * err}
+    truth["verdict"] = {**truth["verdict"], "position_error": 0.5 * err}
     from dataclasses import replace
 
     strict = judge(perched.log, replace(perched.record, truth=truth))

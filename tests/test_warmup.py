@@ -6,7 +6,8 @@ import numpy as np
 
 from tetherland import state, warmup
 from tetherland.config import load_scenario, with_overrides
-from tetherland.control import DflController, HierarchicalController, dfl_kernels, kernels
+from tetherland.control import DflController, HierarchicalController
+from tetherland.control.kernels import dfl, free_flight, hierarchical
 from tetherland.estimation import UkfEstimator, ukf_kernels
 from tetherland.estimation import kernels as estimation_kernels
 from tetherland.geometry import LandingGeometry
@@ -19,9 +20,9 @@ from tetherland.runs import run_mission
 from tetherland.sim.analytic import estimate_of
 
 KERNELS = (
-    kernels.free_flight_into,
-    kernels.hierarchical_into,
-    dfl_kernels.dfl_into,
+    free_flight.free_flight_into,
+    hierarchical.hierarchical_into,
+    dfl.dfl_into,
     ukf_kernels.predict_into,
     ukf_kernels.update_pose_into,
     estimation_kernels.estimate_into,
@@ -40,7 +41,8 @@ def test_the_loop_needs_no_specialisation_beyond_the_warm_up():
     sc = load_scenario("slope50")
     planners = Planners()
     # free flight, the estimator and mocap in the mission loop ...
-    run_mission(with_overrides(sc, ["mission.max_duration=0.5"]), planners=planners)
+    short = ["mission.abort_time=0.25", "mission.safe_hover_time=0.25"]  # ends at 0.5 s
+    run_mission(with_overrides(sc, short), planners=planners)
     # ... and the tethered controllers on a planned track's references, from the estimator
     traj = Planner().plan(sc, "landing").require()
     track = TrajectoryTrack(traj, 0.0, sc.controller.rate_hz)

@@ -11,6 +11,17 @@ class ConfigError(TetherlandError, ValueError):
     """A scenario, an override or a command-line value is malformed or out of range."""
 
 
+class ConfigErrors(ConfigError):
+    """Every problem of one input at once (a scenario file with several bad fields).
+
+    ``messages`` holds one line per problem; ``str(error)`` joins them on one line.
+    """
+
+    def __init__(self, messages: list[str] | tuple[str, ...]):
+        self.messages = tuple(messages)
+        super().__init__("; ".join(self.messages))
+
+
 class SingularityError(TetherlandError, ArithmeticError):
     """A formula was evaluated at (or too near) a singular configuration.
 

@@ -173,7 +173,7 @@ class Reference:
     lateral_free : bool
         Tethered: leave the link azimuth delta to gravity, with no sideways force but a
         fraction of the damping of delta' (the supervisor's lateral release in the last centimetres,
-        ``mission.touchdown_lateral_clearance``). The hierarchical controller honours it;
+        ``mission.touchdown.lateral_clearance``). The hierarchical controller honours it;
         the DFL controller tracks ``output`` as given.
     """
 
@@ -289,6 +289,38 @@ class Controller(Protocol):
 
 
 @runtime_checkable
+class InnerLoop(Protocol):
+    """A flight controller between the controller and the ESCs (e.g. Betaflight firmware).
+
+    The controller's command becomes its setpoint; the inner loop runs at the IMU rate on
+    what the IMU measures and commands the rotors itself (the runner holds its output).
+    """
+
+    def start(self) -> None:
+        """A run begins (power on): before the first sample."""
+        ...
+
+    def setpoint(
+        self, t: float, estimate: StateEstimate, reference: Reference, command: Command
+    ) -> None:
+        """The controller's ``command`` at control tick ``t``, with what it was made from."""
+        ...
+
+    def step(self, imu: ImuSample) -> FloatArray:
+        """One loop on an IMU sample: rotor speed commands held from the next tick [rad/s]."""
+        ...
+
+    def applied(self, command: Command) -> Command:
+        """What the rotors are being commanded now (the inner loop's output, as motor
+        telemetry), for the roles told of each command sent (``CommandAware``)."""
+        ...
+
+    def stop(self) -> None:
+        """The run is over (also after a failure): release everything."""
+        ...
+
+
+@runtime_checkable
 class ReferenceSource(Protocol):
     """The supervisor (issue 6): chooses the mode and the reference from the estimate."""
 
@@ -307,6 +339,7 @@ __all__ = [
     "EventSource",
     "Feedforward",
     "ImuSample",
+    "InnerLoop",
     "MocapSample",
     "Reference",
     "ReferenceSource",

@@ -7,7 +7,7 @@ Quaternions are scalar-first ``q = (w, x, y, z)`` (MuJoCo's order) and unit-norm
 The small helpers convert their inputs to Python floats first (``tolist``): scalar
 arithmetic on floats is several times cheaper than on numpy scalars, and the results are
 the same IEEE doubles. The compiled control and estimation loops use their own inlined
-versions (:mod:`tetherland.control.kernels`, :mod:`tetherland.estimation.ukf_kernels`).
+versions (:mod:`tetherland.control.kernels.so3`, :mod:`tetherland.estimation.ukf_kernels`).
 """
 
 from __future__ import annotations

@@ -35,7 +35,10 @@ def warm_up() -> float:
     est.update(MocapSample(5e-4, 1e-3, start.p_W, start.q_WB))
     est.predict(ImuSample(2e-3, f, w))
     e = est.estimate()
-    FreeFlightController(sc).update(2e-3, e, Reference(t=2e-3, p_W=np.zeros((3, 3))))
+    held = np.zeros((3, 3))
+    held.setflags(write=False)  # a free-flight path's pause hands out read-only rows
+    for rows in (np.zeros((3, 3)), held):
+        FreeFlightController(sc).update(2e-3, e, Reference(t=2e-3, p_W=rows))
     output = np.zeros((5, 4))
     output[0, 0] = e.link.phi if e.link is not None else 0.5
     ff = Feedforward(omega_B=np.zeros(3), omega_dot_B=np.zeros(3), f_R=sc.vehicle.mass * 9.81)

@@ -21,15 +21,17 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
-from tetherland.geometry import FloatArray, Surface
+from tetherland.geometry import FloatArray
 from tetherland.models.airframe import (
     HUB_HALF_SIZE,
     PROP_HALF_THICKNESS,
     PROP_HEIGHT,
     PROP_RADIUS_FRACTION,
+    lander_centres_B,
 )
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import rotation_from_z_and_yaw
+from tetherland.surface import Surface
 
 _N_RIM = 72
 _RIM = np.column_stack(
@@ -78,8 +80,8 @@ def level_vehicle_distance(
     signs = (-1.0, 1.0)
     hub = np.array([[sx * hx, sy * hy, sz * hz] for sx in signs for sy in signs for sz in signs])
     frame_B = np.vstack([*guards, hub])
-    w, r = v.lander_half_width, v.lander_radius
-    landers_B = np.array([[sx * w, sy * w, -(v.h_R - r)] for sx in (-1, 1) for sy in (-1, 1)])
+    r = v.lander_radius
+    landers_B = lander_centres_B(v.lander_half_width, v.h_R, r)
     p = np.asarray(p_W, dtype=float)
     frame = surface_distance(surface, p + frame_B @ R.T).min()
     landers = surface_distance(surface, p + landers_B @ R.T).min() - r

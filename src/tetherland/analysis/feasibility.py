@@ -4,6 +4,11 @@ For the scenario's vehicle and surface this module answers, for each method, whi
 landing conditions can be met, the largest thrust allowed at touchdown, and the steepest
 slope the vehicle can take, counting rotor limits f_min <= f_i <= f_max with the
 ``control_margin`` kept per rotor for attitude control.
+
+Hover first: both methods fly free before and after the landing (take-off, approach,
+hooking pass, return), so every analysis checks before anything else that the vehicle
+can hover in free flight with the control margin (:func:`free_hover`); a vehicle that
+cannot is infeasible on every slope, with ``cannot_hover`` binding.
 """
 
 from __future__ import annotations
@@ -25,14 +30,9 @@ from tetherland.analysis.statics import (
     tethered_rest_tension,
 )
 from tetherland.config import Scenario
-from tetherland.geometry import (
-    FloatArray,
-    LandingGeometry,
-    Surface,
-    inclined_hover_direction,
-    surface_frame_from_slope,
-)
+from tetherland.geometry import FloatArray, LandingGeometry, inclined_hover_direction
 from tetherland.models.quadrotor import RotorLayout
+from tetherland.surface import Surface, surface_frame_from_slope
 
 _TOL = 1e-9
 
@@ -81,6 +81,22 @@ class VehicleLimits:
             heading=math.radians(scenario.planner.heading_deg),
         )
 
+    def free_hover_rotor_thrusts(self, g: float = GRAVITY) -> FloatArray:
+        """Rotor thrusts of the hover in free flight: total m g, no torque [N]."""
+        if self.allocation_inverse is None:
+            return np.full(self.n_rotors, self.mass * g / self.n_rotors)
+        return self.allocation_inverse @ np.array([self.mass * g, 0.0, 0.0, 0.0])
+
+    def thrust_to_weight(self, g: float = GRAVITY) -> float:
+        """n f_max / (m g) [-]."""
+        return self.n_rotors * self.f_max / (self.mass * g)
+
+    @property
+    def hover_thrust_to_weight(self) -> float:
+        """Least thrust-to-weight ratio that hovers with the control margin kept,
+        f_max / (f_max - margin) [-] (the heavy side of :func:`free_hover`)."""
+        return self.f_max / (self.f_max - self.margin)
+
     @property
     def min_controllable_thrust(self) -> float:
         """n (f_min + margin): least total thrust leaving attitude authority [N]."""
@@ -109,9 +125,16 @@ class VehicleLimits:
 class Infeasibility(enum.Enum):
     """Why a landing is infeasible: the requirement that fails (docs/theory.md sections 5, 13).
 
-    Tethered landing at p~_L, in the order in which they bind (the first one failing is
-    :attr:`TetheredAnalysis.binding`):
+    For both methods the free hover binds first (:attr:`CANNOT_HOVER`); then, for the
+    tethered landing at p~_L, the others in the order in which they bind (the first one
+    failing is :attr:`TetheredAnalysis.binding`), and the contact-free ones last.
     """
+
+    CANNOT_HOVER = "cannot_hover"
+    """The vehicle cannot hover in free flight keeping the control margin: the hover's
+    rotor thrusts (m g / n each) lie outside [f_min + control_margin, f_max -
+    control_margin] (:func:`free_hover`). Every mission flies free before and after the
+    landing, so no slope is feasible."""
 
     NO_INCLINED_HOVER = "no_inclined_hover"
     """beta >= 90 deg + gamma: the landed inclined hover would need f_R =
@@ -210,6 +233,45 @@ class LandedHover:
         return min(c.margin for c in self.checks)
 
 
+def free_hover(limits: VehicleLimits, g: float = GRAVITY) -> Check:
+    """Can the vehicle hover in free flight with the control margin kept on both sides?
+
+    The rule: hovering needs the total thrust m g with no torque, f = Gamma^-1 [m g, 0, 0,
+    0] (m g / n per rotor), and every rotor must stay in [f_min + control_margin, f_max -
+    control_margin], the band in which the attitude controller keeps its authority (the
+    same band as every other check here). Above it the vehicle is too heavy, m g > n
+    (f_max - control_margin): its thrust-to-weight ratio n f_max / (m g) is below
+    f_max / (f_max - control_margin); below it the rotors cannot throttle down to the
+    weight. This is the least a mission needs: climbing, turning and the pull that
+    stretches the cable need more.
+
+    Returns
+    -------
+    Check
+        Reason :attr:`Infeasibility.CANNOT_HOVER`, margin min_i min(f_i - f_min - margin,
+        f_max - margin - f_i) [N] (>= 0: it can hover).
+    """
+    thrusts = limits.free_hover_rotor_thrusts(g)
+    lo, hi = limits.f_min + limits.margin, limits.f_max - limits.margin
+    weight = limits.mass * g
+    margin = min(float(thrusts.min()) - lo, hi - float(thrusts.max()))
+    if hi - float(thrusts.max()) <= float(thrusts.min()) - lo:
+        message = (
+            f"the vehicle cannot hover: m g = {weight:.2f} N needs {thrusts.max():.3f} N per "
+            f"rotor, above f_max - control_margin = {hi:.3f} N (thrust-to-weight ratio "
+            f"{limits.thrust_to_weight(g):.2f}, needs >= {limits.hover_thrust_to_weight:.2f} "
+            f"with the control margin): lighten it below {limits.n_rotors * hi / g:.3g} kg or "
+            "raise vehicle.f_max"
+        )
+    else:
+        message = (
+            f"the vehicle cannot hover: m g = {weight:.2f} N needs {thrusts.min():.3f} N per "
+            f"rotor, below f_min + control_margin = {lo:.3f} N: the rotors cannot throttle "
+            "down to its weight (lower vehicle.f_min or vehicle.control_margin)"
+        )
+    return Check(Infeasibility.CANNOT_HOVER, margin, message)
+
+
 def landed_hover(
     surface: Surface, c: float, limits: VehicleLimits, g: float = GRAVITY
 ) -> LandedHover:
@@ -232,6 +294,7 @@ def landed_hover(
     shear = float(np.linalg.norm(rest.f_S))
     b, lim = math.degrees(beta), math.degrees(math.pi / 2 + gamma)
     checks = (
+        free_hover(limits, g),
         Check(
             Infeasibility.NO_INCLINED_HOVER,
             f_R,
@@ -316,7 +379,7 @@ class TetheredAnalysis:
     thrust_within_limits : bool
         The hover rotor thrusts lie in [f_min + margin, f_max - margin].
     feasible : bool
-        All of the above.
+        The vehicle can hover in free flight (:func:`free_hover`) and all of the above.
     max_slope_rad : float or None
         Steepest slope in [0, pi] for which the tethered landing is feasible (None: none is).
     max_slope_binding : Infeasibility or None
@@ -379,7 +442,8 @@ class ContactFreeAnalysis:
     min_touchdown_thrust : float
         Least controllable thrust at touchdown, n (f_min + margin) [N].
     feasible : bool
-        The least controllable touchdown thrust keeps condition (5).
+        The vehicle can hover in free flight (:func:`free_hover`) and the least
+        controllable touchdown thrust keeps condition (5).
     max_slope_rad : float or None
         Steepest feasible slope for this vehicle and friction.
     findings : tuple of Check
@@ -426,10 +490,12 @@ def landed_hover_at(
 
 def _free_flight_margin(surface: Surface, limits: VehicleLimits, g: float) -> float:
     bound = free_flight_max_touchdown_thrust(surface, limits.mass, g)
-    return -math.inf if bound is None else bound - limits.min_controllable_thrust
+    touchdown = -math.inf if bound is None else bound - limits.min_controllable_thrust
+    return min(touchdown, free_hover(limits, g).margin)
 
 
 _ROTOR_REASONS = (
+    Infeasibility.CANNOT_HOVER,
     Infeasibility.NO_INCLINED_HOVER,
     Infeasibility.ROTOR_FLOOR,
     Infeasibility.ROTOR_CEILING,
@@ -440,9 +506,9 @@ _ROTOR_REASONS = (
 def landed_hover_rotor_reason(scenario: Scenario, g: float = GRAVITY) -> str | None:
     """Why the rotors cannot hold the landed inclined hover (cable torque included), or None.
 
-    The rotor checks of :func:`landed_hover` (no hover, rotor floor and ceiling, offset
-    torque), without the slope search: used by the planner so that planning and analysis
-    agree on what is feasible.
+    The rotor checks of :func:`landed_hover` (hover in free flight, no inclined hover,
+    rotor floor and ceiling, offset torque), without the slope search: used by the
+    planner so that planning and analysis agree on what is feasible.
     """
     geometry = LandingGeometry.from_scenario(scenario)
     hover = landed_hover(geometry.surface, geometry.c, VehicleLimits.from_scenario(scenario), g)
@@ -520,7 +586,7 @@ def analyze_tethered(
     surface = geometry.surface
     hover = landed_hover(surface, geometry.c, limits, g)
     by_reason = {c.reason: c for c in hover.checks}
-    thrust_ok = all(by_reason[r].ok for r in _ROTOR_REASONS[1:])
+    thrust_ok = all(by_reason[r].ok for r in _ROTOR_REASONS[2:])
     cond4 = by_reason[Infeasibility.NO_INCLINED_HOVER].ok and hover.tension >= -_TOL
     cond5 = (
         by_reason[Infeasibility.NORMAL_FORCE].ok and by_reason[Infeasibility.FRICTION_MOTORS_OFF].ok
@@ -560,7 +626,8 @@ def analyze_free_flight(
     """Feasibility of a contact-free (perching) landing on this surface (any slope in [0, pi])."""
     bound = free_flight_max_touchdown_thrust(surface, limits.mass, g)
     motors_off = contact_forces(surface, limits.mass, 0.0, surface.z_S, g=g)
-    findings = []
+    hover = free_hover(limits, g)
+    findings = [] if hover.ok else [hover]
     horizontal = surface.is_horizontal or surface.slope < 1e-9
     if not horizontal:
         findings.append(
@@ -590,7 +657,7 @@ def analyze_free_flight(
         )
         feasible = False
     else:
-        feasible = bound >= limits.min_controllable_thrust - _TOL
+        feasible = bound >= limits.min_controllable_thrust - _TOL and hover.ok
         if not motors_off.holds and motors_off.f_N >= surface.f_N_min - _TOL:
             findings.append(
                 Check(
@@ -601,7 +668,7 @@ def analyze_free_flight(
                     f"f_S_max = {motors_off.f_S_max:.3f} N",
                 )
             )
-        if not feasible:
+        if bound < limits.min_controllable_thrust - _TOL:
             findings.append(
                 Check(
                     Infeasibility.TOUCHDOWN_THRUST,

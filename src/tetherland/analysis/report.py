@@ -8,12 +8,14 @@ from typing import Any
 
 from tetherland import GRAVITY
 from tetherland.analysis.feasibility import (
+    Check,
     ContactFreeAnalysis,
     Infeasibility,
     TetheredAnalysis,
     VehicleLimits,
     analyze_free_flight,
     analyze_tethered,
+    free_hover,
 )
 from tetherland.config import Scenario
 from tetherland.geometry import LandingGeometry
@@ -30,13 +32,16 @@ class TableRow:
 
 @dataclass(frozen=True)
 class LandingAnalysis:
-    """Both landing methods analysed for one scenario (chapter section 6.4)."""
+    """Both landing methods analysed for one scenario (chapter section 6.4), after the
+    hover in free flight that both need (:func:`~tetherland.analysis.free_hover`)."""
 
     scenario: Scenario
     geometry: LandingGeometry
     limits: VehicleLimits
     tethered: TetheredAnalysis
     free_flight: ContactFreeAnalysis
+    hover: Check
+    """Hover in free flight with the control margin (reason ``cannot_hover``)."""
 
     def table(self) -> list[TableRow]:
         """Table 6.1 for this scenario's numbers (corrected formulas, docs/theory.md section 5)."""
@@ -54,7 +59,12 @@ class LandingAnalysis:
             text = "none" if value is None else f"{math.degrees(value):.1f} deg"
             return text if binding is None else f"{text} (then {binding.value})"
 
+        twr = (
+            f"{yes[self.hover.ok]} (thrust-to-weight {self.limits.thrust_to_weight():.2f}, "
+            f"needs >= {self.limits.hover_thrust_to_weight:.2f})"
+        )
         return [
+            TableRow("Hovers in free flight", twr, twr),
             TableRow("Surface slope", f"{beta:.1f} deg", f"{beta:.1f} deg"),
             TableRow(
                 "Condition (4) attainable",
@@ -96,6 +106,13 @@ class LandingAnalysis:
         """JSON-ready document (SI units, radians, vectors in F_W)."""
         s, t, f = self.geometry.surface, self.tethered, self.free_flight
         return {
+            "hover": {
+                "ok": self.hover.ok,
+                "margin_N": self.hover.margin,
+                "thrust_to_weight": self.limits.thrust_to_weight(),
+                "thrust_to_weight_needed": self.limits.hover_thrust_to_weight,
+                "message": self.hover.message,
+            },
             "surface": {
                 "kind": s.kind,
                 "slope_rad": s.slope,
@@ -171,4 +188,5 @@ def analyze(scenario: Scenario) -> LandingAnalysis:
         limits=limits,
         tethered=analyze_tethered(geometry, limits),
         free_flight=analyze_free_flight(geometry.surface, limits),
+        hover=free_hover(limits),
     )

@@ -15,7 +15,8 @@ from numpy.typing import ArrayLike
 
 from tetherland import GRAVITY
 from tetherland.errors import SingularityError
-from tetherland.geometry import FloatArray, Surface
+from tetherland.geometry import FloatArray
+from tetherland.surface import Surface
 
 _COS_EPS = 1e-9
 

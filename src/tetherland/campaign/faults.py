@@ -28,6 +28,7 @@ import numpy as np
 from tetherland.config import FaultKind, FaultsConfig, Scenario
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry
+from tetherland.runs.explain import phase_at
 
 FAULT_KINDS = tuple(k.value for k in FaultKind)
 """Names accepted by ``--faults``."""
@@ -111,17 +112,6 @@ def fault_time(faults: FaultsConfig) -> float | None:
     if faults.cable_snap_time is not None:
         return faults.cable_snap_time
     return faults.mocap_outage_start
-
-
-def phase_at(phases: list[dict[str, Any]], t: float | None) -> str:
-    """The phase of a run's phase list (``summary.json``) at time ``t``; ``"all"`` for None,
-    ``"after_end"`` past the end of the run."""
-    if t is None:
-        return "all"
-    for p in phases:
-        if p["start"] <= t < p["end"]:
-            return str(p["name"])
-    return "after_end"
 
 
 def fault_table(records: list[dict[str, Any]]) -> dict[str, dict[str, dict[str, int]]]:

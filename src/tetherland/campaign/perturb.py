@@ -2,7 +2,9 @@
 
 The scenario as given is the truth that the plant simulates. Each run draws model and
 pose errors; the *belief* scenario (used by the planner, controllers and estimator) has
-them. Sensor noise, mocap dropouts and wind gusts act on the plant.
+them. Sensor noise, mocap dropouts and wind gusts act on the plant. The errors come from
+the run's ``perturbation`` stream, the gusts from its ``wind`` stream
+(:mod:`tetherland.randomness`).
 """
 
 from __future__ import annotations
@@ -13,8 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from tetherland.config import Scenario, scenario_from_dict
-from tetherland.geometry import LandingGeometry, normal_from_slope, surface_frame
+from tetherland.config import PerturbationConfig, Scenario, scenario_from_dict
+from tetherland.geometry import LandingGeometry
+from tetherland.randomness import RandomSource
+from tetherland.surface import normal_from_slope, surface_frame
 
 
 @dataclass(frozen=True)
@@ -54,8 +58,13 @@ class Perturbation:
         Believed / true parameter ratios [-].
     slope_error_deg, azimuth_error_deg
         Believed minus true surface orientation [deg].
-    anchor_error_S : (float, float)
-        Believed minus true anchor position along x_S, y_S [m].
+    anchor_error_S : (float, float, float)
+        Believed minus true anchor position along x_S, y_S (of the true surface) and its
+        believed minus true height h_A above the (believed) surface [m].
+    surface_offset : float
+        Believed minus true position of the surface along its believed normal [m].
+    pipe_radius_error : float
+        Believed minus true pipe radius (0 for a plane) [m].
     noise_scale : float
         Plant sensor-noise multiplier [-].
     mocap_dropout_rate, mocap_dropout_duration
@@ -69,7 +78,9 @@ class Perturbation:
     motor_time_constant_factor: float = 1.0
     slope_error_deg: float = 0.0
     azimuth_error_deg: float = 0.0
-    anchor_error_S: tuple[float, float] = (0.0, 0.0)
+    anchor_error_S: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    surface_offset: float = 0.0
+    pipe_radius_error: float = 0.0
     noise_scale: float = 1.0
     mocap_dropout_rate: float = 0.0
     mocap_dropout_duration: float = 0.0
@@ -79,21 +90,18 @@ class Perturbation:
         """Flat JSON-ready record (gusts summarised by count and peak force)."""
         d = asdict(self)
         gusts = d.pop("gusts")
-        d["anchor_error_x_S"], d["anchor_error_y_S"] = d.pop("anchor_error_S")
+        d["anchor_error_x_S"], d["anchor_error_y_S"], d["anchor_error_z_S"] = d.pop(
+            "anchor_error_S"
+        )
         d["gust_count"] = len(gusts)
         d["gust_peak_N"] = max((math.hypot(*g["force_W"]) for g in gusts), default=0.0)
         return d
 
 
-def sample_perturbation(
-    scenario: Scenario, rng: np.random.Generator, horizon: float = 120.0
-) -> Perturbation:
-    """Draw one perturbation from the scenario's ``[perturbation]`` ranges."""
-    c = scenario.perturbation
-
-    def rel(half: float) -> float:
-        return float(1.0 + rng.uniform(-half, half))
-
+def sample_gusts(
+    c: PerturbationConfig, rng: np.random.Generator, horizon: float = 120.0
+) -> tuple[Gust, ...]:
+    """Wind gusts over ``horizon`` [s]: Poisson start times, uniform peak force and heading."""
     gusts = []
     if c.wind_gust_rate > 0 and c.wind_gust_force > 0:
         t = float(rng.exponential(1.0 / c.wind_gust_rate))
@@ -108,21 +116,51 @@ def sample_perturbation(
                 )
             )
             t += c.wind_gust_duration + float(rng.exponential(1.0 / c.wind_gust_rate))
+    return tuple(gusts)
+
+
+def sample_perturbation(
+    scenario: Scenario, random: RandomSource, horizon: float = 120.0
+) -> Perturbation:
+    """Draw one perturbation from the scenario's ``[perturbation]`` ranges.
+
+    The gusts come from ``random``'s ``wind`` stream (over ``horizon`` [s]), everything
+    else from its ``perturbation`` stream, so that the wind settings leave the model errors
+    of a seed unchanged. Within the stream the errors added later are drawn last, so that a
+    seed keeps its earlier draws.
+    """
+    c = scenario.perturbation
+    gusts = sample_gusts(c, random.stream("wind"), horizon)
+    rng = random.stream("perturbation")
+
+    def rel(half: float) -> float:
+        return float(1.0 + rng.uniform(-half, half))
+
+    def sym(half: float) -> float:
+        return float(rng.uniform(-half, half))
+
+    mass, inertia = rel(c.mass_rel), rel(c.inertia_rel)
+    thrust, motor = rel(c.thrust_coefficient_rel), rel(c.motor_time_constant_rel)
+    slope, azimuth = sym(c.slope_error_deg), sym(c.azimuth_error_deg)
+    anchor_x, anchor_y = sym(c.anchor_error), sym(c.anchor_error)
+    noise = float(rng.uniform(c.noise_scale_min, c.noise_scale_max))
+    anchor_z = sym(c.anchor_error)
+    offset = sym(c.surface_offset_error)
+    pipe = sym(c.pipe_radius_error) if scenario.surface.kind == "pipe" else 0.0
     return Perturbation(
-        mass_factor=rel(c.mass_rel),
-        inertia_factor=rel(c.inertia_rel),
-        thrust_coefficient_factor=rel(c.thrust_coefficient_rel),
-        motor_time_constant_factor=rel(c.motor_time_constant_rel),
-        slope_error_deg=float(rng.uniform(-c.slope_deg, c.slope_deg)),
-        azimuth_error_deg=float(rng.uniform(-c.azimuth_deg, c.azimuth_deg)),
-        anchor_error_S=(
-            float(rng.uniform(-c.anchor_position, c.anchor_position)),
-            float(rng.uniform(-c.anchor_position, c.anchor_position)),
-        ),
-        noise_scale=float(rng.uniform(c.noise_scale_min, c.noise_scale_max)),
+        mass_factor=mass,
+        inertia_factor=inertia,
+        thrust_coefficient_factor=thrust,
+        motor_time_constant_factor=motor,
+        slope_error_deg=slope,
+        azimuth_error_deg=azimuth,
+        anchor_error_S=(anchor_x, anchor_y, anchor_z),
+        surface_offset=offset,
+        pipe_radius_error=pipe,
+        noise_scale=noise,
         mocap_dropout_rate=c.mocap_dropout_rate,
         mocap_dropout_duration=c.mocap_dropout_duration,
-        gusts=tuple(gusts),
+        gusts=gusts,
     )
 
 
@@ -131,7 +169,12 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
 
     The plant scenario is ``truth`` with the plant-side disturbances (noise scale, mocap
     dropouts); the belief has the model errors and a surface and anchor estimated with
-    errors (the believed anchor lies on the believed surface).
+    errors in every direction: the believed surface is tilted (slope, azimuth) about the
+    true origin and moved ``surface_offset`` along its normal, a pipe's radius is off by
+    ``pipe_radius_error``, and the believed anchor is off along x_S and y_S and lies at
+    h_A + ``anchor_error_S[2]`` above the believed surface. A believed anchor is never
+    behind the believed surface (the mechanism stands on it): a height below zero is
+    believed zero.
     """
     plant = truth.model_dump(mode="python")
     sensors = plant["sensors"]
@@ -156,9 +199,15 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
     s["normal"] = None
     s["slope_deg"], s["azimuth_deg"] = beta, ((az + 180.0) % 360.0) - 180.0
     R_WS = surface_frame(normal_from_slope(math.radians(beta), math.radians(s["azimuth_deg"])))
-    origin = np.asarray(truth.surface.origin, float)
-    p_A = geo.p_A + geo.surface.x_S * p.anchor_error_S[0] + geo.surface.y_S * p.anchor_error_S[1]
-    # place the believed anchor on the believed surface at the same height h_A
-    p_A = p_A - (R_WS[:, 2] @ (p_A - origin) - truth.anchor.h_A) * R_WS[:, 2]
-    belief["anchor"] = {"position": tuple(p_A), "landing_point": None, "h_A": truth.anchor.h_A}
+    z_S = R_WS[:, 2]
+    origin = np.asarray(truth.surface.origin, float) + p.surface_offset * z_S
+    s["origin"] = tuple(origin)
+    if truth.surface.kind == "pipe":
+        s["pipe_radius"] = truth.surface.pipe_radius + p.pipe_radius_error
+    e_x, e_y, e_h = p.anchor_error_S
+    p_A = geo.p_A + geo.surface.x_S * e_x + geo.surface.y_S * e_y
+    # the believed anchor at its believed height above the believed surface
+    h_A = max(truth.anchor.h_A + e_h, 0.0)
+    p_A = p_A - (z_S @ (p_A - origin) - h_A) * z_S
+    belief["anchor"] = {"position": tuple(p_A), "landing_point": None, "h_A": h_A}
     return scenario_from_dict(plant, truth.name), scenario_from_dict(belief, truth.name)

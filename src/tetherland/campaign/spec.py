@@ -12,6 +12,7 @@ import numpy as np
 from tetherland.campaign.faults import DEFAULT_WINDOW, FAULT_KINDS, time_slice
 from tetherland.errors import ConfigError
 from tetherland.methods import method_names
+from tetherland.randomness import derive_seed
 
 METHODS = method_names()
 JOBS = ("mission", "analysis")
@@ -48,6 +49,13 @@ class Sweep:
         if not values:
             raise ConfigError(f"--sweep '{text}': no values")
         return cls(key, values)
+
+    @staticmethod
+    def override(key: str, value: float) -> str:
+        """``key=value`` as an override; a whole number is written as an integer, so that
+        an integer field (``mission.hooking.max_attempts``) takes it under strict types."""
+        number = str(int(value)) if float(value).is_integer() else repr(float(value))
+        return f"{key}={number}"
 
 
 @dataclass(frozen=True)
@@ -86,6 +94,8 @@ class CampaignSpec:
     """Fault kinds: ``runs`` tethered runs each instead of the methods (issue 15)."""
     fault_window: tuple[float, float] = DEFAULT_WINDOW
     """Window of the fault times [s]."""
+    firmware: str | None = None
+    """Flight firmware flying every run as the inner loop (``tetherland.firmware``)."""
 
     def __post_init__(self) -> None:
         if self.runs < 1:
@@ -102,6 +112,14 @@ class CampaignSpec:
             raise ConfigError(
                 f"--faults: unknown fault kind {bad_faults} (allowed: {', '.join(FAULT_KINDS)})"
             )
+        if self.firmware is not None:
+            from tetherland.firmware import FIRMWARES  # no firmware package needed to check
+
+            if self.firmware not in FIRMWARES:
+                raise ConfigError(f"--firmware must be one of {', '.join(FIRMWARES)} "
+                                  f"(got {self.firmware!r})")  # fmt: skip
+            if self.job != "mission":
+                raise ConfigError("--firmware flies missions (--job mission)")
         if self.faults and (self.sweep is not None or self.job != "mission"):
             raise ConfigError("--faults runs missions without --sweep (and --job mission)")
 
@@ -113,11 +131,51 @@ class CampaignSpec:
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["methods"] = list(self.methods)
+        if self.firmware is None:  # campaigns on tetherland's own inner loop keep theirs
+            del d["firmware"]
         if not self.faults:  # campaigns without faults keep their fingerprint
             del d["faults"], d["fault_window"]
         else:
             d["faults"], d["fault_window"] = list(self.faults), list(self.fault_window)
         return d
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CampaignSpec:
+        """Inverse of :meth:`to_dict` (a manifest's ``spec``); the fingerprint is kept.
+
+        Raises
+        ------
+        ConfigError
+            One line when ``data`` is no campaign specification.
+        """
+        try:
+            sweep, window = data.get("sweep"), data.get("fault_window", DEFAULT_WINDOW)
+            return cls(
+                scenario=dict(data["scenario"]),
+                runs=int(data["runs"]),
+                methods=tuple(data["methods"]),
+                sweep=None if sweep is None else Sweep(str(sweep["key"]),
+                                                       tuple(float(v) for v in sweep["values"])),
+                seed=int(data["seed"]),
+                job=str(data["job"]),
+                controller=str(data["controller"]),
+                extra=dict(data.get("extra", {})),
+                faults=tuple(data.get("faults", ())),
+                fault_window=(float(window[0]), float(window[1])),
+                firmware=data.get("firmware"),
+            )  # fmt: skip
+        except (KeyError, TypeError, ValueError, AttributeError) as err:
+            why = f"{type(err).__name__}: {err}"
+            raise ConfigError(f"not a campaign specification ({why})") from None
+
+    def run(self, run_id: str) -> RunSpec:
+        """The run ``run_id`` of this campaign (ConfigError naming the ids when unknown)."""
+        runs = {r.run_id: r for r in self.expand()}
+        if run_id not in runs:
+            ids = list(runs)
+            shown = ", ".join(ids[:3]) + (f", ... ({len(ids)} runs)" if len(ids) > 3 else "")
+            raise ConfigError(f"RUN_ID {run_id!r} is no run of this campaign (its runs: {shown})")
+        return runs[run_id]
 
     def expand(self) -> list[RunSpec]:
         """Every run of the campaign, in a deterministic order."""
@@ -125,7 +183,7 @@ class CampaignSpec:
             return [
                 RunSpec(
                     f"{kind}-{i:05d}", "tethered", i,
-                    int(np.random.SeedSequence([self.seed, 15, j, i]).generate_state(1)[0]),
+                    derive_seed(self.seed, 15, j, i),
                     None, None, kind, time_slice(self.fault_window, i, self.runs),
                 )
                 for i in range(self.runs)  # interleaved: a partial campaign has every kind
@@ -136,7 +194,7 @@ class CampaignSpec:
         specs = []
         for j, value in enumerate(sweep_values):
             for i in range(self.runs):
-                seed = int(np.random.SeedSequence([self.seed, j, i]).generate_state(1)[0])
+                seed = derive_seed(self.seed, j, i)
                 for method in self.methods:
                     tag = f"{method}-{'base' if value is None else f'{value:g}'}-{i:05d}"
                     specs.append(RunSpec(tag, method, i, seed, key, value))

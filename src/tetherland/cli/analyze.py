@@ -6,7 +6,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from tetherland.analysis import LandingAnalysis
+from tetherland.analysis import Infeasibility, LandingAnalysis
 from tetherland.analysis import analyze as run_analysis
 from tetherland.cli.common import (
     JsonOption,
@@ -57,6 +57,15 @@ def _print_report(sc: Scenario, result: LandingAnalysis) -> None:
         f"vehicle {sc.vehicle.mass} kg, rotors {sc.vehicle.f_min}-{sc.vehicle.f_max} N; "
         f"cable {sc.tether.length} m"
     )
+    hover = result.hover  # before anything else: no landing without a hover in free flight
+    if hover.ok:
+        console.print(
+            f"hover in free flight: ok (thrust-to-weight {result.limits.thrust_to_weight():.2f}, "
+            f"needs >= {result.limits.hover_thrust_to_weight:.2f} with the control margin)"
+        )
+    else:
+        console.print(f"[bold red]{Infeasibility.CANNOT_HOVER.value}:[/bold red] "
+                      f"{escape(hover.message)}")  # fmt: skip
     geo = Table(title="Tethered landing geometry (6.8)-(6.13)", show_header=False)
     geo.add_column(style="bold")
     geo.add_column()

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
 
 from tetherland.config import Scenario, load_scenario
+from tetherland.config.checks import check_name
+from tetherland.errors import ConfigError
+from tetherland.verdict import Outcome
 
 ScenarioArg = Annotated[
     str,
@@ -29,6 +34,25 @@ JsonOption = Annotated[
     bool, typer.Option("--json", help="Print a JSON document on stdout instead of tables.")
 ]
 
+OverwriteOption = Annotated[
+    bool,
+    typer.Option(
+        "--overwrite",
+        help="Replace the output directory as a whole if it holds an earlier output.",
+    ),
+]
+
+VideoOption = Annotated[
+    bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
+]
+McapOption = Annotated[bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")]
+
+INTERRUPTED = 130
+"""Exit code after Ctrl-C or SIGTERM (128 + SIGINT)."""
+
+OUTPUT_ROOT = Path("out")
+"""Root of the default output directories, out/<scenario name>/<command>."""
+
 console = Console()
 err_console = Console(stderr=True)
 
@@ -36,6 +60,24 @@ err_console = Console(stderr=True)
 def resolve_scenario(source: str, overrides: list[str] | None) -> Scenario:
     """Load the scenario named on the command line (raises ConfigError on bad input)."""
     return load_scenario(source, overrides or [])
+
+
+def default_output(name: str, kind: str) -> Path:
+    """``out/<name>/<kind>``, confined to :data:`OUTPUT_ROOT` (a name is a label, not a path).
+
+    Raises
+    ------
+    ConfigError
+        When ``name`` would lead outside the output root.
+    """
+    try:
+        check_name(name)
+    except ValueError as err:
+        raise ConfigError(f"name: {err}") from None
+    path = OUTPUT_ROOT / name / kind
+    if Path(os.path.normpath(path)).parent.parent != OUTPUT_ROOT:  # what check_name ensures
+        raise ConfigError(f"name {name!r} leads outside {OUTPUT_ROOT}/")
+    return path
 
 
 def deg(value: float | None, digits: int = 2) -> str:
@@ -46,3 +88,35 @@ def deg(value: float | None, digits: int = 2) -> str:
 def vec(v) -> str:
     """Format a 3-vector."""
     return "[" + ", ".join(f"{float(x):+.3f}" for x in v) + "]"
+
+
+_COLOURS = {"success": "green", "safe stop": "yellow"}
+
+
+def outcome_text(summary: dict) -> str:
+    """The verdict's outcome as one coloured word: success, failure, safe stop, crash or
+    not flown (:attr:`tetherland.verdict.Outcome.label`)."""
+    label = Outcome(summary["outcome"]).label
+    return f"[{_COLOURS.get(label, 'red')}]{label}[/{_COLOURS.get(label, 'red')}]"
+
+
+def conditions_text(landing: dict) -> str:
+    """The landing conditions the method requires, ``1:ok 2:NO ...``; the others are named
+    as not required (the contact-free method does not require (4))."""
+    conditions = landing["conditions"]
+    required = landing.get("required_conditions") or list(conditions)
+    text = " ".join(f"{k}:{'ok' if conditions[k] else 'NO'}" for k in required)
+    others = [k for k in conditions if k not in required]
+    return text + (f" ({', '.join(others)} not required)" if others else "")
+
+
+def perturbation_text(p: dict) -> str:
+    """A drawn perturbation (``run.json`` provenance ``perturbation``) on one line."""
+    e = (p["anchor_error_x_S"], p["anchor_error_y_S"], p["anchor_error_z_S"])
+    return (
+        f"perturbation of seed {p['seed']}: mass x{p['mass_factor']:.3f}, thrust coefficient "
+        f"x{p['thrust_coefficient_factor']:.3f}, slope {p['slope_error_deg']:+.2f} deg, "
+        f"azimuth {p['azimuth_error_deg']:+.2f} deg, anchor [{e[0]:+.3f}, {e[1]:+.3f}, "
+        f"{e[2]:+.3f}] m, surface {p['surface_offset']:+.3f} m, noise x{p['noise_scale']:.2f}, "
+        f"{p['gust_count']} gusts up to {p['gust_peak_N']:.2f} N"
+    )

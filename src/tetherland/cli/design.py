@@ -11,11 +11,18 @@ from rich.markup import escape
 from rich.table import Table
 
 from tetherland import __version__
-from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
+from tetherland.cli.common import (
+    JsonOption,
+    OverwriteOption,
+    ScenarioArg,
+    SetOption,
+    console,
+    resolve_scenario,
+)
 from tetherland.design import DesignResult, feasibility_map, search_designs
 from tetherland.design.map import MAP_LENGTHS, MAP_SLOPES_DEG
 from tetherland.design.plot import save_map_figure
-from tetherland.io import atomic_write_json, atomic_write_text, dumps_json
+from tetherland.io import OutputDir, atomic_write_json, atomic_write_text, dumps_json
 from tetherland.planning import Planner
 from tetherland.provenance import provenance
 
@@ -36,6 +43,9 @@ OutOption = Annotated[
         file_okay=False,
     ),
 ]
+_FILES = {"map": "feasibility_map.png", "map_data": "feasibility_map.json",
+          "map_csv": "feasibility_map.csv", "design": "design.json"}  # fmt: skip
+"""What ``--out`` holds, by role."""
 
 
 def _table(result: DesignResult) -> Table:
@@ -60,6 +70,7 @@ def design(
     overrides: SetOption = None,
     slope_deg: SlopeOption = None,
     out: OutOption = None,
+    overwrite: OverwriteOption = False,
     json: JsonOption = False,
 ) -> int:
     """Search the cable length, attachment offset along z_B, anchor height and hooking
@@ -72,43 +83,38 @@ def design(
     a one-line reason when no design exists, with 2 on bad input.
     """
     sc = resolve_scenario(scenario, overrides)
+    target = OutputDir(out, overwrite=overwrite) if out is not None else None
     planner = Planner()
     result = search_designs(sc, slope_deg, planner=planner)
     doc: dict[str, Any] = result.to_dict()
     files: dict[str, str] = {}
-    if out is not None:
+    doc["files"] = files
+    doc["provenance"] = provenance(sc, extra={"slope_deg": result.slope_deg})
+    if target is not None:
         fmap = feasibility_map(sc, planner=planner, slopes_deg=MAP_SLOPES_DEG, lengths=MAP_LENGTHS)
         record = provenance(sc, extra={"slope_deg": result.slope_deg})
         title = (
             f"{sc.name}: {sc.vehicle.mass:g} kg, rotors {sc.vehicle.f_min:g}-"
             f"{sc.vehicle.f_max:g} N, control margin {sc.vehicle.control_margin:g} N\n"
-            f"hooking pass: overshoot {sc.mission.hook_overshoot:g} m, capture radius "
+            f"hooking pass: overshoot {sc.mission.hooking.overshoot:g} m, capture radius "
             f"{sc.tether.capture_radius:g} m"
-        )
-        files["map"] = str(save_map_figure(out / "feasibility_map.png", fmap, result.chosen, title))
-        files["map_data"] = str(
-            atomic_write_json(
-                out / "feasibility_map.json",
-                {
-                    **fmap.to_dict(),
-                    "chosen": None if result.chosen is None else result.chosen.to_dict(),
-                    "provenance": record,
-                },
-            )
         )
         header = (
             f"# tetherland {__version__} ({record['git_commit']}), scenario {sc.name}; "
             "provenance in feasibility_map.json\n"
         )
-        files["map_csv"] = str(
-            atomic_write_text(out / "feasibility_map.csv", header + fmap.to_csv())
-        )
+        map_doc = {
+            **fmap.to_dict(),
+            "chosen": None if result.chosen is None else result.chosen.to_dict(),
+            "provenance": record,
+        }
         doc["map_wall_time_s"] = fmap.wall_time_s
-        files["design"] = str(out / "design.json")
-    doc["files"] = files
-    doc["provenance"] = provenance(sc, extra={"slope_deg": result.slope_deg})
-    if out is not None:
-        atomic_write_json(out / "design.json", doc)
+        files.update({role: str(target.path / name) for role, name in _FILES.items()})
+        with target.staging() as stage:  # all at once: nothing of an earlier design stays
+            save_map_figure(stage / "feasibility_map.png", fmap, result.chosen, title)
+            atomic_write_json(stage / "feasibility_map.json", map_doc)
+            atomic_write_text(stage / "feasibility_map.csv", header + fmap.to_csv())
+            atomic_write_json(stage / "design.json", doc)
     if json:
         typer.echo(dumps_json(doc), nl=False)
     else:

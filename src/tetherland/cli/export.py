@@ -38,7 +38,14 @@ def export(
     target = out or run_dir / "run.mcap"
     if target.suffix != ".mcap":
         raise ConfigError(f"--out must end in .mcap (got '{target.name}')")
-    result = write_mcap(load_run(run_dir), target)
+    if target.is_dir():
+        raise ConfigError(f"--out '{target}' is a directory; give a file name ending in .mcap")
+    run = load_run(run_dir)
+    try:
+        result = write_mcap(run, target)
+    except OSError as err:  # a folder we may not write, a path through a file, a full disk
+        why = f"{err.strerror}: '{err.filename}'" if err.strerror and err.filename else err
+        raise ConfigError(f"--out: cannot write '{target}' ({why})") from None
     doc = {"mcap": str(result.path), "ticks": result.ticks, "events": result.events,
            "layout": str(layout_path())}  # fmt: skip
     if json:

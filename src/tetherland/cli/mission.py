@@ -9,11 +9,27 @@ import typer
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
+from tetherland.campaign.jobs import draw_run, fly_perturbed
+from tetherland.cli.common import (
+    JsonOption,
+    McapOption,
+    OverwriteOption,
+    ScenarioArg,
+    SetOption,
+    VideoOption,
+    conditions_text,
+    console,
+    default_output,
+    outcome_text,
+    perturbation_text,
+    resolve_scenario,
+)
 from tetherland.errors import ConfigError
-from tetherland.io import dumps_json, prepare_output_dir
-from tetherland.methods import get_method, method_names
+from tetherland.io import OutputDir, dumps_json
+from tetherland.methods import Flight, get_method, method_names
 from tetherland.runs import run_mission, save_run
+from tetherland.runs.directory import write_summary
+from tetherland.runs.explain import explain
 from tetherland.verdict import Outcome
 
 CONTROLLERS = ("hierarchical", "dfl")
@@ -45,16 +61,13 @@ def _start_live(sc: Any, speed: float, port: int, rate: float, quiet: bool) -> A
     return view
 
 
-def _add_mcap(result: Any, directory: Path, files: dict[str, Path]) -> None:
+def add_mcap(result: Any, directory: Path, files: dict[str, Path], listed_as: Path) -> None:
     """Write run.mcap and list it in summary.json."""
-    from tetherland.io import atomic_write_json
     from tetherland.viz import run_data_from_result
     from tetherland.viz.mcap import write_mcap
 
     files["mcap"] = write_mcap(run_data_from_result(result), directory / "run.mcap").path
-    atomic_write_json(
-        files["summary"], {**result.summary, "files": {k: str(v) for k, v in files.items()}}
-    )
+    write_summary(result.summary, files, listed_as)
 
 
 def mission(
@@ -67,15 +80,29 @@ def mission(
         str,
         typer.Option("--method", help=f"Landing method: {', '.join(method_names())}."),
     ] = "tethered",
-    seed: Annotated[int, typer.Option("--seed", help="Seed of sensor noise and disturbances.")] = 0,
-    out: Annotated[Path | None, typer.Option("--out", help="Output directory.")] = None,
+    seed: Annotated[
+        int,
+        typer.Option(
+            "--seed",
+            help="Seed of the sensor noise (alone it varies nothing else; add --perturb).",
+        ),
+    ] = 0,
+    perturb: Annotated[
+        bool,
+        typer.Option(
+            "--perturb",
+            help="Also draw the campaign's perturbation for --seed (model, surface and "
+            "anchor belief errors, noise scale, wind gusts), exactly as a campaign run with "
+            "that seed; recorded in run.json.",
+        ),
+    ] = False,
+    out: Annotated[
+        Path | None, typer.Option("--out", help="Output directory (default out/<name>/mission).")
+    ] = None,
+    overwrite: OverwriteOption = False,
     json: JsonOption = False,
-    video: Annotated[
-        bool, typer.Option("--video", help="Also render mission.mp4 (offscreen).")
-    ] = False,
-    mcap: Annotated[
-        bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")
-    ] = False,
+    video: VideoOption = False,
+    mcap: McapOption = False,
     live: Annotated[
         bool, typer.Option("--live", help="Stream the mission to Foxglove while it runs.")
     ] = False,
@@ -89,12 +116,19 @@ def mission(
     live_rate: Annotated[
         float, typer.Option("--live-rate", help="With --live: messages per second per topic.")
     ] = 100.0,
+    firmware: Annotated[
+        str | None,
+        typer.Option("--firmware", help="Fly through flight firmware in lockstep: betaflight."),
+    ] = None,
 ) -> None:
     """Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, controllers, supervisor).
 
     Writes the log, summary.json, the figure 6.5 plots and the 3D path (and an mp4 with
-    --video, run.mcap for Foxglove or Rerun with --mcap) into --out; --live streams the
-    run to Foxglove while it flies. Exit code 0 when the mission succeeded, 1 when it failed;
+    --video, run.mcap for Foxglove or Rerun with --mcap) into --out, all at once when the
+    run ends; an existing run there is replaced as a whole only with --overwrite. --live
+    streams the run to Foxglove while it flies. --seed alone varies only the sensor noise
+    (the robot believes the scenario exactly, no wind): --perturb flies the campaign's
+    perturbation of that seed. Exit code 0 when the mission succeeded, 1 when it failed;
     a mission that cannot be planned (a slope the vehicle cannot reach) prints one line with
     the reason, writes no results and exits 1.
     """
@@ -106,12 +140,13 @@ def mission(
         )
     if seed < 0:
         raise ConfigError(f"--seed must be >= 0 (got {seed})")
+    inner_loop = _firmware(firmware)
     if mcap:
         from tetherland.optional import require
 
         require("foxglove", package="foxglove-sdk", extra="viz", feature="--mcap")
     default = "mission" if how.name == "tethered" else "perching"
-    directory = prepare_output_dir(out or Path("out") / sc.name / default)
+    target = OutputDir(out or default_output(sc.name, default), overwrite=overwrite)
     view = _start_live(sc, live_speed, live_port, live_rate, json) if live else None
     with Progress(
         SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
@@ -124,11 +159,20 @@ def mission(
             phase = getattr(holder.get("reference"), "phase", None)
             return phase.name.lower() if phase is not None else ""
 
-        result = run_mission(
-            sc, method=how.name, controller=controller, seed=seed,
-            observers=[_ProgressObserver(progress, task, phase_of), *([view] if view else [])],
-            on_flight=lambda flight: holder.update(reference=flight.reference),
-        )  # fmt: skip
+        def on_flight(flight: Flight) -> None:
+            holder.update(reference=flight.reference)
+
+        observers = [_ProgressObserver(progress, task, phase_of), *([view] if view else [])]
+        if perturb:  # the campaign's draw for this seed, flown as the campaign flies it
+            result = fly_perturbed(
+                draw_run(sc, seed), how.name, controller=controller, inner_loop=inner_loop,
+                observers=observers, on_flight=on_flight,
+            )  # fmt: skip
+        else:
+            result = run_mission(
+                sc, method=how.name, controller=controller, seed=seed, observers=observers,
+                on_flight=on_flight, inner_loop=inner_loop,
+            )  # fmt: skip
         if view is not None:
             view.finish(result.summary)
             view.close()
@@ -139,32 +183,49 @@ def mission(
             typer.echo(f"error: mission not flown: {result.summary['reason']}", err=True)
             raise typer.Exit(1)
         progress.update(task, description="writing results")
-        files = save_run(result, directory, video=video)
-        if mcap and result.log is not None:
-            _add_mcap(result, directory, files)
+        with target.staging() as staging:
+            files = save_run(result, staging, video=video, listed_as=target.path)
+            if mcap and result.log is not None:
+                add_mcap(result, staging, files, target.path)
+        files = {k: target.path / v.name for k, v in files.items()}
         summary = result.summary
+        failures = [f.to_dict() for f in explain(summary, result.log, result.record)]
     if json:
-        typer.echo(
-            dumps_json({**summary, "files": {k: str(v) for k, v in files.items()}}), nl=False
-        )
+        files_doc = {k: str(v) for k, v in files.items()}
+        typer.echo(dumps_json({**summary, "failures": failures, "files": files_doc}), nl=False)
     else:
-        _print_summary(summary, files)
+        _print_summary(summary, files, failures)
     if not summary["success"]:
         raise typer.Exit(1)
 
 
-def _print_summary(summary: dict, files: dict[str, Path]) -> None:
+def _firmware(name: str | None) -> Any:
+    """The inner-loop factory of ``--firmware`` (ConfigError for an unknown name)."""
+    if name is None:
+        return None
+    from tetherland.firmware import FIRMWARES, BetaflightSitl
+
+    if name not in FIRMWARES:
+        raise ConfigError(f"--firmware must be one of {', '.join(FIRMWARES)} (got {name!r})")
+    return BetaflightSitl()
+
+
+def _print_summary(summary: dict, files: dict[str, Path], failures: list[dict]) -> None:
     import math
 
     landing = summary.get("landing", {})
-    ok = "[green]success[/green]" if summary["success"] else "[red]failure[/red]"
     rtf = summary.get("real_time_factor") or 0.0
     console.print(
-        f"[bold]{summary['scenario']}[/bold] ({summary['method']}): {ok}, "
+        f"[bold]{summary['scenario']}[/bold] ({summary['method']}): {outcome_text(summary)}, "
         f"{summary['sim_time_s']:.1f} s simulated, {rtf:.1f}x real time"
     )
-    if summary.get("abort_reason") or summary.get("reason") not in (None, "ok"):
-        console.print(f"reason: {summary.get('abort_reason') or summary.get('reason')}")
+    perturbation = summary.get("provenance", {}).get("perturbation")
+    if perturbation is not None:
+        console.print(perturbation_text(perturbation), markup=False, highlight=False)
+    if not summary["success"]:
+        console.print(f"reason: {summary['reason']}", markup=False, highlight=False)
+        for failure in failures:
+            console.print(f"  {failure['message']}", markup=False, highlight=False)
     table = Table(title="Landing (plant truth at touchdown)")
     table.add_column("measure")
     table.add_column("value")
@@ -174,17 +235,18 @@ def _print_summary(summary: dict, files: dict[str, Path]) -> None:
         ("touchdown speed", "touchdown_speed_mps", 1, "m/s"),
         ("touchdown angular rate", "touchdown_angular_rate_rps", 1, "rad/s"),
         ("touchdown acceleration", "touchdown_accel_mps2", 1, "m/s^2"),
-        ("slip while motors off", "slip_m", 1000, "mm"),
+        ("slip, touchdown to spin-up", "slip_m", 1000, "mm"),
         ("min cable tension", "min_tension_N", 1, "N"),
     ]
     for label, key, scale, unit in rows:
         value = landing.get(key)
         if value is not None:
             table.add_row(label, f"{value * scale:.3g} {unit}")
-    conditions = landing.get("conditions") or {}
-    table.add_row(
-        "conditions (1)-(5)", " ".join(f"{k}:{'ok' if v else 'NO'}" for k, v in conditions.items())
-    )
+    rest = landing.get("rest_interval_s")
+    if rest is not None:
+        table.add_row("rest (true thrust off)", f"{rest[0]:.2f}-{rest[1]:.2f} s")
+    if landing.get("conditions"):
+        table.add_row("conditions (required)", conditions_text(landing))
     console.print(table)
     if "phases" in summary:
         console.print(

@@ -10,8 +10,16 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from tetherland.cli.common import JsonOption, ScenarioArg, SetOption, console, resolve_scenario
-from tetherland.io import atomic_write_json, dumps_json, prepare_output_dir
+from tetherland.cli.common import (
+    JsonOption,
+    OverwriteOption,
+    ScenarioArg,
+    SetOption,
+    console,
+    default_output,
+    resolve_scenario,
+)
+from tetherland.io import OutputDir, atomic_write_json, dumps_json
 from tetherland.planning import Maneuver, Planner, PlanningError, PlanResult
 from tetherland.planning.plot import save_plan_figure
 from tetherland.provenance import provenance
@@ -96,16 +104,20 @@ def plan(
     solver: SolverOption = None,
     method: MethodOption = None,
     out: OutOption = None,
+    overwrite: OverwriteOption = False,
     json: JsonOption = False,
 ) -> int:
     """Plan the tethered landing or takeoff (OCP 6.21 or spline) and write trajectory.csv,
-    trajectory.png and plan.json into the output directory.
+    trajectory.png and plan.json into the output directory (an earlier plan there is
+    replaced as a whole only with --overwrite).
 
     Exits with 1 and a one-line reason when no valid plan exists (infeasible, solver
     failure), with 2 on bad input.
     """
     sc = resolve_scenario(scenario, overrides)
-    out_dir = prepare_output_dir(out if out is not None else Path("out") / sc.name / "plan")
+    target = OutputDir(
+        out if out is not None else default_output(sc.name, "plan"), overwrite=overwrite
+    )
     result = Planner().plan(
         sc,
         Maneuver(maneuver.value),
@@ -115,26 +127,26 @@ def plan(
     summary = result.summary()
     doc: dict[str, Any] = {"scenario": sc.name, **summary}
     files: dict[str, str] = {}
-    if result.success:
-        traj = result.require()
-        files["trajectory"] = str(traj.save_csv(out_dir / "trajectory.csv"))
-        files["plot"] = str(
-            save_plan_figure(
-                out_dir / "trajectory.png",
-                traj,
-                result.spec,
-                title=f"{sc.name}: {result.maneuver.value} ({result.method}), "
-                f"slope {math.degrees(result.spec.theta_surface):.0f} deg",
-            )
-        )
-        files["summary"] = str(out_dir / "plan.json")
     doc["files"] = files
     doc["provenance"] = provenance(
         sc,
         extra={"maneuver": result.maneuver.value, "method": result.method, "solver": result.solver},
     )
-    if result.success:
-        atomic_write_json(out_dir / "plan.json", doc)
+    if result.success:  # written all at once: no file of an earlier plan stays beside them
+        traj = result.require()
+        with target.staging() as stage:
+            traj.save_csv(stage / "trajectory.csv")
+            save_plan_figure(
+                stage / "trajectory.png",
+                traj,
+                result.spec,
+                title=f"{sc.name}: {result.maneuver.value} ({result.method}), "
+                f"slope {math.degrees(result.spec.theta_surface):.0f} deg",
+            )
+            for role, name in (("trajectory", "trajectory.csv"), ("plot", "trajectory.png"),
+                               ("summary", "plan.json")):  # fmt: skip
+                files[role] = str(target.path / name)
+            atomic_write_json(stage / "plan.json", doc)
     if json:
         typer.echo(dumps_json(doc), nl=False)
     else:

@@ -20,7 +20,14 @@ from tetherland.config.loader import (
     scenario_to_toml,
     with_overrides,
 )
-from tetherland.config.mission import MissionConfig
+from tetherland.config.mission import (
+    ContactConfig,
+    FlightConfig,
+    HookingConfig,
+    MissionConfig,
+    StretchConfig,
+    TouchdownConfig,
+)
 from tetherland.config.perching import PerchingConfig, PerchingWeights
 from tetherland.config.perturbation import PerturbationConfig
 from tetherland.config.physical import (
@@ -33,20 +40,25 @@ from tetherland.config.physical import (
     VehicleConfig,
 )
 from tetherland.config.planning import PlannerConfig, PlannerWeights
+from tetherland.config.renames import RENAMES, check_renames
 from tetherland.config.scenario import Scenario
 from tetherland.config.sensors import ImuConfig, MocapConfig, SensorsConfig
 from tetherland.config.simulation import SimConfig
 from tetherland.config.verdict import VerdictConfig
 
 __all__ = [
+    "RENAMES",
     "TETHER_MATERIALS",
     "AnchorConfig",
     "CableModel",
+    "ContactConfig",
     "ControllerConfig",
     "FaultDetectionConfig",
     "FaultKind",
     "FaultsConfig",
+    "FlightConfig",
     "FreeFlightGains",
+    "HookingConfig",
     "ImuConfig",
     "MissionConfig",
     "MocapConfig",
@@ -60,15 +72,18 @@ __all__ = [
     "Section",
     "SensorsConfig",
     "SimConfig",
+    "StretchConfig",
     "SurfaceConfig",
     "TetherConfig",
     "TetherMaterial",
     "TetheredGains",
+    "TouchdownConfig",
     "Vec3",
     "VehicleConfig",
     "VerdictConfig",
     "apply_overrides",
     "builtin_scenarios",
+    "check_renames",
     "format_validation_error",
     "load_scenario",
     "parse_override",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import stat
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -9,11 +11,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import annotated_types as at
 from pydantic import BaseModel, ValidationError
 
+from tetherland.config.renames import renamed_keys
 from tetherland.config.scenario import Scenario
-from tetherland.errors import ConfigError
+from tetherland.config.schema import allowed_range as _allowed_range
+from tetherland.errors import ConfigError, ConfigErrors
 
 _BUILTIN_PACKAGE = "tetherland.scenarios"
 
@@ -43,6 +46,10 @@ def builtin_scenarios() -> list[ScenarioInfo]:
     return sorted(infos, key=lambda i: i.name)
 
 
+MAX_SCENARIO_BYTES = 16 * 1024 * 1024
+"""Largest scenario file read [bytes] (a scenario is a few kB of TOML)."""
+
+
 def _read_source(source: str | Path) -> tuple[dict[str, Any], str]:
     path = Path(source)
     builtins = {info.name: info for info in builtin_scenarios()}
@@ -58,11 +65,21 @@ def _read_source(source: str | Path) -> tuple[dict[str, Any], str]:
     if path.is_dir():
         raise ConfigError(f"scenario '{source}' is a directory, expected a TOML file")
     try:
+        # only regular files: a named pipe or a device would block or never end
+        if not stat.S_ISREG(path.stat().st_mode):
+            raise ConfigError(f"scenario '{source}' is not a regular file, expected a TOML file")
+        if path.stat().st_size > MAX_SCENARIO_BYTES:
+            raise ConfigError(
+                f"scenario file '{path}' is {path.stat().st_size / 2**20:.0f} MiB; a scenario "
+                f"is at most {MAX_SCENARIO_BYTES // 2**20} MiB of TOML"
+            )
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(f"scenario file '{path}' is not valid TOML: {err}") from None
     except (OSError, UnicodeDecodeError) as err:
         raise ConfigError(f"scenario file '{path}' cannot be read: {err}") from None
+    except RecursionError:
+        raise ConfigError(f"scenario file '{path}': tables or arrays nested too deeply") from None
     return data, path.stem
 
 
@@ -82,6 +99,8 @@ def parse_override(text: str) -> tuple[list[str], Any]:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()
+    except RecursionError:
+        raise ConfigError(f"override '{text[:60]}': value nested too deeply") from None
     return keys, value
 
 
@@ -89,7 +108,10 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
     """Return a copy of ``data`` with every ``section.key=value`` override applied."""
     import copy
 
-    out = copy.deepcopy(data)
+    try:
+        out = copy.deepcopy(data)
+    except RecursionError:
+        raise ConfigError("scenario: tables or arrays nested too deeply") from None
     for text in overrides:
         keys, value = parse_override(text)
         node = out
@@ -119,68 +141,98 @@ def _field_info(model: type[BaseModel], loc: Sequence[Any]):
     return info
 
 
-def _allowed_range(info: Any) -> str | None:
-    lo = hi = None
-    lo_open = hi_open = False
-    for m in getattr(info, "metadata", []):
-        if isinstance(m, at.Gt):
-            lo, lo_open = m.gt, True
-        elif isinstance(m, at.Ge):
-            lo, lo_open = m.ge, False
-        elif isinstance(m, at.Lt):
-            hi, hi_open = m.lt, True
-        elif isinstance(m, at.Le):
-            hi, hi_open = m.le, False
-    if lo is None and hi is None:
-        return None
-    left = "(" if lo_open or lo is None else "["
-    right = ")" if hi_open or hi is None else "]"
-    return f"{left}{'-inf' if lo is None else lo:g}, {'inf' if hi is None else hi:g}{right}"
+VALUE_CHARS = 60
+"""Longest quoted input value in an error message [characters]."""
+
+
+def _short_repr(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= VALUE_CHARS else text[: VALUE_CHARS - 3] + "..."
+
+
+def _format_one(error: Any, model: type[BaseModel]) -> str:
+    """One line for one pydantic error: the field, what is wrong, the allowed range."""
+    loc = list(error["loc"])
+    name = ""
+    for part in loc:
+        name += f"[{part}]" if isinstance(part, int) else (f".{part}" if name else str(part))
+    msg = str(error["msg"]).removeprefix("Value error, ")
+    if error["type"] == "json_invalid":  # the JSON form's parser: only its depth limit
+        return "scenario: tables or arrays nested too deeply" if "recursion" in msg else msg
+    if error["type"] == "extra_forbidden":
+        parent = _field_info(model, loc[:-1])
+        parent_model = parent.annotation if parent is not None else model
+        allowed = sorted(getattr(parent_model, "model_fields", {}))
+        return f"{name}: unknown key (allowed keys: {', '.join(allowed)})"
+    text = f"{name}: {msg}" if name else msg
+    section = _field_info(model, loc)
+    section_model = section.annotation if section is not None else None
+    first_word = msg.split(" ", 1)[0]
+    if error["type"] == "value_error" and first_word in getattr(section_model, "model_fields", {}):
+        text = f"{name}.{msg}"  # a section-level check that names its field first
+    if "input" in error and error["type"] not in ("value_error", "assertion_error"):
+        value = error["input"]
+        if not isinstance(value, dict):
+            text += f" (got {_short_repr(value)})"
+    rng = _allowed_range(_field_info(model, loc))
+    if rng and error["type"] not in ("value_error",):
+        text += f"; allowed range {rng}"
+    return text
+
+
+def format_validation_errors(err: ValidationError, model: type[BaseModel] = Scenario) -> list[str]:
+    """One line per bad field: its name, what is wrong and the allowed range."""
+    return [_format_one(e, model) for e in err.errors(include_url=False)]
 
 
 def format_validation_error(err: ValidationError, model: type[BaseModel] = Scenario) -> str:
     """One line naming the first bad field, what is wrong and the allowed range."""
-    errors = err.errors(include_url=False)
-    first = errors[0]
-    loc = list(first["loc"])
-    name = ""
-    for part in loc:
-        name += f"[{part}]" if isinstance(part, int) else (f".{part}" if name else str(part))
-    msg = str(first["msg"]).removeprefix("Value error, ")
-    if first["type"] == "extra_forbidden":
-        parent = _field_info(model, loc[:-1])
-        parent_model = parent.annotation if parent is not None else model
-        allowed = sorted(getattr(parent_model, "model_fields", {}))
-        text = f"{name}: unknown key (allowed keys: {', '.join(allowed)})"
-    else:
-        text = f"{name}: {msg}" if name else msg
-        section = _field_info(model, loc)
-        section_model = section.annotation if section is not None else None
-        first_word = msg.split(" ", 1)[0]
-        if first["type"] == "value_error" and first_word in getattr(
-            section_model, "model_fields", {}
-        ):
-            text = f"{name}.{msg}"  # a section-level check that names its field first
-        if "input" in first and first["type"] not in ("value_error", "assertion_error"):
-            value = first["input"]
-            if not isinstance(value, dict):
-                text += f" (got {value!r})"
-        rng = _allowed_range(_field_info(model, loc))
-        if rng and first["type"] not in ("value_error",):
-            text += f"; allowed range {rng}"
-    if len(errors) > 1:
-        text += f" (and {len(errors) - 1} more error{'s' if len(errors) > 2 else ''})"
+    lines = format_validation_errors(err, model)
+    text = lines[0]
+    if len(lines) > 1:
+        text += f" (and {len(lines) - 1} more error{'s' if len(lines) > 2 else ''})"
     return text
 
 
+def _json_value(value: Any) -> Any:
+    """Values TOML has and JSON not (dates, times) become text, which no field accepts."""
+    item = getattr(value, "item", None)  # numpy scalars
+    return item() if callable(item) else str(value)
+
+
 def scenario_from_dict(data: dict[str, Any], default_name: str = "custom") -> Scenario:
-    """Validate a nested dict (TOML layout) into a :class:`Scenario`."""
+    """Validate a nested dict (TOML layout) into a :class:`Scenario`.
+
+    Types are strict: a number field takes an integer or a float, never a boolean or a
+    string; a boolean field takes only ``true`` or ``false``; an integer field no float.
+    An old field name is named with its new one (:mod:`tetherland.config.renames`).
+
+    Raises
+    ------
+    ConfigErrors
+        One line per bad field (every field error at once).
+    """
     data = dict(data)
     data.setdefault("name", default_name)
     try:
-        return Scenario.model_validate(data)
+        # strict validation of the JSON form: no bool <-> number or "yes" -> bool coercion,
+        # while TOML arrays still fill tuples (strict Python mode would refuse them)
+        document = json.dumps(data, default=_json_value)
+        return Scenario.model_validate_json(document, strict=True)
     except ValidationError as err:
-        raise ConfigError(format_validation_error(err)) from None
+        renamed = dict(renamed_keys(data))
+        lines = []
+        for error in err.errors(include_url=False):
+            dotted = ".".join(str(part) for part in error["loc"])
+            if error["type"] == "extra_forbidden" and dotted in renamed:
+                lines.append(f"{dotted} was renamed: use {renamed[dotted]}")
+            else:
+                lines.append(_format_one(error, Scenario))
+        raise ConfigErrors(sorted(lines, key=lambda line: "was renamed" not in line)) from None
+    except RecursionError:
+        raise ConfigError("scenario: tables or arrays nested too deeply") from None
+    except ArithmeticError as err:  # a check's arithmetic on an extreme value (1/5e-324)
+        raise ConfigError(f"scenario: a value is out of any usable range ({err})") from None
 
 
 def load_scenario(source: str | Path, overrides: Sequence[str] = ()) -> Scenario:

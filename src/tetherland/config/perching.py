@@ -31,26 +31,27 @@ class PerchingWeights(Section):
 class PerchingConfig(Section):
     """The contact-free perching maneuver: start, touchdown, timing and tracking run."""
 
-    start_distance: float = Field(0.8, gt=0, le=20)
+    hover_distance: float = Field(0.8, gt=0, le=20)
     """Start hover point: the centre of mass this far from the landed centre of mass
     p*_L + h_R z_S, along the surface normal z_S through the landing point [m]."""
-    start_position: Vec3 | None = None
+    hover_position: Vec3 | None = None
     """Explicit start hover point of the centre of mass in F_W (overrides
-    ``start_distance``); it must lie in the vertical plane of the fall line through the
+    ``hover_distance``); it must lie in the vertical plane of the fall line through the
     landing point [m]."""
     approach_speed: float = Field(0.05, ge=0, le=1)
-    """v_n, the planned touchdown velocity p'(t_L) = -v_n z_S [m/s]. Zero is the chapter's
+    """v_n, the planned touchdown velocity p'(t_L) = -v_n z_S. Zero is the chapter's
     condition (3) exactly, but then nothing fixes *when* contact happens: near t_L the
     vehicle closes on the surface only cubically in time, so a millimetre of tracking
     error shifts contact by tens of milliseconds, at a tangential speed of g sin(beta)
     per second of shift. A small normal speed makes contact happen on time (timing error
-    = normal error / v_n) at a touchdown speed still within condition (3)'s tolerance."""
+    = normal error / v_n) at a touchdown speed still within condition (3)'s tolerance
+    [m/s]."""
     approach_height: float = Field(0.03, ge=0, le=1)
     """d_f: the lander tips stay above min(d_f, 0.5 v_n (t_L - t)), so the last d_f are
     flown towards the surface, not along it [m]."""
     duration: float | None = Field(None, gt=0.3, le=30)
-    """Maneuver duration t_L - t_0 [s]; None: free final time, chosen in
-    [``min_duration``, ``max_duration``] by minimising cost + k_time T."""
+    """Maneuver duration t_L - t_0 (None: free final time, chosen between
+    ``min_duration`` and ``max_duration`` by minimising cost + k_time T) [s]."""
     min_duration: float = Field(0.8, gt=0.3, le=30)
     """Shortest duration of the free-final-time search [s]."""
     max_duration: float = Field(4.0, gt=0.3, le=30)
@@ -65,8 +66,9 @@ class PerchingConfig(Section):
     """Least clearance of the landers and rotor guards above the surface before t_L [m]."""
     hover_time: float = Field(4.0, ge=0, le=60)
     """Hover at the start point before the maneuver starts (closed-loop run) [s]."""
-    rest_time: float = Field(1.0, gt=0, le=60)
-    """Simulated time with the motors off after touchdown (closed-loop run) [s]."""
+    rest_time: float = Field(1.5, gt=0, le=60)
+    """Simulated time with the motors off after touchdown (closed-loop run), at least
+    ``verdict.min_rest_time`` plus the rotors' spin-down [s]."""
     contact_grace: float = Field(0.1, ge=0, le=5)
     """Longest flight past the planned touchdown time, holding the touchdown thrust and
     attitude, while waiting for (estimated) contact; then the motors go off anyway [s]."""

@@ -27,12 +27,18 @@ class PerturbationConfig(Section):
     """Relative error of the believed rotor thrust coefficient c_f [-]."""
     motor_time_constant_rel: float = Field(0.20, ge=0, le=0.9)
     """Relative error of the believed motor time constant [-]."""
-    slope_deg: float = Field(1.0, ge=0, le=20)
+    slope_error_deg: float = Field(1.0, ge=0, le=20)
     """Error of the believed slope angle [deg]."""
-    azimuth_deg: float = Field(1.0, ge=0, le=45)
+    azimuth_error_deg: float = Field(1.0, ge=0, le=45)
     """Error of the believed downhill azimuth [deg]."""
-    anchor_position: float = Field(0.01, ge=0, le=0.5)
-    """Error of the believed anchor position along each surface axis [m]."""
+    anchor_error: float = Field(0.01, ge=0, le=0.5)
+    """Error of the believed anchor position along each surface axis x_S, y_S and z_S
+    (the last one is an error of the believed anchor height h_A) [m]."""
+    surface_offset_error: float = Field(0.005, ge=0, le=0.5)
+    """Error of the believed surface position along its normal (the believed plane or
+    pipe top line is moved by up to this towards or away from the vehicle) [m]."""
+    pipe_radius_error: float = Field(0.002, ge=0, le=0.5)
+    """Error of the believed pipe radius (``surface.kind = "pipe"`` only) [m]."""
     noise_scale_min: float = Field(0.5, ge=0, le=100)
     """Smallest sensor-noise multiplier of the plant [-]."""
     noise_scale_max: float = Field(2.0, ge=0, le=100)

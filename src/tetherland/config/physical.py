@@ -284,20 +284,21 @@ class SurfaceConfig(Section):
     kind: Literal["plane", "pipe"] = "plane"
     """Surface type."""
     slope_deg: float = Field(50.0, ge=0, le=180)
-    """Slope angle beta between the surface and the horizontal [deg]: 90 is a vertical wall,
-    above 90 an overhang (the surface faces down, n_S . z_W = cos(beta) < 0)."""
+    """Slope angle beta between the surface and the horizontal: 90 is a vertical wall,
+    above 90 an overhang (the surface faces down, n_S . z_W = cos(beta) < 0) [deg]."""
     azimuth_deg: float = Field(0.0, ge=-360, le=360)
     """Azimuth of the downhill direction x_S in the horizontal plane, from x_W towards y_W [deg]."""
     normal: Vec3 | None = None
     """Alternative to slope/azimuth: the outward surface normal n_S in F_W, pointing to the
-    side the vehicle lands on (any length, not zero; a negative z component is an overhang)."""
+    side the vehicle lands on (any length, not zero; a negative z component is an
+    overhang) [-]."""
     origin: Vec3 = (0.0, 0.0, 0.0)
     """A point O_S on the surface (the top line for a pipe), in F_W [m]."""
     friction: float = Field(0.6, ge=0, le=10)
     """Friction coefficient mu between the landers and the surface [-]."""
     f_N_min: float = Field(0.0, ge=-1000, le=0)
-    """Minimum normal force: 0 for a plain surface, negative with an adhesive pad [N].
-    The shear limit is f_S_max = mu (f_N - f_N_min)."""
+    """Minimum normal force: 0 for a plain surface, negative with an adhesive pad; the
+    shear limit is f_S_max = mu (f_N - f_N_min) [N]."""
     pipe_radius: float = Field(0.25, gt=0, le=10)
     """Pipe radius (``kind = "pipe"`` only) [m]."""
     extent: float = Field(3.0, gt=0, le=100)

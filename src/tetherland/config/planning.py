@@ -12,31 +12,34 @@ from tetherland.config.base import Section
 class PlannerWeights(Section):
     """Gains k_* >= 0 of the cost J = integral(J1 + J2 + J3 + J4) + J5 (section 6.5.2).
 
-    Angles in rad, rates in rad/s, rotor thrust accelerations f_i'' in N/s^2.
+    Angles in rad, rates in rad/s, rotor thrust accelerations f_i'' in N/s^2; each weight's
+    unit makes its integrand (J1-J4) or its terminal term (J5) a plain number.
     """
 
     k_phi: float = Field(1.0, ge=0, le=1e6)
-    """J1: (phi - phi_f)^2, elevation error to the maneuver's final value."""
+    """J1: (phi - phi_f)^2, elevation error to the maneuver's final value [rad^-2]."""
     k_theta: float = Field(1.0, ge=0, le=1e6)
-    """J1: (theta_A - theta_A,f)^2, tilt error to the final value."""
+    """J1: (theta_A - theta_A,f)^2, tilt error to the final value [rad^-2]."""
     k_phi_dot: float = Field(0.5, ge=0, le=1e6)
-    """J1: phi'^2."""
+    """J1: phi'^2, the link elevation rate [(rad/s)^-2]."""
     k_theta_dot: float = Field(0.5, ge=0, le=1e6)
-    """J1: theta_A'^2."""
+    """J1: theta_A'^2, the tilt rate [(rad/s)^-2]."""
     k_phi_ddot: float = Field(0.05, ge=0, le=1e6)
-    """J1: phi''^2."""
+    """J1: phi''^2, the link elevation acceleration [(rad/s^2)^-2]."""
     k_theta_ddot: float = Field(0.05, ge=0, le=1e6)
-    """J1: theta_A''^2."""
+    """J1: theta_A''^2, the tilt acceleration [(rad/s^2)^-2]."""
     k_theta_near: float = Field(20.0, ge=0, le=1e6)
-    """J2: h(phi) (theta_A - theta_A*)^2, the landing attitude near the surface."""
+    """J2: h(phi) (theta_A - theta_A*)^2, the landing attitude near the surface [rad^-2]."""
     k_rates_near: float = Field(20.0, ge=0, le=1e6)
-    """J3: h(phi) (phi'^2 + theta_A'^2), slow near the surface."""
+    """J3: h(phi) (phi'^2 + theta_A'^2), slow near the surface [(rad/s)^-2]."""
     k_thrust_accel: float = Field(1e-3, ge=0, le=1e6)
-    """J4: sum f_i''^2, smooth rotor commands."""
+    """J4: sum f_i''^2, smooth rotor commands [(N/s^2)^-2]."""
     k_final_theta_dot: float = Field(10.0, ge=0, le=1e6)
-    """J5: theta_A'(t_L)^2 (zero at the optimum: the final rates are also constrained)."""
+    """J5: theta_A'(t_L)^2 (zero at the optimum: the final rates are also constrained)
+    [(rad/s)^-2]."""
     k_final_phi_dot: float = Field(10.0, ge=0, le=1e6)
-    """J5: phi'(t_L)^2 (zero at the optimum: the final rates are also constrained)."""
+    """J5: phi'(t_L)^2 (zero at the optimum: the final rates are also constrained)
+    [(rad/s)^-2]."""
     bump_width_deg: float = Field(10.0, gt=0, le=90)
     """Half-width w of the bumps h(phi) = exp(-((phi - phi*)/w)^4) of J2 and J3 [deg]."""
 
@@ -64,9 +67,9 @@ class PlannerConfig(Section):
     start_tension: float = Field(2.0, gt=0, le=1000)
     """Cable tension held in the taut start/end hover [N]."""
     min_tension: float = Field(0.3, gt=0, le=1000)
-    """Lower bound f_L_min on the tension along the planned trajectory (6.21d) [N].
-    Near a boundary hover whose own tension is lower (a flat surface has none when
-    landed) the bound ramps down to that tension over ``tension_ramp`` of the duration."""
+    """Lower bound f_L_min on the tension along the planned trajectory (6.21d). Near a
+    boundary hover whose own tension is lower (a flat surface has none when landed) the
+    bound ramps down to that tension over ``tension_ramp`` of the duration [N]."""
     tension_ramp: float = Field(0.25, gt=0, le=0.5)
     """Fraction of the duration over which the tension bound relaxes towards a boundary [-]."""
     heading_deg: float = Field(0.0, ge=-180, le=180)

@@ -2,10 +2,19 @@
 
 from __future__ import annotations
 
-from pydantic import Field, model_validator
+import math
 
-from tetherland import geometry as geo
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from tetherland import surface as geo
 from tetherland.config.base import Section
+from tetherland.config.checks import (
+    check_name,
+    check_rates,
+    check_tension_threshold,
+    check_timing,
+)
 from tetherland.config.control import ControllerConfig
 from tetherland.config.faults import FaultsConfig
 from tetherland.config.mission import MissionConfig
@@ -15,7 +24,7 @@ from tetherland.config.physical import AnchorConfig, SurfaceConfig, TetherConfig
 from tetherland.config.planning import PlannerConfig
 from tetherland.config.sensors import SensorsConfig
 from tetherland.config.simulation import SimConfig
-from tetherland.config.verdict import VerdictConfig
+from tetherland.config.verdict import VerdictConfig, spin_down_time
 
 ON_SURFACE_TOL = 1e-3
 """Tolerance for a point to count as lying on (or at height h_A above) the surface [m]."""
@@ -26,7 +35,8 @@ class Scenario(Section):
     mission and simulation settings. Load it with :func:`tetherland.config.load_scenario`."""
 
     name: str = Field("custom", min_length=1, max_length=100)
-    """Short identifier of the scenario."""
+    """Short identifier of the scenario: a label (output folders are named after it), no
+    path separators, ``.``, ``..`` or control characters."""
     description: str = ""
     """One-line description."""
     vehicle: VehicleConfig = VehicleConfig()
@@ -43,6 +53,16 @@ class Scenario(Section):
     verdict: VerdictConfig = VerdictConfig()
     faults: FaultsConfig = FaultsConfig()
     """Injected faults (the plant's truth; the robot's belief never has them)."""
+
+    @field_validator("name")
+    @classmethod
+    def _label(cls, value: str) -> str:
+        return check_name(value)
+
+    @model_validator(mode="after")
+    def _rates(self) -> Scenario:
+        check_rates(self)  # first: the checks below count in control periods and steps
+        return self
 
     @model_validator(mode="after")
     def _consistent_geometry(self) -> Scenario:
@@ -66,7 +86,11 @@ class Scenario(Section):
                 f"tether.length = {l} m must be > |h_att - anchor.h_A| = {abs(h_att - a.h_A):g} m, "
                 "h_att = h_R + cable_attachment z (inclined hovering needs |c| < 1, eq. 6.9)"
             )
-        surface = geo.surface_from_config(self)
+        surface = geo.Surface(
+            origin=np.asarray(s.origin, dtype=float),
+            R_WS=geo.surface_frame_of(s.normal, math.radians(s.slope_deg),
+                                      math.radians(s.azimuth_deg)),
+        )  # fmt: skip
         if a.position is not None:
             off = surface.height(a.position) - a.h_A
             if abs(off) > ON_SURFACE_TOL:
@@ -80,6 +104,27 @@ class Scenario(Section):
                 raise ValueError(
                     f"anchor.landing_point must lie on the surface (within {ON_SURFACE_TOL} m); "
                     f"it is {off:+.3g} m off"
+                )
+        return self
+
+    @model_validator(mode="after")
+    def _rest_long_enough(self) -> Scenario:
+        # The judge needs the true thrust below the motors-off level for min_rest_time: the
+        # motors are off for deploy_time (rest_time) from the command, less the spin-down
+        # and up to a control period at each end before the log shows the change.
+        need = (
+            self.verdict.min_rest_time + spin_down_time(self.vehicle)
+            + 2.0 / self.controller.rate_hz
+        )  # fmt: skip
+        for field, value in (
+            ("mission.deploy_time", self.mission.deploy_time),
+            ("perching.rest_time", self.perching.rest_time),
+        ):
+            if value < need:
+                raise ValueError(
+                    f"{field} = {value:g} s must be >= {need:.3g} s: verdict.min_rest_time = "
+                    f"{self.verdict.min_rest_time:g} s of rest with the true thrust below the "
+                    "motors-off level, plus the rotors' spin-down and two control periods"
                 )
         return self
 
@@ -103,4 +148,10 @@ class Scenario(Section):
                 f"{w_dt:.3g} must be <= {limit:.3g} at damping_ratio {zeta:g}; use a smaller "
                 'sim.timestep, a softer cable or tether.material = "ideal"'
             )
+        return self
+
+    @model_validator(mode="after")
+    def _cross_checks(self) -> Scenario:
+        check_timing(self)  # tetherland.config.checks
+        check_tension_threshold(self)
         return self

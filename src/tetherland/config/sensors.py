@@ -11,7 +11,7 @@ class ImuConfig(Section):
     """Strapdown IMU: specific force and angular rate in F_B, white noise and bias walks."""
 
     rate_hz: float = Field(1000.0, gt=0, le=10000)
-    """Sample rate [Hz]."""
+    """Sample rate of the IMU [Hz]."""
     gyro_noise: float = Field(0.005, ge=0, le=10)
     """Standard deviation of the gyro white noise per sample [rad/s]."""
     accel_noise: float = Field(0.05, ge=0, le=100)
@@ -30,7 +30,7 @@ class MocapConfig(Section):
     """Motion capture: position and attitude of the body, with noise, latency and dropouts."""
 
     rate_hz: float = Field(120.0, gt=0, le=2000)
-    """Sample rate [Hz]."""
+    """Sample rate of the motion-capture poses [Hz]."""
     position_noise: float = Field(0.001, ge=0, le=1)
     """Standard deviation of the position noise per axis [m]."""
     attitude_noise_deg: float = Field(0.3, ge=0, le=45)

@@ -18,23 +18,23 @@ class SimConfig(Section):
     Constraint softness follows MuJoCo's ``solref = (timeconst, dampratio)``: a violated
     contact or cable limit is corrected like a mass-spring-damper with that time constant
     and damping ratio. MuJoCo raises any time constant below two time steps to two time
-    steps, so keep ``*_timeconst >= 2 timestep``.
+    steps, so keep ``*_time_constant >= 2 timestep``.
     """
 
-    timestep: float = Field(0.001, gt=0, le=0.005)
+    timestep: float = Field(0.001, ge=1e-6, le=0.005)
     """Physics time step; 1/timestep must be an integer number of steps per second [s]."""
     integrator: Literal["implicitfast", "Euler"] = "implicitfast"
     """MuJoCo integrator (both semi-implicit in velocity; RK4 is not supported here) [-]."""
-    contact_timeconst: float = Field(0.005, gt=0, le=1)
+    contact_time_constant: float = Field(0.005, gt=0, le=1)
     """Time constant of the lander-surface contacts [s]."""
-    contact_dampratio: float = Field(1.0, gt=0, le=10)
+    contact_damping_ratio: float = Field(1.0, gt=0, le=10)
     """Damping ratio of the lander-surface contacts [-]."""
     impratio: float = Field(10.0, ge=1, le=1000)
     """Ratio of frictional to normal constraint impedance (elliptic cones); larger values
     reduce the creep of soft static friction [-]."""
-    cable_timeconst: float = Field(0.004, gt=0, le=1)
+    cable_time_constant: float = Field(0.004, gt=0, le=1)
     """Time constant of the cable length limit (cable stiffness) [s]."""
-    cable_dampratio: float = Field(1.0, gt=0, le=10)
+    cable_damping_ratio: float = Field(1.0, gt=0, le=10)
     """Damping ratio of the cable length limit [-]."""
     ground_z: float | None = None
     """Height of the horizontal ground plane (start pad) in F_W; by default the lowest point

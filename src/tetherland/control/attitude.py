@@ -43,6 +43,40 @@ def attitude_error(R: FloatArray, R_d: FloatArray) -> FloatArray:
     return 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
 
 
+def attitude_torque(
+    J: FloatArray,
+    J_k_R: FloatArray,
+    J_k_w: FloatArray,
+    R: FloatArray,
+    omega_B: FloatArray,
+    R_d: FloatArray,
+    omega_d: FloatArray | None = None,
+    omega_dot_d: FloatArray | None = None,
+) -> FloatArray:
+    """Body torque tau_B [N m] of the law above for attitude R_WB, rate omega_B [rad/s] and
+    the desired R_d; principal inertia ``J`` [kg m^2] and the gains as J k_R [N m/rad] and
+    J k_w [N m s/rad] per axis.
+
+    ``omega_d``, ``omega_dot_d`` are the desired angular velocity [rad/s] and acceleration
+    [rad/s^2] in the desired frame (feed-forward; zero when omitted). Compiled:
+    :func:`tetherland.control.kernels.so3.attitude_torque`.
+    """
+    e_R = attitude_error(R, R_d)
+    Jw = J * omega_B
+    tau = cross3(omega_B, Jw)
+    if omega_d is None:
+        e_w = omega_B
+    else:
+        Rt_Rd = R.T @ R_d
+        w_d_B = Rt_Rd @ omega_d
+        e_w = omega_B - w_d_B
+        ff = cross3(omega_B, w_d_B)
+        if omega_dot_d is not None:
+            ff = ff - Rt_Rd @ omega_dot_d
+        tau = tau - J * ff
+    return tau - J_k_R * e_R - J_k_w * e_w
+
+
 class AttitudeController:
     """Torque command tracking a desired attitude.
 
@@ -67,23 +101,6 @@ class AttitudeController:
         omega_d: FloatArray | None = None,
         omega_dot_d: FloatArray | None = None,
     ) -> FloatArray:
-        """Body torque tau_B [N m] for attitude R_WB, rate omega_B and the desired R_d.
-
-        ``omega_d``, ``omega_dot_d`` are the desired angular velocity and acceleration in
-        the desired frame (feed-forward; zero when omitted).
-        """
-        J = self.J
-        e_R = attitude_error(R, R_d)
-        Jw = J * omega_B
-        tau = cross3(omega_B, Jw)
-        if omega_d is None:
-            e_w = omega_B
-        else:
-            Rt_Rd = R.T @ R_d
-            w_d_B = Rt_Rd @ omega_d
-            e_w = omega_B - w_d_B
-            ff = cross3(omega_B, w_d_B)
-            if omega_dot_d is not None:
-                ff = ff - Rt_Rd @ omega_dot_d
-            tau = tau - J * ff
-        return tau - self._JkR * e_R - self._Jkw * e_w
+        """Body torque tau_B [N m] for attitude R_WB, rate omega_B and the desired R_d
+        (:func:`attitude_torque` with this controller's inertia and gains)."""
+        return attitude_torque(self.J, self._JkR, self._Jkw, R, omega_B, R_d, omega_d, omega_dot_d)

@@ -17,8 +17,9 @@ v = y_d^(r) + sum_j k_j (y_d^(j) - y^(j)) with (s + p)^r error dynamics; with
 ``dfl_integral`` a clamped integral of each error is added and the error dynamics are
 (s + p)^(r+1), so a constant model error leaves no steady offset. The extension knows
 f_R', so the command leads the motor lag along it. The Lie derivatives are derived
-symbolically with CasADi (:mod:`tetherland.control.dfl_model`, the vehicle parameters
-symbolic too) and generated into a numba kernel, :mod:`tetherland.control.dfl_terms`.
+symbolically with CasADi (:mod:`tetherland.control.kernels.dfl_model`, the vehicle
+parameters symbolic too) and generated into a numba kernel,
+:mod:`tetherland.control.kernels.dfl_terms`.
 
 What it neglects of the cable attachment offset r_att (docs/theory.md section 4.6): the
 model's link ends at the centre of mass. With an offset the link ends at the attachment
@@ -38,7 +39,7 @@ nylon at l = 1 m, a 1 % error in the l of phi'').
 The extension states f_R, f_R' live in the controller and are integrated at the control
 rate; :meth:`DflController.reset` starts them at a given thrust (bumpless switching).
 Singular where A is (nearly) singular, i.e. its Hadamard ratio is below
-:data:`tetherland.control.dfl_kernels.HADAMARD_MIN` (the hierarchical controller's
+:data:`tetherland.control.kernels.dfl.HADAMARD_MIN` (the hierarchical controller's
 singularities plus roll = 90 deg): detected, reported in the diagnostics and handled by
 holding f_R'' = 0 and the last torque.
 """
@@ -51,19 +52,22 @@ import numpy as np
 
 from tetherland import GRAVITY
 from tetherland.config import Scenario
-from tetherland.control import dfl_kernels, kernels
-from tetherland.control.dfl_model import (
+from tetherland.control.kernels import dfl as kernel
+from tetherland.control.kernels.dfl_model import (
     DFL_RELATIVE_DEGREES,
     MODEL_PARAMETERS,
     dfl_expression,
     dfl_function,
     model_parameters,
 )
+from tetherland.control.kernels.mixer import OUT_SATURATION
 from tetherland.control.mixer import Mixer, command_from
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, Reference, StateEstimate
 
 _ERROR_NAMES = ("e_phi", "e_delta", "e_theta_A", "e_psi")
+
+
 def _poly_gains(pole: float, order: int) -> np.ndarray:
     """Coefficients k_0..k_{r-1} of (s + p)^r = s^r + k_{r-1} s^{r-1} + ... + k_0."""
     coeffs = np.poly(np.full(order, -pole))  # [1, k_{r-1}, ..., k_0]
@@ -73,9 +77,9 @@ def _poly_gains(pole: float, order: int) -> np.ndarray:
 class DflController:
     """Gamma_DFL^b for y^b = [phi, delta, theta_A, psi] (implements Controller).
 
-    The update is one compiled call, :func:`tetherland.control.dfl_kernels.dfl_into`, with the
-    Lie derivatives generated from :func:`dfl_expression` (plain reference with the CasADi
-    function: ``dfl_reference``).
+    The update is one compiled call, :func:`tetherland.control.kernels.dfl.dfl_into`, with
+    the Lie derivatives generated from :func:`dfl_expression` (plain reference beside it,
+    with the CasADi function: ``dfl_reference``).
 
     Parameters
     ----------
@@ -108,40 +112,40 @@ class DflController:
         self.control_dt = (
             control_dt if control_dt is not None else 1.0 / scenario.controller.rate_hz
         )
-        self._par = dfl_kernels.pack_dfl(
+        self._par = kernel.pack_dfl(
             self.mass, self.integral, self.integral_max, self.compensate_offset, self.control_dt,
             self.r_att_B, self.R_WA, [k[extra:] for k in full], k_int,
             self.mixer.layout.allocation_inverse[:, 0],  # dF_i/df_R: the thrust share
             self.model,
         )  # fmt: skip
-        # [f_R, f_R', t_last, last u (4), error integrals (4)]
-        self._state = dfl_kernels.dfl_state()
+        # thrust extension, last update time, last input, error integrals (kernel.STATE_*)
+        self._state = kernel.dfl_state()
         # load the compiled law now (numba's cache, once per process), not at the first
         # tethered tick of a mission: a call on scratch arrays
-        scratch = dfl_kernels.dfl_state()
-        scratch[0] = self.mass * GRAVITY
-        dfl_kernels.dfl_into(
+        scratch = kernel.dfl_state()
+        scratch[kernel.STATE_THRUST] = self.mass * GRAVITY
+        kernel.dfl_into(
             0.0, np.array([0.5, 0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3),
             np.zeros((5, 4)), 0.0, scratch, self._par, self.mixer.packed,
-            np.empty(dfl_kernels.DFL_OUT_WIDTH),
+            np.empty(kernel.OUT_WIDTH),
         )  # fmt: skip
 
     def reset(self, thrust: float | None = None, thrust_rate: float = 0.0) -> None:
         """Restart the thrust extension at ``thrust`` [N] and ``thrust_rate`` [N/s]
         (None: the reference's nominal thrust at the next update)."""
-        last_u = self._state[3:7].copy()  # the held torque survives a restart
-        self._state[:] = dfl_kernels.dfl_state()
-        self._state[3:7] = last_u
+        state = self._state
+        last_u = state[kernel.STATE_U].copy()  # the held torque survives a restart
+        state[:] = kernel.dfl_state()
+        state[kernel.STATE_U] = last_u
         if thrust is not None:
-            self._state[0], self._state[1] = thrust, thrust_rate
-        else:
-            self._state[1] = thrust_rate
+            state[kernel.STATE_THRUST] = thrust
+        state[kernel.STATE_THRUST_RATE] = thrust_rate
 
     @property
     def extension(self) -> tuple[float | None, float]:
         """The thrust extension state (f_R, f_R') [N, N/s]."""
-        f = float(self._state[0])
-        return (None if math.isnan(f) else f), float(self._state[1])
+        f = float(self._state[kernel.STATE_THRUST])
+        return (None if math.isnan(f) else f), float(self._state[kernel.STATE_THRUST_RATE])
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         """Rotor commands: u = A^-1 (v - b), then integrate f_R'' into the thrust."""
@@ -153,21 +157,21 @@ class DflController:
             )
         ff = reference.feedforward
         state = self._state
-        if math.isnan(state[0]):  # start the extension at the plan's nominal thrust
-            state[0] = ff.f_R if ff is not None else self.mass * GRAVITY
-            state[1] = ff.f_R_dot if ff is not None else 0.0
+        if math.isnan(state[kernel.STATE_THRUST]):  # start at the plan's nominal thrust
+            state[kernel.STATE_THRUST] = ff.f_R if ff is not None else self.mass * GRAVITY
+            state[kernel.STATE_THRUST_RATE] = ff.f_R_dot if ff is not None else 0.0
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
         body = estimate.body
-        out = np.empty(dfl_kernels.DFL_OUT_WIDTH)
-        dfl_kernels.dfl_into(
+        out = np.empty(kernel.OUT_WIDTH)
+        kernel.dfl_into(
             t, np.array((link.phi, link.delta, link.phi_dot, link.delta_dot)), body.q_WB,
             body.omega_B, Y, float(tension), state, self._par, self.mixer.packed, out,
         )  # fmt: skip
-        diag = dict(zip(_ERROR_NAMES, out[dfl_kernels.DFL_ERRORS].tolist(), strict=True))
-        diag["singular"] = float(out[dfl_kernels.DFL_SINGULAR])
-        diag["decoupling_ratio"] = float(out[dfl_kernels.DFL_RATIO])
+        diag = dict(zip(_ERROR_NAMES, out[kernel.OUT_ERRORS].tolist(), strict=True))
+        diag["singular"] = float(out[kernel.OUT_SINGULAR])
+        diag["decoupling_ratio"] = float(out[kernel.OUT_RATIO])
         diag["ff_tension"] = ff.tension if ff is not None else math.nan
-        diag["saturation"] = float(out[kernels.OUT_SATURATION])
+        diag["saturation"] = float(out[OUT_SATURATION])
         return command_from(out, diag)
 
 

@@ -11,7 +11,8 @@ import math
 import numpy as np
 
 from tetherland.config import Scenario
-from tetherland.control import kernels
+from tetherland.control.kernels import free_flight as kernel
+from tetherland.control.kernels.mixer import OUT_SATURATION
 from tetherland.control.mixer import Mixer, command_from
 from tetherland.control.position import PositionController, PositionReference
 from tetherland.errors import SingularityError
@@ -22,8 +23,9 @@ from tetherland.rotations import quat_to_rotmat
 class FreeFlightController:
     """Geometric position + SO(3) attitude control (Lee et al. 2010) to rotor speeds.
 
-    The update is one compiled call, :func:`tetherland.control.kernels.free_flight_into`
-    (plain reference: ``free_flight_reference``, the equations of
+    The update is one compiled call,
+    :func:`tetherland.control.kernels.free_flight.free_flight_into` (plain reference beside
+    it: ``free_flight_reference``, the equations of
     :class:`PositionController`, :class:`AttitudeController` and :class:`Mixer`).
 
     Parameters
@@ -41,13 +43,17 @@ class FreeFlightController:
             min_thrust=4.0 * v.f_min,
         )
         self.mixer = Mixer(v)
-        self._par = kernels.pack_free_flight(self.position)
+        pos, att = self.position, self.position.attitude
+        self._par = kernel.pack_free_flight(
+            pos.mass, pos.g, pos.k_x, pos.k_v, pos.k_i, pos.integral_max, pos.tan_max_tilt,
+            pos.min_vertical, att.J, att.gains.k_R, att.gains.k_w,
+        )  # fmt: skip
         self._t_last: float | None = None
         # load the compiled law now (numba's cache, once per process): scratch arrays
         z3 = np.zeros(3)
-        kernels.free_flight_into(
+        kernel.free_flight_into(
             z3, z3, np.array([1.0, 0.0, 0.0, 0.0]), z3, np.zeros((3, 3)), 0.0, math.nan,
-            np.zeros(3), self._par, self.mixer.packed, np.empty(kernels.FF_OUT_WIDTH),
+            np.zeros(3), self._par, self.mixer.packed, np.empty(kernel.OUT_WIDTH),
         )  # fmt: skip
 
     def reset(self) -> None:
@@ -78,19 +84,19 @@ class FreeFlightController:
         dt = math.nan if self._t_last is None else t - self._t_last
         self._t_last = t
         body = estimate.body
-        out = np.empty(kernels.FF_OUT_WIDTH)
-        kernels.free_flight_into(
+        out = np.empty(kernel.OUT_WIDTH)
+        kernel.free_flight_into(
             body.p_W, body.v_W, body.q_WB, body.omega_B, P, float(reference.yaw), dt,
             self.position.integral, self._par, self.mixer.packed, out,
         )  # fmt: skip
-        if out[kernels.FF_SINGULAR]:
+        if out[kernel.OUT_SINGULAR]:
             raise SingularityError("thrust axis is aligned with the desired heading: yaw undefined")
-        e_x, e_y, e_z = out[kernels.FF_E_X].tolist()
+        e_x, e_y, e_z = out[kernel.OUT_E_X].tolist()
         diag = {
             "e_x": e_x,
             "e_y": e_y,
             "e_z": e_z,
-            "tilt_limited": float(out[kernels.FF_LIMITED]),
-            "saturation": float(out[kernels.OUT_SATURATION]),
+            "tilt_limited": float(out[kernel.OUT_LIMITED]),
+            "saturation": float(out[OUT_SATURATION]),
         }
         return command_from(out, diag)

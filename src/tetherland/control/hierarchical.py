@@ -31,8 +31,9 @@ import numpy as np
 
 from tetherland import GRAVITY
 from tetherland.config import Scenario
-from tetherland.control import kernels
 from tetherland.control.attitude import AttitudeController, AttitudeGains
+from tetherland.control.kernels import hierarchical as kernel
+from tetherland.control.kernels.mixer import OUT_SATURATION
 from tetherland.control.mixer import Mixer, command_from
 from tetherland.errors import SingularityError
 from tetherland.geometry import LandingGeometry
@@ -45,8 +46,9 @@ _ZERO3 = np.zeros(3)
 class HierarchicalController:
     """Gamma_HC^b: link-angle outer loop, SO(3) attitude inner loop (implements Controller).
 
-    The update is one compiled call, :func:`tetherland.control.kernels.hierarchical_into`
-    (plain reference with the equations of the module docstring: ``hierarchical_reference``).
+    The update is one compiled call,
+    :func:`tetherland.control.kernels.hierarchical.hierarchical_into` (plain reference beside
+    it, with the equations of the module docstring: ``hierarchical_reference``).
 
     Parameters
     ----------
@@ -73,23 +75,28 @@ class HierarchicalController:
         self.integral_max = gains.link_integral_max
         self.attitude = AttitudeController(v.inertia, AttitudeGains.from_config(gains))
         self.mixer = Mixer(v)
-        self._par = kernels.pack_hierarchical(self)
+        att = self.attitude
+        self._par = kernel.pack_hierarchical(
+            self.mass, self.length, self.g, self.k_p, self.k_d, self.k_i, self.integral_max,
+            self.compensate_offset, self.r_att_B, self.R_WA, att.J, att.gains.k_R,
+            att.gains.k_w,
+        )  # fmt: skip
         # integral of the (phi, delta) errors [rad s], last update time, last regular
         # thrust and attitude (held through singularities)
-        self._state = kernels.hierarchical_state(self.mass, self.g)
+        self._state = kernel.hierarchical_state(self.mass, self.g)
         # load the compiled law now (numba's cache, once per process), not at the first
         # tethered tick of a mission: a call on scratch arrays
-        kernels.hierarchical_into(
+        kernel.hierarchical_into(
             0.0, np.array([0.5, 0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3),
             np.zeros((5, 4)), np.zeros(3), np.zeros(3), True, 0.0, self._state.copy(),
-            self._par, self.mixer.packed, np.empty(kernels.HC_OUT_WIDTH),
+            self._par, self.mixer.packed, np.empty(kernel.OUT_WIDTH),
         )  # fmt: skip
 
     def reset(self) -> None:
         """Forget the last regular attitude and the link integral (on activation)."""
-        last_thrust = self._state[3]
-        self._state[:] = kernels.hierarchical_state(self.mass, self.g)
-        self._state[3] = last_thrust
+        last_thrust = self._state[kernel.STATE_THRUST]
+        self._state[:] = kernel.hierarchical_state(self.mass, self.g)
+        self._state[kernel.STATE_THRUST] = last_thrust
 
     def _delta_free(self, Y: np.ndarray, link: LinkState) -> np.ndarray:
         """``Y`` with the delta rows that leave the link azimuth to gravity
@@ -106,7 +113,7 @@ class HierarchicalController:
         out[2, 1] = (
             self.g * math.sin(link.phi) * math.sin(link.delta) / self.length
             - 0.5 * math.sin(2.0 * link.delta) * link.phi_dot**2
-            - self.k_i * self._state[1]
+            - self.k_i * self._state[kernel.STATE_INTEGRAL][1]
         )
         return out
 
@@ -121,26 +128,26 @@ class HierarchicalController:
         ff = reference.feedforward
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
         body = estimate.body
-        out = np.empty(kernels.HC_OUT_WIDTH)
-        kernels.hierarchical_into(
+        out = np.empty(kernel.OUT_WIDTH)
+        kernel.hierarchical_into(
             t, np.array((link.phi, link.delta, link.phi_dot, link.delta_dot)), body.q_WB,
             body.omega_B, Y, _ZERO3 if ff is None else ff.omega_B,
             _ZERO3 if ff is None else ff.omega_dot_B, ff is not None, float(tension),
             self._state, self._par, self.mixer.packed, out,
         )  # fmt: skip
-        if out[kernels.HC_THETA_UNDEFINED]:
+        if out[kernel.OUT_THETA_UNDEFINED]:
             raise SingularityError(
                 "thrust axis is perpendicular to the link plane: theta_A undefined"
             )
-        e_phi, e_delta, e_theta, e_psi = out[kernels.HC_ERRORS].tolist()
+        e_phi, e_delta, e_theta, e_psi = out[kernel.OUT_ERRORS].tolist()
         diag = {
             "e_phi": e_phi,
             "e_delta": e_delta,
             "e_theta_A": e_theta,
             "e_psi": e_psi,
-            "singular": float(out[kernels.HC_SINGULAR]),
-            "singularity_margin": float(out[kernels.HC_MARGIN]),
+            "singular": float(out[kernel.OUT_SINGULAR]),
+            "singularity_margin": float(out[kernel.OUT_MARGIN]),
             "ff_tension": ff.tension if ff is not None else math.nan,
-            "saturation": float(out[kernels.OUT_SATURATION]),
+            "saturation": float(out[OUT_SATURATION]),
         }
         return command_from(out, diag)

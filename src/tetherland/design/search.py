@@ -1,13 +1,15 @@
 """Search cable length, attachment offset, anchor height and hooking approach for a slope.
 
-Three stages, cheapest first:
+Hover first: a vehicle that cannot hover in free flight with the control margin
+(:func:`tetherland.analysis.free_hover`) has no design; nothing else is searched. Then
+three stages, cheapest first:
 
 1. **Analysis** on the whole grid of (l, r_att,z, h_A): the landed inclined hover of
    :func:`tetherland.analysis.landed_hover` (rotor floor and ceiling with the control
    margin, the cable-offset torque, the rest with the motors off).
 2. **Hooking clearance** for the feasible ones, best landed-hover rotor margin first:
    every approach direction and hook drop of the space; the pass must keep the
-   mission's ``hooking_clearance``, and the approach with the most clearance (counted up to
+   ``mission.hooking.min_clearance``, and the approach with the most clearance (counted up to
    ``target_clearance``, then the shorter hook drop) is kept.
 3. **Planning** for the first ``shortlist`` of them (stopping once ``max_designs`` are
    verified): the landing and takeoff OCPs (6.21)
@@ -35,6 +37,7 @@ from tetherland.analysis import (
     LandedHover,
     SlopeLimit,
     VehicleLimits,
+    free_hover,
     landed_hover,
     tethered_slope_limit,
 )
@@ -44,7 +47,6 @@ from tetherland.design.space import DesignPoint, DesignSpace
 from tetherland.errors import ConfigError
 from tetherland.geometry import (
     LandingGeometry,
-    Surface,
     attachment_in_plane,
     effective_h_R,
     landing_geometry,
@@ -52,6 +54,7 @@ from tetherland.geometry import (
 )
 from tetherland.mission.hooking import hooking_pass_for, pass_clearance
 from tetherland.planning import Maneuver, Planner, PlanResult
+from tetherland.surface import Surface
 
 _TOL = 1e-9
 
@@ -59,11 +62,14 @@ _TOL = 1e-9
 class DesignLimit(enum.Enum):
     """The stage at which every candidate of a design search failed."""
 
+    CANNOT_HOVER = "cannot_hover"
+    """The vehicle cannot hover in free flight with the control margin: checked before
+    any candidate (:attr:`~tetherland.analysis.Infeasibility.CANNOT_HOVER`)."""
     LANDED_HOVER = "landed_hover"
     """The analysis: no candidate holds the landed hover (see ``analysis_binding``)."""
     HOOKING_CLEARANCE = "hooking_clearance"
     """Every hooking pass of the feasible candidates comes closer to the surface than
-    ``mission.hooking_clearance``."""
+    ``mission.hooking.min_clearance``."""
     PLAN = "plan"
     """The planner found no verified landing and takeoff for the shortlisted candidates."""
     PLAN_ROTOR_MARGIN = "plan_rotor_margin"
@@ -261,7 +267,8 @@ def search_designs(
     base = design_base(scenario, slope_deg)
     B = float(base.surface.slope_deg)
 
-    candidates = _analysis_stage(base, space)
+    hover = free_hover(VehicleLimits.from_scenario(base))
+    candidates = _analysis_stage(base, space) if hover.ok else []
     feasible = sorted((c for c in candidates if c.hover.feasible), key=lambda c: -c.landed_margin)
 
     def result(
@@ -279,6 +286,9 @@ def search_designs(
             candidates=counted, planned=planned, wall_time_s=time.perf_counter() - t0,
         )  # fmt: skip
 
+    if not hover.ok:
+        reason = f"no design lands on {B:g} deg: {hover.message}"
+        return result((), DesignLimit.CANNOT_HOVER, None, reason, 0, 0)
     if not feasible:
         limit, binding, reason = _no_landed_hover(base, space, candidates)
         return result((), limit, binding, reason, len(candidates), 0)
@@ -290,7 +300,7 @@ def search_designs(
         best = _best_hooking(base, surface, space, cand)
         if best is None:
             continue
-        if best.clearance >= base.mission.hooking_clearance - _TOL:
+        if best.clearance >= base.mission.hooking.min_clearance - _TOL:
             hooked.append((cand, best))
             if len(hooked) >= space.shortlist:
                 break
@@ -303,8 +313,8 @@ def search_designs(
             reason += (
                 f" for every candidate whose landed hover is feasible; the best ({cand.describe()},"
                 f" approach {list(hook.approach_A)}, hook_drop {hook.hook_drop:g} m) passes "
-                f"{100 * hook.clearance:.1f} cm from it (needs mission.hooking_clearance = "
-                f"{100 * base.mission.hooking_clearance:g} cm)"
+                f"{100 * hook.clearance:.1f} cm from it (needs mission.hooking.min_clearance = "
+                f"{100 * base.mission.hooking.min_clearance:g} cm)"
             )
         return result((), DesignLimit.HOOKING_CLEARANCE, None, reason, len(candidates), 0)
 
@@ -416,7 +426,7 @@ def _best_hooking(
     def exact(approach: tuple[float, float, float], drop: float) -> _Hooking:
         hooking = hooking_pass_for(
             geo, approach_A=approach, hook_drop=drop, r_att_B=cand.attachment,
-            approach_distance=cfg.approach_distance, hook_overshoot=cfg.hook_overshoot,
+            approach_distance=cfg.hooking.approach_distance, hook_overshoot=cfg.hooking.overshoot,
         )  # fmt: skip
         return _Hooking(approach, float(drop), pass_clearance(base, geo, hooking))
 

@@ -54,7 +54,7 @@ class DesignSpace:
     target_clearance : float
         Clearance beyond which more does not count when ranking, in [0, 10] [m]: among
         hooking approaches that reach it the shorter hook drop is preferred. (The least
-        clearance a design must keep is the scenario's ``mission.hooking_clearance``.)
+        clearance a design must keep is the scenario's ``mission.hooking.min_clearance``.)
     shortlist : int
         At most how many (length, attachment, anchor height) candidates, best landed-hover
         rotor margin first, get their landing and takeoff planned, in [1, 1000].

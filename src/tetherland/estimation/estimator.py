@@ -90,8 +90,8 @@ class UkfEstimator:
             tension_time_constant = tension_filter_time_constant(self._stiffness, v.mass)
         self.tension = TensionEstimator(
             v.mass,
-            scenario.mission.tension_threshold,
-            scenario.mission.tension_dwell,
+            scenario.mission.stretch.tension_threshold,
+            scenario.mission.stretch.tension_dwell,
             tension_time_constant,
         )
         w0 = np.zeros(4) if rotor_speeds0 is None else np.asarray(rotor_speeds0, dtype=float)

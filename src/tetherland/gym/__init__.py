@@ -8,7 +8,8 @@
 
 Both run the mission's physics (MuJoCo plant at 1 kHz, IMU and mocap, UKF in the loop);
 one step is one 500 Hz control tick. :class:`ExpertPolicy` (the OCP plan and the
-hierarchical controller) maps observations to actions, for learning from demonstration::
+hierarchical controller, on the env's belief) maps observations to actions, for learning
+from demonstration; ``info`` carries the truth only with ``privileged=True``::
 
     import gymnasium as gym
     import tetherland.gym

@@ -11,25 +11,36 @@ link state and the estimated tension. Action (float32, 4): normalised rotor thru
 a_i in [0, 1], f_i = f_min + a_i (f_max - f_min) [N], sent as speed commands through the
 believed rotor model.
 
-Landing: the episode runs to touchdown (a contact force above ``verdict.contact_force``,
+Landing: the episode runs to touchdown (a contact force above ``verdict.touchdown_force``,
 as the judge of a mission) and on until the rotors have idled (the action's zero, the
 motors-off of the mission) for ``rest_time``; conditions (1)-(4) are judged at touchdown
 with the scenario's ``[verdict]`` tolerances and (5) over the rest as the judge does: the
-slip over the whole idle interval, the speed from ``verdict.rest_settle`` after idling.
+slip over the whole idle interval, the speed from ``verdict.rest_settle_time`` after idling.
 The rest ends early if the rotors are driven again. The final
 reward is the number of conditions held plus ``success_bonus`` when all five hold.
 Takeoff: the episode ends ``rest_time`` after the planned end; success when the link
 elevation and the tilt are within ``takeoff_tolerance`` of the planned taut end hover.
 A frame contact above ``verdict.crash_force`` (crash) or a slack cable (true tension
-below ``SLACK_TENSION`` for ``mission.fault_slack_time`` while airborne) ends the episode
-with ``-failure_penalty``;
+below ``SLACK_TENSION`` for ``mission.detection.slack_dwell`` while airborne) ends the
+episode with ``-failure_penalty``;
 each step costs ``dt`` x the distance to the goal [m s]. Episodes are truncated at
 ``time_limit`` (default: the plan's duration + ``rest_time`` + 3 s).
 
-``randomize=True`` draws the campaign perturbations (:mod:`tetherland.campaign.perturb`)
-from the env's RNG at each reset: the plant keeps the scenario as the truth (with the drawn
-sensor-noise scale and mocap dropouts), the estimator believes the perturbed vehicle,
-surface and anchor (``info["perturbation"]``). Wind gusts are not applied.
+Each reset draws the episode's seed from the env's RNG (``info["seed"]``); the episode's
+sensor noise and perturbation come from that seed's named streams
+(:mod:`tetherland.randomness`). ``randomize=True`` draws the campaign perturbations
+(:mod:`tetherland.campaign.perturb`) at each reset: the plant keeps the scenario as the
+truth (with the drawn sensor-noise scale and mocap dropouts), the estimator believes the
+perturbed vehicle, surface and anchor (``env.belief``, what an agent or the expert may plan
+on). Wind gusts are not applied.
+
+``info`` holds what an agent may know: ``t``, ``seed``, ``outcome``, the landing
+``conditions`` when judged (the episode's result, as the reward) and a ``message`` when the
+physics diverged. The truth (:data:`PRIVILEGED_INFO`: the true ``tension``, the drawn
+``perturbation``, the judge's ``measures``, the true touchdown ``t_L`` and the start of
+the judged rest ``t_rest``) is added only for an env made with ``privileged=True``: for
+debugging, or for the critic of an asymmetric actor-critic, never for a policy that is
+meant to fly a real robot.
 """
 
 from __future__ import annotations
@@ -58,11 +69,12 @@ from tetherland.interfaces import Command, StateEstimate
 from tetherland.models.quadrotor import RotorModel
 from tetherland.planning import Planner
 from tetherland.planning.maneuver import Maneuver
+from tetherland.planning.start import plan_start_state
 from tetherland.planning.trajectory import Trajectory
+from tetherland.randomness import RandomSource
 from tetherland.rotations import quat_to_rotmat
 from tetherland.sim import Plant, Runner
 from tetherland.sim.baselines import ConstantSpeedController
-from tetherland.sim.start import plan_start_state
 from tetherland.state import LinkState, RigidBodyState
 from tetherland.verdict import tolerances_of
 
@@ -78,6 +90,8 @@ OBSERVATION_BOUND = np.array(
 """Bounds of the observation space (far beyond any flight; |q| = 1; angles wrap at pi)."""
 SLACK_TENSION = 0.05
 """True tension below which the cable counts as slack [N]."""
+PRIVILEGED_INFO = ("tension", "perturbation", "measures", "t_L", "t_rest")
+"""``info`` entries that carry the plant's truth: only with ``privileged=True``."""
 
 
 class Outcome(StrEnum):
@@ -118,7 +132,7 @@ def _observe(est: StateEstimate) -> FloatArray:
 
 def initial_state(plan: Trajectory, scenario: Scenario) -> tuple[RigidBodyState, FloatArray]:
     """The plan's first state (cable taut at the plan's start tension) and rotor speeds
-    [rad/s]: :func:`tetherland.sim.start.plan_start_state`."""
+    [rad/s]: :func:`tetherland.planning.start.plan_start_state`."""
     return plan_start_state(plan, scenario)
 
 
@@ -136,7 +150,7 @@ class TetheredEnv(gymnasium.Env):
     randomize : bool
         Draw the campaign perturbations at each reset.
     rest_time : float
-        Landing: the rest with idle rotors judged for condition (5) (> verdict.rest_settle);
+        Landing: the rest with idle rotors judged for condition (5) (> verdict.rest_settle_time);
         takeoff: time after the planned end [s], in (0, 10].
     time_limit : float, optional
         Truncation time [s] (default: plan duration + rest_time + 3 s), in (0, 600].
@@ -145,7 +159,17 @@ class TetheredEnv(gymnasium.Env):
     success_bonus, failure_penalty : float
         Reward terms [-].
     planner : Planner, optional
-        Reuse compiled solvers.
+        Reuse compiled solvers (kept as :attr:`planner`, the expert's too).
+    privileged : bool
+        Add the truth to ``info`` (:data:`PRIVILEGED_INFO`): debugging, asymmetric
+        actor-critic.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The truth the plant simulates.
+    belief : Scenario
+        What the robot believes this episode (the scenario itself unless ``randomize``).
     """
 
     metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (gymnasium's convention)
@@ -163,6 +187,7 @@ class TetheredEnv(gymnasium.Env):
         success_bonus: float = 5.0,
         failure_penalty: float = 10.0,
         planner: Planner | None = None,
+        privileged: bool = False,
     ) -> None:
         super().__init__()
         if isinstance(scenario, Scenario):
@@ -175,10 +200,10 @@ class TetheredEnv(gymnasium.Env):
             raise ConfigError(f"maneuver must be landing or takeoff (got {maneuver!r})") from None
         if not 0 < rest_time <= 10:
             raise ConfigError(f"rest_time must be in (0, 10] s (got {rest_time})")
-        self._rest_settle = sc.verdict.rest_settle
+        self._rest_settle = sc.verdict.rest_settle_time
         if self.maneuver is Maneuver.LANDING and rest_time <= self._rest_settle:
             raise ConfigError(
-                f"rest_time must exceed verdict.rest_settle = {self._rest_settle:g} s for a "
+                f"rest_time must exceed verdict.rest_settle_time = {self._rest_settle:g} s for a "
                 f"landing (got {rest_time})"
             )
         if time_limit is not None and not 0 < time_limit <= 600:
@@ -188,12 +213,15 @@ class TetheredEnv(gymnasium.Env):
                 f"takeoff_tolerance_deg must be in (0, 45] (got {takeoff_tolerance_deg})"
             )
         self.scenario = sc
+        self.belief = sc
         self.randomize = bool(randomize)
+        self.privileged = bool(privileged)
         self.rest_time = float(rest_time)
         self.tolerance = tolerances_of(sc)
         self.takeoff_tolerance = math.radians(takeoff_tolerance_deg)
         self.success_bonus, self.failure_penalty = float(success_bonus), float(failure_penalty)
-        result = (planner or Planner()).plan(sc, self.maneuver)
+        self.planner = planner or Planner()
+        result = self.planner.plan(sc, self.maneuver)
         if result.trajectory is None or result.status.value != "solved":
             raise ConfigError(f"no {self.maneuver.value} plan for '{sc.name}': {result.message}")
         self.plan: Trajectory = result.require()
@@ -222,10 +250,11 @@ class TetheredEnv(gymnasium.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[FloatArray, dict[str, Any]]:
         super().reset(seed=seed)
-        rng = self.np_random
+        # one random source per episode, its seed drawn from the environment's generator
+        random = RandomSource(int(self.np_random.integers(2**63)))
         plant_sc, belief, perturbation = self.scenario, self.scenario, None
         if self.randomize:
-            perturbation = sample_perturbation(self.scenario, rng, horizon=self.time_limit)
+            perturbation = sample_perturbation(self.scenario, random, horizon=self.time_limit)
             plant_sc, belief = apply_perturbation(self.scenario, perturbation)
         if self._plant.scenario != plant_sc:
             self._plant = Plant(plant_sc)
@@ -236,8 +265,10 @@ class TetheredEnv(gymnasium.Env):
                         plant=self._plant)  # fmt: skip
         if self._loop is not None:
             self._loop.close()
-        self._loop = runner.steps(self.time_limit + 2 * self.dt, initial_state=self._x0,
-                                  rotor_speeds=self._w0, cable_engaged=True, rng=rng)  # fmt: skip
+        self._loop = runner.steps(
+            self.time_limit + 2 * self.dt, initial_state=self._x0, rotor_speeds=self._w0,
+            cable_engaged=True, random=random,
+        )  # fmt: skip
         tick = next(self._loop)
         self._history: deque[tuple[FloatArray, FloatArray]] = deque(maxlen=3)
         self._touchdown: dict[str, Any] | None = None
@@ -247,9 +278,9 @@ class TetheredEnv(gymnasium.Env):
         self._idle_since: float | None = None
         self._done = False
         self._record_truth()
-        info = {"t": tick.t, "outcome": Outcome.RUNNING.value,
+        info = {"t": tick.t, "outcome": Outcome.RUNNING.value, "seed": random.seed,
                 "perturbation": perturbation.to_dict() if perturbation else {}}  # fmt: skip
-        return _observe(tick.estimate), info
+        return _observe(tick.estimate), self._shown(info)
 
     def step(self, action: FloatArray) -> tuple[FloatArray, float, bool, bool, dict[str, Any]]:
         if self._loop is None or self._done:
@@ -269,13 +300,20 @@ class TetheredEnv(gymnasium.Env):
             obs[0] = t
             penalty = 0.0 if outcome is Outcome.TIME_LIMIT else -self.failure_penalty
             info = {"t": t, "outcome": outcome.value, "message": log.metadata.get("message", "")}
-            return obs, penalty, outcome is Outcome.DIVERGED, outcome is Outcome.TIME_LIMIT, info
+            return (obs, penalty, outcome is Outcome.DIVERGED, outcome is Outcome.TIME_LIMIT,
+                    self._shown(info))  # fmt: skip
         reward, outcome, info = self._judge(tick.t, not a.any())
         terminated = outcome not in (Outcome.RUNNING, Outcome.TIME_LIMIT)
         truncated = outcome is Outcome.TIME_LIMIT
         self._done = terminated or truncated
         info.update(t=tick.t, outcome=outcome.value)
-        return _observe(tick.estimate), reward, terminated, truncated, info
+        return _observe(tick.estimate), reward, terminated, truncated, self._shown(info)
+
+    def _shown(self, info: dict[str, Any]) -> dict[str, Any]:
+        """``info`` as the env shows it: without the truth unless privileged."""
+        if self.privileged:
+            return info
+        return {k: v for k, v in info.items() if k not in PRIVILEGED_INFO}
 
     def close(self) -> None:
         if self._loop is not None:
@@ -302,7 +340,7 @@ class TetheredEnv(gymnasium.Env):
         if frame > cfg.crash_force:
             return -self.failure_penalty, Outcome.CRASHED, info
         force = max(float(plant.lander_forces.max()), frame)
-        airborne = force <= cfg.contact_force
+        airborne = force <= cfg.touchdown_force
         if self._slack(t, plant.tension, airborne):
             return -self.failure_penalty, Outcome.SLACK, info
         if self.maneuver is Maneuver.LANDING:
@@ -321,7 +359,7 @@ class TetheredEnv(gymnasium.Env):
             return False
         if self._slack_since is None:
             self._slack_since = t
-        return t - self._slack_since > self.scenario.mission.fault_slack_time
+        return t - self._slack_since > self.scenario.mission.detection.slack_dwell
 
     def _landing(self, t, p_RL, z_B, v_W, airborne, idle, info) -> tuple[float, Outcome]:
         geo = self.geometry

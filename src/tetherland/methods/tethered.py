@@ -35,7 +35,7 @@ class TetheredMethod:
             controller=SwitchingController(belief, controller or belief.controller.kind),
             initial_state=plan.start,
             rotor_speeds=None,
-            duration=belief.mission.max_duration,
+            duration=belief.mission.time_limit,
             diagnostic_keys=DIAGNOSTICS,
         )
 
@@ -54,7 +54,6 @@ class TetheredMethod:
         return replace(
             base,
             phase_codes={p.name.lower(): int(p) for p in Phase},
-            landing_phases=("tethered_landing", "touchdown"),
             tension_phases=("tethered_landing", "tethered_takeoff"),
             tethered_phases=("tethered_landing", "touchdown", "spin_up", "tethered_takeoff"),
             phases=tuple(

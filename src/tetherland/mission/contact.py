@@ -3,28 +3,27 @@
 One rule for the mission's supervisor and the gym expert. Near the end of the planned
 landing, and past it while the link reference keeps descending (:func:`guarded_descent`),
 contact with the surface is believed only when every signal agrees for
-``mission.contact_dwell``:
+``mission.contact.dwell`` (the names below are fields of ``[mission.contact]``):
 
-1. **clearance**: the lowest lander tip of the estimated pose is within
-   ``contact_clearance`` of the *believed* surface (and the link within
-   ``contact_gate_deg`` of the believed phi*), so a lagging link far above the surface is
-   a tracking error;
-2. **link stall**: the estimated link stays ``contact_error_deg`` above the descending
-   reference *and* it descends slower than ``contact_stall_rate_deg`` and rises slower
-   than ``contact_creep_rate_deg``: the surface stops it (a link that still descends lags,
-   it is not stopped). On a wall the landers pressed by the descending reference let the
+1. **clearance**: the lowest lander tip of the estimated pose is within ``clearance`` of
+   the *believed* surface (and the link within ``gate_deg`` of the believed phi*), so a
+   lagging link far above the surface is a tracking error;
+2. **link stall**: the estimated link stays ``link_lag_deg`` above the descending
+   reference *and* it descends slower than ``stall_rate_deg_s`` and rises slower than
+   ``creep_rate_deg_s``: the surface stops it (a link that still descends lags, it is not
+   stopped). On a wall the landers pressed by the descending reference let the
    vehicle creep up the surface at up to about 1 deg/s (the weight does not hold it
    there); a bounce or a gust moves the link faster;
 3. **contact force** (when the estimate carries the external force, i.e. the IMU's
    specific force and the rotors' thrust): the external force on the vehicle without its
    component along the cable, projected on the believed surface normal, low-passed, is
-   above ``contact_force``, or an impact above ``contact_impact_force`` was seen within
-   twice the dwell.
+   above ``surface_force``, or an impact above ``impact_force`` was seen within twice the
+   dwell.
 
 A gust pushes the vehicle away from the surface only while it lasts and gives no
 clearance; an anchor belief error shifts the link angles but not the surface force. A
 descent that stalls above the surface therefore goes on until the surface pushes back.
-At contact the reference holds the link ``contact_press_deg`` below the contact elevation
+At contact the reference holds the link ``press_deg`` below the contact elevation
 (:func:`contact_hold`), which keeps the landers loaded until the motors go off.
 """
 
@@ -37,9 +36,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from tetherland.config import Scenario
-from tetherland.config.mission import MissionConfig
+from tetherland.config.mission import ContactConfig, TouchdownConfig
 from tetherland.geometry import FloatArray, LandingGeometry, effective_h_R
 from tetherland.interfaces import ControlMode, Feedforward, Reference, StateEstimate
+from tetherland.models.airframe import lander_tips_B
 from tetherland.rotations import quat_to_rotmat
 
 
@@ -140,12 +140,10 @@ class ContactGeometry:
     def from_scenario(cls, scenario: Scenario) -> ContactGeometry:
         geo = LandingGeometry.from_scenario(scenario)
         v = scenario.vehicle
-        w = v.lander_half_width
-        tips = np.array([[sx * w, sy * w, -v.h_R] for sx in (1, -1) for sy in (1, -1)])
         return cls(
             z_S=geo.surface.z_S.copy(),
             surface_point=geo.p_L.copy(),
-            tips_B=tips,
+            tips_B=lander_tips_B(v.lander_half_width, v.h_R),
             sag=v.h_R - effective_h_R(scenario),
             p_A=geo.p_A.copy(),
             r_att_B=np.asarray(v.cable_attachment, dtype=float),
@@ -185,17 +183,17 @@ class ContactRule:
     Parameters
     ----------
     scenario : Scenario
-        The believed scenario (``[mission]`` thresholds, vehicle, surface, anchor).
+        The believed scenario (``[mission.contact]`` thresholds, vehicle, surface, anchor).
     """
 
     def __init__(self, scenario: Scenario) -> None:
-        cfg: MissionConfig = scenario.mission
+        cfg: ContactConfig = scenario.mission.contact
         self.cfg = cfg
         self.geometry = ContactGeometry.from_scenario(scenario)
-        self._error = math.radians(cfg.contact_error_deg)
-        self._stall = math.radians(cfg.contact_stall_rate_deg)
-        self._creep = math.radians(cfg.contact_creep_rate_deg)
-        self._gate = math.radians(cfg.contact_gate_deg)
+        self._error = math.radians(cfg.link_lag_deg)
+        self._stall = math.radians(cfg.stall_rate_deg_s)
+        self._creep = math.radians(cfg.creep_rate_deg_s)
+        self._gate = math.radians(cfg.gate_deg)
         self.reset()
 
     def reset(self) -> None:
@@ -206,7 +204,7 @@ class ContactRule:
         self._impact_at = -math.inf
 
     def _filtered_force(self, t: float, raw: float) -> float:
-        tau = self.cfg.contact_force_time_constant
+        tau = self.cfg.surface_force_time_constant
         if self._force is None or self._t_force is None or tau == 0.0:
             self._force = raw
         else:
@@ -226,27 +224,27 @@ class ContactRule:
         R_WB = quat_to_rotmat(est.body.q_WB)
         clearance = geo.clearance(p_W, R_WB)
         lag = link.phi - phi_d
-        near = clearance < cfg.contact_clearance and link.phi - geo.phi_star < self._gate
+        near = clearance < cfg.clearance and link.phi - geo.phi_star < self._gate
         stalled = lag > self._error and -self._stall < link.phi_dot < self._creep
         force: float | None = None
         pressed = True
         if est.external_force_B is not None:
             raw = geo.normal_force(p_W, R_WB, est.external_force_B)
             force = self._filtered_force(t, raw)
-            if raw > cfg.contact_impact_force:
+            if raw > cfg.impact_force:
                 self._impact_at = t
-            pressed = force > cfg.contact_force or t - self._impact_at <= 2.0 * cfg.contact_dwell
+            pressed = force > cfg.surface_force or t - self._impact_at <= 2.0 * cfg.dwell
         return ContactEvidence(clearance, lag, link.phi_dot, force, near, stalled, pressed)
 
     def update(self, t: float, est: StateEstimate, phi_d: float) -> ContactDecision:
-        """Feed one tick; CONFIRMED once every signal has agreed for ``contact_dwell``."""
+        """Feed one tick; CONFIRMED once every signal has agreed for ``contact.dwell``."""
         ev = self.evidence(t, est, phi_d)
         if ev is None or not (ev.near and ev.stalled and ev.pressed):
             self._since = None
             return ContactDecision(ContactStatus.NONE, ev)
         if self._since is None:
             self._since = t
-        if t - self._since >= self.cfg.contact_dwell - 1e-12:
+        if t - self._since >= self.cfg.dwell - 1e-12:
             return ContactDecision(ContactStatus.CONFIRMED, ev)
         return ContactDecision(ContactStatus.CANDIDATE, ev)
 
@@ -256,18 +254,19 @@ class ContactRule:
         return _NOT_ARMED
 
 
-def early_contact_armed(cfg: MissionConfig, t: float, t0: float, duration: float) -> bool:
-    """Early contact counts in the last ``contact_window`` of a landing planned from ``t0``
+def early_contact_armed(cfg: ContactConfig, t: float, t0: float, duration: float) -> bool:
+    """Early contact counts in the last ``contact.window`` of a landing planned from ``t0``
     over ``duration`` seconds."""
-    return t > t0 + (1.0 - cfg.contact_window) * duration
+    return t > t0 + (1.0 - cfg.window) * duration
 
 
-def guarded_descent(cfg: MissionConfig, ref: Reference, elapsed: float, phase: int) -> Reference:
-    """The planned end with phi_d lowered at ``touchdown_rate_deg`` for ``elapsed`` seconds,
-    down to ``touchdown_search_deg`` below it (the guarded descent past the plan)."""
+def guarded_descent(cfg: TouchdownConfig, ref: Reference, elapsed: float, phase: int) -> Reference:
+    """The planned end with phi_d lowered at ``touchdown.descent_rate_deg_s`` for ``elapsed``
+    seconds, down to ``touchdown.search_depth_deg`` below it (the guarded descent past the
+    plan)."""
     assert ref.output is not None
-    rate = math.radians(cfg.touchdown_rate_deg)
-    depth = math.radians(cfg.touchdown_search_deg)
+    rate = math.radians(cfg.descent_rate_deg_s)
+    depth = math.radians(cfg.search_depth_deg)
     s = min(rate * max(elapsed, 0.0), depth)
     out = ref.output.copy()
     out[0, 0] -= s
@@ -279,15 +278,15 @@ def guarded_descent(cfg: MissionConfig, ref: Reference, elapsed: float, phase: i
 
 
 def contact_hold(
-    cfg: MissionConfig, t: float, est: StateEstimate, ref: Reference, phase: int
+    cfg: ContactConfig, t: float, est: StateEstimate, ref: Reference, phase: int
 ) -> Reference:
     """The reference held from contact until the motors go off: the plan's delta,
-    theta_A, psi and the estimated link elevation less ``contact_press_deg``, at rest
+    theta_A, psi and the estimated link elevation less ``contact.press_deg``, at rest
     (the link azimuth still left to gravity if it was, ``Reference.lateral_free``)."""
     assert est.link is not None and ref.output is not None
     out = np.zeros((5, 4))
     out[0] = ref.output[0]
-    out[0, 0] = est.link.phi - math.radians(cfg.contact_press_deg)
+    out[0, 0] = est.link.phi - math.radians(cfg.press_deg)
     return Reference(
         t=t, mode=ControlMode.TETHERED, phase=phase, output=out,
         thrust_ff=ref.thrust_ff, feedforward=ref.feedforward, lateral_free=ref.lateral_free,
@@ -300,14 +299,14 @@ class SlowApproach:
     The link reference approaches the surface at l |phi_d'| (the attachment point moves
     across the cable, nearly along z_S near phi*). Within reach of the believed surface
     the plan's clock tau advances at alpha = min(1, v_cap / (l |phi_d'(tau)|)) with
-    v_cap = ``touchdown_approach_speed`` + ``touchdown_approach_gain`` * clearance: the
+    v_cap = ``approach_speed`` + ``approach_gain`` * clearance (``[mission.touchdown]``): the
     closer the estimated landers, the slower the reference, and every output (tilt too)
     still follows the planned path. The k-th derivative rows scale by alpha^k, as do the
     feed-forward's rates (d alpha/dt is neglected: alpha changes slowly).
 
-    Rate hold: within ``touchdown_hold_clearance`` the clock runs backwards (alpha =
-    -``touchdown_hold_retreat``, never before the plan's start) while the estimated
-    roll-pitch rate exceeds ``touchdown_hold_rate``, for at most ``touchdown_hold_max`` in
+    Rate hold: within ``hold_clearance`` the clock runs backwards (alpha =
+    -``hold_retreat``, never before the plan's start) while the estimated
+    roll-pitch rate exceeds ``hold_rate``, for at most ``hold_max_time`` in
     total, so the reference backs away and a gust's roll or pitch swing decays before the
     landers meet the surface (condition (3)). Backing away along the plan moves the link
     elevation only: the hierarchical law's thrust direction in the link plane is set by
@@ -315,13 +314,14 @@ class SlowApproach:
 
     Parameters
     ----------
-    cfg : MissionConfig
+    cfg : TouchdownConfig
+        The ``[mission.touchdown]`` settings.
     geometry : ContactGeometry
     length : float
         Believed cable length l [m].
     """
 
-    def __init__(self, cfg: MissionConfig, geometry: ContactGeometry, length: float) -> None:
+    def __init__(self, cfg: TouchdownConfig, geometry: ContactGeometry, length: float) -> None:
         self.cfg = cfg
         self.geometry = geometry
         self.length = length
@@ -351,18 +351,18 @@ class SlowApproach:
         self._t = t
         cfg = self.cfg
         alpha = 1.0
-        v0, gain = cfg.touchdown_approach_speed, cfg.touchdown_approach_gain
+        v0, gain = cfg.approach_speed, cfg.approach_gain
         speed = self.length * abs(rate_at)
         slow = v0 > 0.0 and speed > v0
-        hold = cfg.touchdown_hold_rate > 0.0 and self.held < cfg.touchdown_hold_max
-        lateral = cfg.touchdown_lateral_clearance
+        hold = cfg.hold_rate > 0.0 and self.held < cfg.hold_max_time
+        lateral = cfg.lateral_clearance
         self.clearance = math.inf
         if slow or hold or lateral > 0.0:
             px, py, pz = est.body.p_W.tolist()
             (zx, zy, zz), (ox, oy, oz) = self._z, self._o
             # a lower bound of the lander clearance, whatever the attitude
             low = (px - ox) * zx + (py - oy) * zy + (pz - oz) * zz - self._reach
-            reach = max(cfg.touchdown_hold_clearance if hold else 0.0, lateral)
+            reach = max(cfg.hold_clearance if hold else 0.0, lateral)
             if slow:  # the slowing starts where the capped speed falls below the plan's
                 reach = max(reach, (speed - v0) / gain if gain > 0.0 else math.inf)
             if low < reach:  # within reach: the exact clearance
@@ -371,10 +371,10 @@ class SlowApproach:
                 wx, wy, _ = est.body.omega_B.tolist()
                 if (
                     hold
-                    and clearance < cfg.touchdown_hold_clearance
-                    and wx * wx + wy * wy > cfg.touchdown_hold_rate**2
+                    and clearance < cfg.hold_clearance
+                    and wx * wx + wy * wy > cfg.hold_rate**2
                 ):
-                    alpha = -cfg.touchdown_hold_retreat
+                    alpha = -cfg.hold_retreat
                     self.held += max(dt, 0.0)
                 elif slow:
                     cap = v0 + gain * max(clearance, 0.0)

@@ -86,7 +86,7 @@ class FaultMonitor:
     def __init__(self, scenario: Scenario, geometry: LandingGeometry) -> None:
         cfg = scenario.mission.detection
         self.cfg = cfg
-        self._tension_threshold = scenario.mission.tension_threshold
+        self._tension_threshold = scenario.mission.stretch.tension_threshold
         self._p_A = geometry.p_A
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
         self._length = scenario.tether.length
@@ -208,7 +208,7 @@ class FaultMonitor:
             self._rotor.reset()
             return None
         cx, cy = self.cable_torque_xy(est)
-        a = 1.0 - math.exp(-dt / self.cfg.rotor_filter_time)
+        a = 1.0 - math.exp(-dt / self.cfg.rotor_torque_time_constant)
         self._lp_x += a * (self._torque_cmd[0] + cx - self._lp_x)
         self._lp_y += a * (self._torque_cmd[1] + cy - self._lp_y)
         self.torque_residual = r = math.hypot(self._lp_x, self._lp_y)

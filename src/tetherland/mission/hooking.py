@@ -3,15 +3,11 @@
 The pass is the one the mission supervisor flies (:func:`tetherland.mission.plan_mission`
 puts its ends into the waypoints): the vehicle level with heading x_A,
 the hook point moving straight along the approach direction n from ``approach_distance``
-before the anchor to ``hook_overshoot`` beyond it (``mission`` section).
+before the anchor to ``overshoot`` beyond it (``[mission.hooking]``).
 
 Hook model assumed here: the hook point is the cable attachment point moved by
-``hook_drop`` along n, leading the vehicle in the direction it moves. For the default
-approach n = -z_W this is the hook hanging under the vehicle; for other directions the
-hook is held out along the approach direction (a hook on a short stiff arm), which lets
-the vehicle hook an anchor on a wall or an overhang from the side or from below.
-:func:`hook_offset` is the one place that states it; the plant's hook model
-(:mod:`tetherland.sim.hook`) uses the same offset.
+``hook_drop`` along n (:func:`tetherland.models.hook.hook_offset`, the one statement of it,
+which the plant's hook model :mod:`tetherland.sim.hook` uses too).
 
 The clearance is that of the plant's collision shape, computed by
 :func:`tetherland.analysis.clearance.hooking_clearance`.
@@ -19,11 +15,11 @@ The clearance is that of the plant's collision shape, computed by
 The unhooking pass (:func:`unhooking_path`) is the hooking pass in reverse, but no deeper
 than it needs: the cable is released when the hook point crosses the capture plane back
 (along -n, within the capture radius), so the pass begins on its axis with the hook point
-only ``mission.unhook_depth`` beyond the plane (:meth:`HookingPass.entry`), not at the
-pass's end ``hook_overshoot`` beyond it. From the release point the vehicle first backs
+only ``mission.hooking.unhook_depth`` beyond the plane (:meth:`HookingPass.entry`), not at the
+pass's end ``overshoot`` beyond it. From the release point the vehicle first backs
 off along -n to that depth (away from the surface: the approach runs toward it), then
 moves across to the axis at that depth and out along -n. The frame so stays
-``hook_overshoot - unhook_depth`` farther from the surface than at the end of the hooking
+``overshoot - unhook_depth`` farther from the surface than at the end of the hooking
 pass, a margin for the belief errors (slope, anchor) and the release transient that the
 pass's planned clearance alone does not cover.
 """
@@ -39,6 +35,7 @@ from numpy.typing import ArrayLike
 from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.models.hook import hook_offset
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
@@ -78,11 +75,6 @@ class HookingPass:
         return (1.0 - s) * self.p_start_W + s * self.p_end_W
 
 
-def hook_offset(n_W: FloatArray, hook_drop: float) -> FloatArray:
-    """Hook point minus attachment point, hook_drop n [m] (the assumed hook model)."""
-    return hook_drop * n_W
-
-
 def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) -> HookingPass:
     """The hooking pass of ``scenario`` (its tether, vehicle and mission settings)."""
     t, cfg = scenario.tether, scenario.mission
@@ -91,8 +83,8 @@ def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) ->
         approach_A=t.approach_direction,
         hook_drop=t.hook_drop,
         r_att_B=scenario.vehicle.cable_attachment,
-        approach_distance=cfg.approach_distance,
-        hook_overshoot=cfg.hook_overshoot,
+        approach_distance=cfg.hooking.approach_distance,
+        hook_overshoot=cfg.hooking.overshoot,
     )
 
 
@@ -176,11 +168,11 @@ def check_pass(
     scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass
 ) -> HookingClearance:
     """Clearance of the level vehicle (``scenario``'s collision shape) from the surface of
-    ``geometry`` along the hooking pass, against ``mission.hooking_clearance``, with the
+    ``geometry`` along the hooking pass, against ``mission.hooking.min_clearance``, with the
     hook drop that would restore it."""
     count = PIPE_SAMPLES if geometry.surface.kind == "pipe" else 2
     points = hooking.points(count)
-    margin = scenario.mission.hooking_clearance
+    margin = scenario.mission.hooking.min_clearance
     return hooking_clearance(scenario, geometry.surface, points, hooking.yaw, margin, hooking.n_W)
 
 

@@ -14,15 +14,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tetherland import GRAVITY
 from tetherland.analysis.clearance import HookingClearance, level_vehicle_distance
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
-from tetherland.geometry import FloatArray, LandingGeometry, Surface, link_direction
+from tetherland.geometry import FloatArray, LandingGeometry, link_direction
 from tetherland.mission.hooking import check_pass, hooking_pass, unhooking_path
+from tetherland.mission.paths import segment_duration
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import rotation_from_z_and_yaw
 from tetherland.state import RigidBodyState
+from tetherland.surface import Surface
 
 Z_W = np.array([0.0, 0.0, 1.0])
 Z_W.setflags(write=False)
@@ -49,17 +52,17 @@ class Waypoints:
         Ends of the straight hooking pass: the hook point ``approach_distance`` before and
         ``hook_overshoot`` beyond the anchor along the approach direction, in level flight.
     unhook_entry : (3,) array
-        On the pass axis with the hook point ``mission.unhook_depth`` beyond the anchor:
+        On the pass axis with the hook point ``mission.hooking.unhook_depth`` beyond the anchor:
         where the reverse (unhooking) pass begins
         (:func:`tetherland.mission.hooking.unhooking_path`).
     slack_out : (3,) array
-        Inside the cable length (``mission.slack_out_distance``, or less where the frame
+        Inside the cable length (``mission.stretch.slack_out_distance``, or less where the frame
         needs it to clear the surface), on the line of the planned start elevation.
     stretch : (3,) array
         Just beyond the cable length: the pull that makes the cable taut (phase (c)).
     release_distance : float
         Distance of the attachment point from the anchor at the end of the release leg,
-        along the cable: ``mission.release_slack`` inside the cable length, or less where
+        along the cable: ``mission.hooking.release_slack`` inside the cable length, or less where
         the frame needs it to clear the surface (short cables on walls) [m].
     z_safe : float
         Height of the transfers between the pad and the anchor [m].
@@ -186,7 +189,7 @@ def plan_mission(
         No verified landing or takeoff plan, a hooking pass that would hit the surface
         (the message names the ``tether.hook_drop`` the surface needs), or another
         free-flight leg that would pass closer to the surface than
-        ``mission.hooking_clearance`` (the message names the leg).
+        ``mission.hooking.min_clearance`` (the message names the leg).
     """
     cfg = scenario.mission
     v = scenario.vehicle
@@ -221,19 +224,19 @@ def plan_mission(
     takeoff_traj = takeoff.require()
     d_T = R_WA @ link_direction(float(takeoff_traj.output(takeoff_traj.duration).phi[0]), 0.0)
     wn = scenario.controller.free_flight.position_frequency
-    pull = scenario.planner.start_tension / (v.mass * wn * wn) + cfg.stretch_margin
+    pull = scenario.planner.start_tension / (v.mass * wn * wn) + cfg.stretch.pull_margin
     # On short cables near walls the frame limits how far inside the cable length the
     # take-up and the release may go (the default distances would put it into the wall):
     # there they keep the clearance of the hooking pass's end (at least
-    # mission.hooking_clearance) and stop at least SLACK_MIN short of the cable length.
-    keep = max(clearance.clearance_m, cfg.hooking_clearance)
+    # mission.hooking.min_clearance) and stop at least SLACK_MIN short of the cable length.
+    keep = max(clearance.clearance_m, cfg.hooking.min_clearance)
     radii = []
-    for d_W, inside in ((d0, cfg.slack_out_distance), (d_T, cfg.release_slack)):
+    for d_W, inside in ((d0, cfg.stretch.slack_out_distance), (d_T, cfg.hooking.release_slack)):
         wanted = length - inside
         r = _clear_radius(scenario, geo, d_W, attachment_W, yaw, wanted, keep, length - SLACK_MIN)
         if r is None:
             r = _clear_radius(
-                scenario, geo, d_W, attachment_W, yaw, wanted, cfg.hooking_clearance,
+                scenario, geo, d_W, attachment_W, yaw, wanted, cfg.hooking.min_clearance,
                 length - SLACK_MIN,
             )  # fmt: skip
         radii.append(r)
@@ -242,18 +245,18 @@ def plan_mission(
                     (r_release, "release at the planned takeoff end")):  # fmt: skip
         if r is None:
             raise MissionError(
-                f"the {what} would bring the frame within mission.hooking_clearance = "
-                f"{cfg.hooking_clearance * 100:.0f} cm of the surface anywhere more than "
+                f"the {what} would bring the frame within mission.hooking.min_clearance = "
+                f"{cfg.hooking.min_clearance * 100:.0f} cm of the surface anywhere more than "
                 f"{SLACK_MIN * 100:.0f} cm inside the cable length {length:g} m"
             )
     assert r_slack is not None and r_release is not None
-    z_safe = max(float(hook_start[2]), float(p_start[2]) + cfg.takeoff_height)
-    z_safe += cfg.safe_height_margin
+    z_safe = max(float(hook_start[2]), float(p_start[2]) + cfg.flight.takeoff_height)
+    z_safe += cfg.flight.safe_height_margin
     waypoints = Waypoints(
         start=_frozen(p_start),
         hook_start=_frozen(hook_start),
         hook_end=_frozen(hook_end),
-        unhook_entry=_frozen(hooking.entry(cfg.unhook_depth, cfg.hook_overshoot)),
+        unhook_entry=_frozen(hooking.entry(cfg.hooking.unhook_depth, cfg.hooking.overshoot)),
         slack_out=_frozen(p_A + r_slack * d0 - attachment_W),
         stretch=_frozen(p_A + (length + pull) * d0 - attachment_W),
         release_distance=r_release,
@@ -262,6 +265,8 @@ def plan_mission(
         attachment_W=_frozen(attachment_W),
     )
     leg_clearance = _check_legs(scenario, geo, waypoints, d_T)
+    _check_stretch_tension(scenario, d0)
+    _check_duration(scenario, mission_time_bound(scenario, geo, waypoints, d_T, landing, takeoff))
     return MissionPlan(
         start=start, geometry=geo, landing=landing, takeoff=takeoff, waypoints=waypoints,
         clearance=clearance, leg_clearance_m=leg_clearance,
@@ -290,7 +295,7 @@ def free_flight_legs(
     :mod:`tetherland.mission.supervisor`.
     """
     cfg = scenario.mission
-    top = wp.start + cfg.takeoff_height * Z_W
+    top = wp.start + cfg.flight.takeoff_height * Z_W
     over_hook = np.array([*wp.hook_start[:2], wp.z_safe])
     release = geo.p_A + wp.release_distance * d_T_W - wp.attachment_W
     return {
@@ -303,20 +308,111 @@ def free_flight_legs(
     }
 
 
+def rotor_tension_limit(scenario: Scenario, d_W: FloatArray) -> float:
+    """Largest cable tension the rotors can hold with the cable along ``d_W`` [N].
+
+    ``d_W`` is the unit direction from the anchor to the vehicle; the cable pulls the
+    vehicle back along -d, so the thrust must be m g z_W + T d. With the total thrust
+    |f| <= 4 f_max: T = -m g c + sqrt(F^2 - (m g)^2 (1 - c^2)), c = z_W . d; with the
+    free-flight tilt limit theta (horizontal thrust <= tan(theta) x vertical thrust):
+    T (|d_h| - tan(theta) c) <= tan(theta) m g.
+    """
+    v = scenario.vehicle
+    w = v.mass * GRAVITY
+    c = float(d_W @ Z_W)
+    f_max = 4.0 * v.f_max
+    limit = -w * c + math.sqrt(max(f_max * f_max - w * w * (1.0 - c * c), 0.0))
+    tan = math.tan(math.radians(scenario.controller.free_flight.max_tilt_deg))
+    lean = math.sqrt(max(1.0 - c * c, 0.0)) - tan * c
+    if lean > 0.0:
+        limit = min(limit, tan * w / lean)
+    return limit
+
+
+def _check_stretch_tension(scenario: Scenario, d0_W: FloatArray) -> None:
+    """The supervisor's ``mission.stretch.tension_threshold`` is within what the rotors can pull
+    along the planned start direction of the cable (else the hook counts as missed)."""
+    threshold = scenario.mission.stretch.tension_threshold
+    limit = rotor_tension_limit(scenario, d0_W)
+    if threshold >= limit:
+        raise MissionError(
+            f"mission.stretch.tension_threshold = {threshold:g} N: the rotors can hold at most "
+            f"{limit:.3g} N of tension along the cable at the planned start (4 x f_max = "
+            f"{4 * scenario.vehicle.f_max:g} N, max_tilt_deg "
+            f"{scenario.controller.free_flight.max_tilt_deg:g}); the hook would count as "
+            "missed: lower the threshold"
+        )
+
+
+def mission_time_bound(
+    scenario: Scenario,
+    geo: LandingGeometry,
+    wp: Waypoints,
+    d_T_W: FloatArray,
+    landing: PlanResult,
+    takeoff: PlanResult,
+) -> float:
+    """A lower bound on the nominal mission's duration [s].
+
+    The planned landing and takeoff; the fixed holds (deploy, spin-up, the final hold on
+    the pad, the ``settle_time`` pause after the climb, the approach, the hooking pass,
+    the unhooking, the return and the landing on the pad); and the free-flight segments
+    the supervisor flies rest to rest (:func:`tetherland.mission.paths.segment_duration`)
+    at their speeds: the climb, the approach and the return at ``flight.cruise_speed``,
+    the hooking pass, the unhooking and the descent onto the pad at ``hooking.speed``,
+    the take-up before stretching at its fraction of the cruise speed. The stretch itself
+    and the release's pull are left out (they end on the tension).
+    """
+    cfg = scenario.mission
+    legs = free_flight_legs(scenario, geo, wp, d_T_W)
+    fly, hook = cfg.flight, cfg.hooking
+    top = wp.start + fly.takeoff_height * Z_W
+    pad = wp.start - fly.pad_press_depth * Z_W
+    take_up = cfg.stretch.take_up_speed_factor * fly.cruise_speed
+    flown = [
+        ([wp.start, top], fly.cruise_speed),
+        (legs["approach"], fly.cruise_speed),
+        ([wp.hook_start, wp.hook_end], hook.speed),
+        ([wp.hook_end, wp.slack_out], take_up),
+        (legs["release"], hook.speed),
+        (legs["return"], fly.cruise_speed),
+        ([top, pad], hook.speed),
+    ]
+    moving = sum(
+        segment_duration(float(np.linalg.norm(b - a)), speed, fly.cruise_accel)
+        for leg, speed in flown
+        for a, b in itertools.pairwise(leg)
+    )
+    holds = cfg.deploy_time + cfg.spinup_time + cfg.done_hold_time + 6 * cfg.settle_time
+    return landing.require().duration + takeoff.require().duration + holds + moving
+
+
+def _check_duration(scenario: Scenario, bound: float) -> None:
+    """The mission can end before ``mission.time_limit`` (else it would be cut off);
+    ``bound`` from :func:`mission_time_bound` [s]."""
+    cfg = scenario.mission
+    if bound >= cfg.time_limit:
+        raise MissionError(
+            f"mission.time_limit = {cfg.time_limit:g} s is too short: the plans, "
+            f"deploy_time {cfg.deploy_time:g} s and the flight legs take at least {bound:.0f} s; "
+            f"raise time_limit above {bound:.0f} s or shorten deploy_time"
+        )
+
+
 def _check_legs(
     scenario: Scenario, geo: LandingGeometry, wp: Waypoints, d_T_W: FloatArray
 ) -> float:
     """Smallest clearance over :func:`free_flight_legs`; raises :class:`MissionError`
-    naming the first leg below ``mission.hooking_clearance`` [m]."""
-    margin = scenario.mission.hooking_clearance
+    naming the first leg below ``mission.hooking.min_clearance`` [m]."""
+    margin = scenario.mission.hooking.min_clearance
     smallest = math.inf
     for name, leg in free_flight_legs(scenario, geo, wp, d_T_W).items():
         c = _leg_clearance(scenario, geo.surface, leg, wp.yaw)
         if c < margin - 1e-9:
             raise MissionError(
                 f"the {name} leg would pass {c * 100:.1f} cm from the surface (needs >= "
-                f"{margin * 100:.0f} cm, mission.hooking_clearance): move the start pad "
-                f"(sim.start_position) or raise mission.safe_height_margin"
+                f"{margin * 100:.0f} cm, mission.hooking.min_clearance): move the start pad "
+                f"(sim.start_position) or raise mission.flight.safe_height_margin"
             )
         smallest = min(smallest, c)
     return smallest

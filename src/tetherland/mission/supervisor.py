@@ -36,7 +36,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
@@ -47,6 +46,7 @@ from tetherland.errors import TetherlandError
 from tetherland.estimation import ThresholdDwell
 from tetherland.geometry import theta_A_from_z_B
 from tetherland.interfaces import Command, ControlMode, EventRecord, Reference, StateEstimate
+from tetherland.mission.blend import BlendedTrack
 from tetherland.mission.contact import (
     ContactDecision,
     ContactRule,
@@ -60,7 +60,7 @@ from tetherland.mission.hooking import unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
-from tetherland.planning.spline import smoothstep9_scalar
+from tetherland.mission.release import ReleasePull
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
 
@@ -98,61 +98,6 @@ from the surface."""
 
 class TransitionError(TetherlandError):
     """The supervisor tried a phase change that :data:`TRANSITIONS` does not allow."""
-
-
-class BlendedTrack:
-    """A planned tethered track whose start is moved onto the current output (bumpless).
-
-    y_d(t) = y_plan(t) + (1 - s((t - t_b)/T)) (y_now - y_plan(t_b)), s the 9th-order
-    smoothstep: at t_b the reference equals the current output with zero derivatives of
-    the offset, and after t_b + T it is the plan.
-    """
-
-    def __init__(self, track: TrajectoryTrack, y_now: np.ndarray, t_b: float, duration: float):
-        self.track = track
-        self.t_b = t_b
-        self.duration = duration
-        y0 = track.reference(t_b).output[0]
-        delta = np.asarray(y_now, dtype=float) - y0
-        delta[3] = math.remainder(delta[3], 2.0 * math.pi)
-        self.delta = delta
-
-    def reference(self, t: float, phase: Phase) -> Reference:
-        ref = self.track.reference(t)
-        tau = (t - self.t_b) / self.duration
-        if tau >= 1.0:
-            if ref.phase == int(phase):
-                return ref
-            return Reference(
-                t=t, mode=ref.mode, phase=int(phase), output=ref.output,
-                thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-            )  # fmt: skip
-        s = smoothstep9_scalar(tau, 4)
-        scale = np.array([1.0 - s[0]] + [-s[k] / self.duration**k for k in range(1, 5)])
-        out = ref.output + np.outer(scale, self.delta)
-        return Reference(
-            t=t, mode=ControlMode.TETHERED, phase=int(phase), output=out,
-            thrust_ff=ref.thrust_ff, feedforward=ref.feedforward,
-        )  # fmt: skip
-
-
-@dataclass(slots=True)
-class _ReleasePull:
-    """The cable's pull handed over to free flight at the release (mutable run state)."""
-
-    t0: float
-    """Release time [s]."""
-    fade: float
-    """Duration of the timed fade of the pull: the leg to the slack point [s]."""
-    tension: float
-    """The tension estimate at the release [N]."""
-    d0: np.ndarray
-    """Cable direction at the release (anchor to vehicle) [-]."""
-    bias: float = 0.0
-    """The tension estimate read inside the slack point: B.d, the force-model error
-    along the cable [N]."""
-    frozen: np.ndarray | None = None
-    """The feed-forward frozen when the unhooking pass starts [m/s^2] (None: not yet)."""
 
 
 class MissionSupervisor:
@@ -198,18 +143,18 @@ class MissionSupervisor:
         self._safe_land = False
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
-        self._taut = ThresholdDwell(cfg.tension_threshold, cfg.tension_dwell)
+        self._taut = ThresholdDwell(cfg.stretch.tension_threshold, cfg.stretch.tension_dwell)
         self._contact_rule = ContactRule(scenario)
-        self._slow = SlowApproach(cfg, self._contact_rule.geometry, self.geo.link_length)
+        self._slow = SlowApproach(cfg.touchdown, self._contact_rule.geometry, self.geo.link_length)
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
-        self._slack = ThresholdDwell(0.0, cfg.fault_slack_time)
+        self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
         self._path = self._new_path(0.0, wp.start).to(
-            wp.start + cfg.takeoff_height * Z_W, pause=cfg.settle_time
+            wp.start + cfg.flight.takeoff_height * Z_W, pause=cfg.settle_time
         )
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
-        self._release_pull: _ReleasePull | None = None
+        self._release_pull: ReleasePull | None = None
         self._t_free = 0.0  # last tick of the free-flight reference [s]
         self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
@@ -253,7 +198,7 @@ class MissionSupervisor:
         if (
             self.phase in _NEAR_MECHANISM
             and self.monitor.torque_residual > det.rotor_suspect * det.rotor_torque
-            and self._suspect_held < det.rotor_suspect_max
+            and self._suspect_held < det.rotor_suspect_max_time
             and dt > 0.0
         ):  # a rotor fault is suspected close to the mechanism: the pass holds still
             self._path.delay(dt)
@@ -264,42 +209,13 @@ class MissionSupervisor:
             rows = self._path.sample(t)
         if self._release_pull is not None:
             rows = rows.copy()  # the path's rows are shared and read-only
-            rows[2] += self._pull_feedforward(t, est, rows[0])
+            rows[2] += self._release_pull.feedforward(t, est, rows[0])
         return Reference(
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
 
-    def _pull_feedforward(self, t: float, est: StateEstimate, p_d: np.ndarray) -> np.ndarray:
-        """The released cable's pull as an acceleration feed-forward [m/s^2] (reference
-        position ``p_d``).
-
-        The estimated pull at the release, along the cable, fades out while the reference
-        moves to the slack point. At the hand-over, though, the position integral starts
-        with the thrust that held the cable less the estimated pull, and so lacks the part
-        of the force-model error B (mass, thrust coefficient) along the cable: taut, the
-        pull and B.d look alike, and the tension estimate reads T + B.d. Once the fade is
-        over and the vehicle is inside the slack point (the cable slack for sure), the
-        estimate reads B.d alone; taken as the feed-forward along the cable it supplies
-        the missing part, and it is frozen when the unhooking pass starts (the pass turns
-        d). Without it the missing part became a steady error -(B.d) d/(m k_x), up to
-        5 cm towards a wall during the unhooking pass. B.d < 0 (an error away from the
-        anchor, which the cable stops) is left to the integral.
-        """
-        pull = self._release_pull
-        assert pull is not None
-        if pull.frozen is not None:
-            return pull.frozen
-        s = (t - pull.t0) / pull.fade if pull.fade > 0.0 else 1.0
-        if s < 1.0:
-            return ((1.0 - smoothstep9_scalar(s, 0)[0]) * pull.tension / self.mass) * pull.d0
-        d = est.body.p_W - self.geo.p_A
-        d /= max(float(np.linalg.norm(d)), 1e-9)
-        if float((est.body.p_W - p_d) @ d) <= 0.0:  # inside the slack point: B.d
-            pull.bias = min(max(est.tension or 0.0, 0.0), pull.tension)
-        return (pull.bias / self.mass) * d
-
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
-        return Path(t, start, speed or self.cfg.cruise_speed, self.cfg.cruise_accel)
+        return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel)
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""
@@ -350,8 +266,8 @@ class MissionSupervisor:
             self._path = (
                 self._path.to(np.array([*start[:2], max(start[2], wp.z_safe)]))
                 .to(np.array([*wp.start[:2], wp.z_safe]))
-                .to(wp.start + self.cfg.takeoff_height * Z_W)
-                .to(wp.start - self.cfg.pad_press_depth * Z_W, speed=self.cfg.hook_speed,
+                .to(wp.start + self.cfg.flight.takeoff_height * Z_W)
+                .to(wp.start - self.cfg.flight.pad_press_depth * Z_W, speed=self.cfg.hooking.speed,
                     pause=self.cfg.settle_time)
             )  # fmt: skip
             self._safe_land = True
@@ -398,27 +314,27 @@ class MissionSupervisor:
             return
         active = self.phase == Phase.TETHERED_LANDING or (
             self.phase == Phase.TETHERED_TAKEOFF and self._track is not None
-            and t > self._track.track.t0 + self.cfg.takeoff_fault_delay
+            and t > self._track.track.t0 + self.cfg.detection.tethered_takeoff_delay
         )  # fmt: skip
         if not active or est.link is None or self._track is None:
             self._slack.reset()
             return
-        if self._contact_rule.geometry.clearance(body.p_W, body.R_WB) < self.cfg.contact_clearance:
+        if self._contact_rule.geometry.clearance(body.p_W, body.R_WB) < self.cfg.contact.clearance:
             # the landers are at the surface and may carry the vehicle: a slackening cable
             # is expected there (flat ground, gentle slopes), not a fault
             self._slack.reset()
-        elif self._slack.update(t, self.cfg.fault_min_tension - (est.tension or 0.0)):
+        elif self._slack.update(t, self.cfg.detection.slack_tension - (est.tension or 0.0)):
             self.abort(
                 t,
                 est,
-                f"fault: cable slack (estimated tension < {self.cfg.fault_min_tension} N)",
+                f"fault: cable slack (estimated tension < {self.cfg.detection.slack_tension} N)",
                 away=True,
             )
             return
         if ref.output is None:
             return
         err = math.degrees(abs(ref.output[0, 0] - est.link.phi))
-        if err > self.cfg.fault_tracking_deg:
+        if err > self.cfg.detection.tracking_error_deg:
             self.abort(t, est, f"fault: link tracking error {err:.1f} deg")
 
     # ------------------------------------------------------------------ ReferenceSource
@@ -446,7 +362,8 @@ class MissionSupervisor:
     # ------------------------------------------------------------------ phases
     def _takeoff(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
-        if t >= self._path.t_end and self._close(est, self._path.end, cfg.waypoint_tolerance):
+        tol = cfg.flight.waypoint_tolerance
+        if t >= self._path.t_end and self._close(est, self._path.end, tol):
             up = np.array([*self._path.end[:2], wp.z_safe])
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
@@ -456,29 +373,30 @@ class MissionSupervisor:
                 .to(wp.hook_start, pause=cfg.settle_time)
             )
             self._enter(Phase.APPROACH, t, "takeoff height reached")
-        elif t > self._path.t_end + cfg.phase_timeout:
+        elif t > self._path.t_end + cfg.detection.leg_timeout:
             self.abort(t, est, "fault: takeoff height not reached")
         return self._free(t, est)
 
     def _approach(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
-        if t >= self._path.t_end and self._close(est, wp.hook_start, cfg.hook_start_tolerance):
-            self._path = self._new_path(t, wp.hook_start, cfg.hook_speed).to(
+        if t >= self._path.t_end and self._close(est, wp.hook_start, cfg.hooking.start_tolerance):
+            self._path = self._new_path(t, wp.hook_start, cfg.hooking.speed).to(
                 wp.hook_end, pause=cfg.settle_time
             )
             self.hook_attempts += 1
             self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
-        elif t > self._path.t_end + cfg.phase_timeout:
+        elif t > self._path.t_end + cfg.detection.leg_timeout:
             self.abort(t, est, "fault: hooking start not reached")
         return self._free(t, est)
 
     def _hooking(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
+            take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
             self._path = (
-                self._new_path(t, wp.hook_end, cfg.take_up_speed_factor * cfg.cruise_speed)
+                self._new_path(t, wp.hook_end, take_up)
                 .to(wp.slack_out)
-                .to(wp.stretch, speed=cfg.stretch_speed)
+                .to(wp.stretch, speed=cfg.stretch.speed)
             )
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
@@ -494,13 +412,13 @@ class MissionSupervisor:
             self._landing_rate = 0.0
             self._enter(
                 Phase.TETHERED_LANDING, t,
-                f"estimated tension {est.tension:.2f} N above {cfg.tension_threshold} N "
-                f"for {cfg.tension_dwell} s: cable taut, tethered control",
+                f"estimated tension {est.tension:.2f} N above {cfg.stretch.tension_threshold} N "
+                f"for {cfg.stretch.tension_dwell} s: cable taut, tethered control",
             )  # fmt: skip
             return self._track.reference(t, self.phase)
-        if t > self._path.t_end + cfg.stretch_timeout:
+        if t > self._path.t_end + cfg.stretch.timeout:
             self._event(t, "hook", f"missed hook (attempt {self.hook_attempts}): no tension")
-            if self.hook_attempts >= cfg.max_hook_attempts:
+            if self.hook_attempts >= cfg.hooking.max_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
                 return self._free(t, est)
             above = np.array([*wp.hook_start[:2], wp.z_safe])
@@ -515,7 +433,7 @@ class MissionSupervisor:
     ) -> Reference:
         """Touchdown confirmed: hold the link at contact until the motors go off."""
         self.times["t_L"] = t
-        self._hold = contact_hold(self.cfg, t, est, ref, int(Phase.TOUCHDOWN))
+        self._hold = contact_hold(self.cfg.contact, t, est, ref, int(Phase.TOUCHDOWN))
         assert decision.evidence is not None
         reason = f"contact {when} (t_L): {decision.evidence.describe()}"
         self._event(t, "touchdown", reason)
@@ -530,9 +448,9 @@ class MissionSupervisor:
         planned = self._track.reference(tau, self.phase)
         self._landing_rate = abs(float(planned.output[1, 0]))
         ref = self._slow.scale(planned, t)
-        if self._slow.clearance < self.cfg.touchdown_lateral_clearance:
+        if self._slow.clearance < self.cfg.touchdown.lateral_clearance:
             ref = dataclasses.replace(ref, lateral_free=True)
-        if early_contact_armed(self.cfg, tau, track.t0, track.duration):
+        if early_contact_armed(self.cfg.contact, tau, track.t0, track.duration):
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             if decision.confirmed:
                 return self._contact(t, est, ref, decision, "before the planned end")
@@ -549,21 +467,23 @@ class MissionSupervisor:
         """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
         assert self._track is not None and self._search_start is not None
         ref = self._track.reference(t, self.phase)
-        return guarded_descent(self.cfg, ref, t - self._search_start, int(self.phase))
+        return guarded_descent(self.cfg.touchdown, ref, t - self._search_start, int(self.phase))
 
     def _touchdown(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
         cfg = self.cfg
         if self._hold is None:  # searching for the surface
             ref = self._search_reference(t)
-            if cfg.touchdown_lateral_clearance > 0.0:
+            if cfg.touchdown.lateral_clearance > 0.0:
                 ref = dataclasses.replace(ref, lateral_free=True)
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             if decision.confirmed:
                 return self._contact(t, est, ref, decision, "during the guarded descent")
-            limit = cfg.touchdown_search_deg / cfg.touchdown_rate_deg + cfg.touchdown_search_grace
+            td = cfg.touchdown
+            limit = td.search_depth_deg / td.descent_rate_deg_s + cfg.detection.no_contact_grace
             if t > self._search_start + limit:
-                self.abort(t, est, "fault: no contact within touchdown_search_deg beyond phi*")
+                depth = td.search_depth_deg
+                self.abort(t, est, f"fault: no contact within {depth:g} deg beyond phi*")
                 return self._free(t, est)
             return ref
         if t >= self.times["t_L"] + cfg.settle_time:
@@ -602,20 +522,17 @@ class MissionSupervisor:
         cfg = self.cfg
         if t >= self._track.track.t_end + cfg.settle_time:
             self.times["t_released"] = t
-            # The pull is handed over as a force feed-forward that fades out while the
-            # reference moves inside the cable length, then supplies the force-model
-            # error the hand-over left out (_pull_feedforward). (As a position offset, as
-            # in stretching, the free-flight position integral would wind up on it and
-            # keep the cable taut when the release leg is short: short cables near walls.)
+            # the pull is handed over as a fading force feed-forward (mission.release)
             d = est.body.p_W - self.geo.p_A
             d /= np.linalg.norm(d)
             slack = self.geo.p_A + self.wp.release_distance * d - self.wp.attachment_W
-            self._path = self._new_path(t, est.body.p_W, cfg.hook_speed).to(
+            self._path = self._new_path(t, est.body.p_W, cfg.hooking.speed).to(
                 slack, pause=cfg.settle_time
             )
-            self._release_pull = _ReleasePull(
+            self._release_pull = ReleasePull(
                 t0=t, fade=self._path.segments[0].duration,
-                tension=max(est.tension or 0.0, 0.0), d0=d.copy(),
+                tension=max(est.tension or 0.0, 0.0), d0=d.copy(), mass=self.mass,
+                p_A=self.geo.p_A,
             )  # fmt: skip
             self._track = None
             self._enter(
@@ -629,12 +546,12 @@ class MissionSupervisor:
         if t >= self._path.t_end:
             slack = self._path.end
             if self._release_pull is not None:  # the pass turns d: freeze the pull
-                self._release_pull.frozen = self._pull_feedforward(t, est, slack)
-            # the reverse pass, no deeper than mission.unhook_depth (mission.hooking)
+                self._release_pull.freeze(t, est, slack)
+            # the reverse pass, no deeper than mission.hooking.unhook_depth
             *corners, last = unhooking_path(
                 slack, wp.unhook_entry, wp.hook_start, self._unhook_reach
             )
-            self._path = self._new_path(t, slack, cfg.hook_speed)
+            self._path = self._new_path(t, slack, cfg.hooking.speed)
             for p in corners:
                 self._path.to(p)
             self._path.to(last, pause=cfg.settle_time)
@@ -646,7 +563,7 @@ class MissionSupervisor:
         if t >= self._path.t_end:
             up = np.array([*wp.hook_start[:2], wp.z_safe])
             home_high = np.array([*wp.start[:2], wp.z_safe])
-            home = wp.start + cfg.takeoff_height * Z_W
+            home = wp.start + cfg.flight.takeoff_height * Z_W
             self._path = (
                 self._new_path(t, wp.hook_start)
                 .to(up)
@@ -659,8 +576,8 @@ class MissionSupervisor:
     def _return(self, t: float, est: StateEstimate) -> Reference:
         cfg = self.cfg
         if t >= self._path.t_end:
-            self._path = self._new_path(t, self._path.end, cfg.hook_speed).to(
-                self.wp.start - cfg.pad_press_depth * Z_W, pause=cfg.settle_time
+            self._path = self._new_path(t, self._path.end, cfg.hooking.speed).to(
+                self.wp.start - cfg.flight.pad_press_depth * Z_W, pause=cfg.settle_time
             )
             self._enter(Phase.LAND, t, "above the start pad")
         return self._free(t, est)

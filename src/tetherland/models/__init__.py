@@ -7,7 +7,9 @@
 * :mod:`.planar`: planar model (6.18) and its double dynamic extension (6.20), numpy and
   CasADi;
 * :mod:`.flatness`: the flatness map from y^b = [phi, delta, theta_A, psi] to the nominal
-  state and input.
+  state and input;
+* :mod:`.airframe`: the vehicle's collision shape (lander tips, hub, rotor guards);
+* :mod:`.hook`: the hook model (where the hook point is, relative to the attachment).
 """
 
 from tetherland.models.flatness import FlatnessMap, NominalState, OutputDerivatives

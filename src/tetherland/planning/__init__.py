@@ -12,6 +12,8 @@
   samples a plan (outputs with derivatives, nominal state and input) and saves/loads it
   with the CSV :mod:`.codec`; :mod:`.verify` re-checks it; :mod:`.planner` ties it
   together (:meth:`Planner.plan`, and :meth:`Planner.replan` for online re-planning).
+* :mod:`.start` places the vehicle at a tethered plan's first state, the cable taut at
+  the planned tension (where a run that starts on the plan begins).
 """
 
 from tetherland.planning.checks import CheckResult, CheckScope

@@ -11,13 +11,13 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Protocol
 
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import FloatArray
-from tetherland.interfaces import Estimator
+from tetherland.interfaces import Estimator, InnerLoop
 from tetherland.methods import ControllerChoice, Flight, Planners, get_method
 from tetherland.provenance import provenance
 from tetherland.sim import Plant, Runner, SimLog
@@ -27,6 +27,18 @@ from tetherland.verdict import RunRecord, Verdict, judge, not_flown
 
 EstimatorFactory = Callable[[Scenario, RigidBodyState, float, FloatArray | None], Estimator | None]
 """``factory(belief, initial_state, t0, rotor_speeds0) -> Estimator`` (None: the truth)."""
+
+
+class InnerLoopFactory(Protocol):
+    """Makes the flight controller under the method's controller (e.g. the firmware)."""
+
+    def __call__(self, truth: Scenario, belief: Scenario) -> InnerLoop:
+        """The inner loop for a run: hardware from ``truth``, knowledge from ``belief``."""
+        ...
+
+    def describe(self) -> dict[str, Any]:
+        """What flies the inner loop, for the run's provenance (name, versions, settings)."""
+        ...
 
 
 def ukf_estimator(
@@ -103,6 +115,7 @@ def run_mission(
     observers: Sequence[Callable[[float, Plant], None]] = (),
     plant_setup: Callable[[Plant], None] | None = None,
     on_flight: Callable[[Flight], None] | None = None,
+    inner_loop: InnerLoopFactory | None = None,
 ) -> RunResult:
     """Fly one run of a landing method closed loop and judge it.
 
@@ -135,6 +148,9 @@ def run_mission(
     on_flight : callable, optional
         Called with the method's :class:`~tetherland.methods.Flight` before it flies (to
         watch the supervisor's phase, for example).
+    inner_loop : InnerLoopFactory, optional
+        A flight controller under the method's controller (``tetherland.firmware``): the
+        controllers become its outer loop.
     """
     belief = belief or scenario
     if scenario.faults.active or belief.faults.active:  # the robot never knows the faults
@@ -149,8 +165,9 @@ def run_mission(
         method=how.name, seed=int(seed), controller=name,
         truth=scenario.model_dump(mode="json"), belief=belief.model_dump(mode="json"),
         expects=how.expects,
-        provenance=provenance(scenario, seed=seed, extra={"method": how.name,
-                                                           "controller": name}),
+        provenance=provenance(scenario, seed=seed, extra={
+            "method": how.name, "controller": name,
+            **({} if inner_loop is None else {"inner_loop": inner_loop.describe()})}),
     )  # fmt: skip
     plant = Plant(scenario) if plant is None else plant
     if plant_setup is not None:
@@ -169,6 +186,7 @@ def run_mission(
         estimator=estimator(belief, flight.initial_state, 0.0, flight.rotor_speeds),
         reference=flight.reference, seed=seed, plant=plant,
         diagnostic_keys=flight.diagnostic_keys, observers=observers,
+        inner_loop=None if inner_loop is None else inner_loop(scenario, belief),
     )  # fmt: skip
     wall0 = time.perf_counter()
     log = runner.run(flight.duration, initial_state=flight.initial_state,

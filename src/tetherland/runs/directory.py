@@ -9,6 +9,8 @@ and the record alone.
 
 from __future__ import annotations
 
+import zipfile
+import zlib
 from pathlib import Path
 
 from tetherland.io import atomic_write_json, to_jsonable
@@ -21,10 +23,19 @@ LOG_FILE = "log.npz"
 SUMMARY_FILE = "summary.json"
 
 
-def save_run(result: RunResult, directory: str | Path, *, video: bool = False) -> dict[str, Path]:
+def save_run(
+    result: RunResult,
+    directory: str | Path,
+    *,
+    video: bool = False,
+    listed_as: str | Path | None = None,
+) -> dict[str, Path]:
     """Write every file of ``result`` into ``directory`` (which must exist and be writable).
 
-    Returns the written files by role; ``summary.json`` lists them too.
+    Returns the written files by role; ``summary.json`` lists them too, under
+    ``listed_as`` (default ``directory``): the directory they will live in when
+    ``directory`` is a staging directory moved there afterwards
+    (:class:`tetherland.io.OutputDir`).
     """
     out = Path(directory)
     files: dict[str, Path] = {"summary": out / SUMMARY_FILE, "record": out / RECORD_FILE}
@@ -43,9 +54,15 @@ def save_run(result: RunResult, directory: str | Path, *, video: bool = False) -
             files["video"] = render_log(
                 result.log, out / "mission.mp4", scenario=result.plant_scenario
             ).path
-    summary = {**result.summary, "files": {k: str(v) for k, v in files.items()}}
-    atomic_write_json(files["summary"], summary)
+    write_summary(result.summary, files, listed_as if listed_as is not None else out)
     return files
+
+
+def write_summary(summary: dict, files: dict[str, Path], listed_as: str | Path) -> Path:
+    """Write ``summary.json`` (``files["summary"]``) listing ``files`` under ``listed_as``."""
+    where = Path(listed_as)
+    listed = {k: str(where / Path(v).name) for k, v in files.items()}
+    return atomic_write_json(files["summary"], {**summary, "files": listed})
 
 
 def load_run(directory: str | Path) -> tuple[SimLog, RunRecord]:
@@ -65,8 +82,11 @@ def load_run(directory: str | Path) -> tuple[SimLog, RunRecord]:
         raise RunRecordError(f"{directory}: no {LOG_FILE} (the run was not flown)")
     try:
         log = SimLog.load(log_path)
-    except (OSError, ValueError, KeyError) as err:
-        raise RunRecordError(f"{log_path}: unreadable log ({err})") from None
+    except (OSError, ValueError, KeyError, IndexError, TypeError, EOFError,
+            zipfile.BadZipFile, zlib.error) as err:  # fmt: skip
+        # a truncated or empty file, or a zip that is no log: np.load raises each of these
+        why = str(err) or type(err).__name__
+        raise RunRecordError(f"{log_path}: unreadable log ({why})") from None
     return log, record
 
 

@@ -243,7 +243,7 @@ class ChainCable:
         self.dt = scenario.sim.timestep
         sim = scenario.sim
         tau = hook_timeconst(scenario)
-        self._k_c = scenario.vehicle.mass / (tau * sim.cable_dampratio) ** 2
+        self._k_c = scenario.vehicle.mass / (tau * sim.cable_damping_ratio) ** 2
         self._p_A = np.asarray(p_A, dtype=float)
         self._side = np.asarray(side_W, dtype=float)
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)

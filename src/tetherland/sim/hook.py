@@ -3,8 +3,8 @@
 The vehicle carries the hook; the anchoring mechanism sits at the anchor point p_A. The
 capture disk has centre p_A, unit normal n (the approach direction) and radius r_c. The
 hook point is the cable attachment point moved by ``hook_drop`` along n
-(:func:`tetherland.mission.hooking.hook_offset`, the one statement of the hook model that
-the mission plan, the clearance check and the design search also use): for the default
+(:func:`tetherland.models.hook.hook_offset`, the one statement of the hook model that the
+mission plan, the clearance check and the design search also use): for the default
 n = -z_W the hook hanging under the vehicle, for any other direction a hook held out along
 n (on a short stiff arm), e.g. horizontally toward a wall or along the normal of a steep
 slope or an overhang. ``hook_drop = 0`` puts it at the attachment point.
@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
-from tetherland.mission.hooking import hook_offset
+from tetherland.models.hook import hook_offset
 
 
 class HookState(IntEnum):

@@ -93,6 +93,10 @@ TRUTH: tuple[Column, ...] = (
     _c("frame_force", 1, "N", "normal force on hub and rotor guards (crash if > 0)"),
     _c("rotor_speeds", 4, "rad/s", "rotor speeds"),
     _c("rotor_thrusts", 4, "N", "rotor thrusts"),
+    _c("lander_surface_forces", 4, "N", "largest normal force of the landing surface on "
+       "each lander over the physics steps since the previous control tick"),
+    _c("lander_ground_forces", 4, "N", "largest normal force of the ground (start pad) on "
+       "each lander over the physics steps since the previous control tick"),
 )
 MEASUREMENTS: tuple[Column, ...] = (
     _c("imu_specific_force_B", 3, "m/s^2", "last IMU specific force"),

@@ -18,17 +18,24 @@ the cable (docs/tether.md), by ``tether.cable_model``:
 Sensors (in ``sensordata`` order, see :data:`SENSOR_LAYOUT`): IMU accelerometer and gyro
 at the centre of mass, cable tension at the attachment (``tendonlimitfrc``,
 ``actuatorfrc`` or a user sensor the plant writes) and length, lander touch forces and a
-touch sensor around the frame (crash detection).
+touch sensor around the frame (crash detection), and the contact force of each lander
+with the landing surface and with the ground (``contact`` sensors filtered by partner
+geom: what a lander touches, for the judge; :data:`CONTACT_PARTNERS`).
 
 Names are fixed (``vehicle``, ``attachment``, ``cable``, ...): the plant, the renderer and
 tests find elements by these names.
+
+:func:`build_mjcf` runs the named builders of :data:`SCENE_BUILDERS` in order (options and
+assets, ground and surface, anchor, vehicle, cable, actuators, sensors), each adding its
+part to one :class:`SceneXml`; the vehicle's shape comes from
+:mod:`tetherland.models.airframe`.
 """
 
 from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
@@ -39,9 +46,11 @@ from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.models.airframe import (
     HUB_HALF_SIZE,
+    LANDER_CORNERS,
     PROP_HALF_THICKNESS,
     PROP_HEIGHT,
     PROP_RADIUS_FRACTION,
+    lander_centres_B,
 )
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import rotmat_to_quat
@@ -63,6 +72,11 @@ CHAIN_W_DT = 0.5
 """Highest angular frequency times the time step allowed for a link's swing about its
 joint under the largest tension (the armature of :func:`chain_spec`) [-]."""
 
+CONTACT_PARTNERS: tuple[str, ...] = ("surface", "ground")
+"""Geoms whose contact force with each lander has its own sensor ``lander<i>_<partner>``:
+the force of the first contact of the pair in its contact frame (normal, tangent 1,
+tangent 2) [N]; a lander sphere meets the box, cylinder or plane at one point."""
+
 SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("accelerometer", 3),
     ("gyro", 3),
@@ -73,6 +87,7 @@ SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("lander2_touch", 1),
     ("lander3_touch", 1),
     ("frame_touch", 1),
+    *((f"lander{i}_{partner}", 3) for partner in CONTACT_PARTNERS for i in range(4)),
 )
 """Sensors in ``sensordata`` order: (name, dimension)."""
 
@@ -217,11 +232,11 @@ def chain_spec(scenario: Scenario) -> ChainSpec:
 
 
 def hook_timeconst(scenario: Scenario) -> float:
-    """Time constant of the chain's hook connection [s]: ``sim.cable_timeconst``, or for
+    """Time constant of the chain's hook connection [s]: ``sim.cable_time_constant``, or for
     an elastic line at least 1/sqrt(k/m), so that a cable snapping taut stops the vehicle
     no faster than the line's own spring would (snap load about v sqrt(k m))."""
     sim, t = scenario.sim, scenario.tether
-    tau = max(sim.cable_timeconst, 2.0 * sim.timestep)  # MuJoCo's floor: two steps
+    tau = max(sim.cable_time_constant, 2.0 * sim.timestep)  # MuJoCo's floor: two steps
     k = t.stiffness
     return tau if k is None else max(tau, math.sqrt(scenario.vehicle.mass / k))
 
@@ -320,20 +335,62 @@ def _sub(parent: ET.Element, tag: str, **attrs: str) -> ET.Element:
     return ET.SubElement(parent, tag, {k.rstrip("_"): v for k, v in attrs.items()})
 
 
-def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
-    """MJCF text of the scene for ``scenario`` (compile with ``MjModel.from_xml_string``).
+@dataclass
+class SceneXml:
+    """The MJCF document of a scene while the builders of :data:`SCENE_BUILDERS` fill it.
 
-    The cable tendon is created limited (engaged); the plant disengages it at reset, as
-    the hook model requires.
+    Attributes
+    ----------
+    scenario : Scenario
+        What the scene is built for (the plant's truth).
+    layout : SceneLayout
+        Where things are.
+    root : Element
+        The ``mujoco`` element.
+    vehicle : Element or None
+        The vehicle's body, once :func:`add_vehicle` has added it (the place for anything
+        the vehicle carries).
     """
-    layout = SceneLayout.from_scenario(scenario) if layout is None else layout
-    v, sim, tether = scenario.vehicle, scenario.sim, scenario.tether
-    geom = layout.geometry
-    surf = geom.surface
-    mu = scenario.surface.friction
-    contact_solref = _fmt((sim.contact_timeconst, sim.contact_dampratio))
 
-    root = ET.Element("mujoco", model=f"tetherland_{scenario.name}")
+    scenario: Scenario
+    layout: SceneLayout
+    root: ET.Element
+    vehicle: ET.Element | None = None
+
+    @classmethod
+    def start(cls, scenario: Scenario, layout: SceneLayout) -> SceneXml:
+        """An empty document for ``scenario``."""
+        return cls(scenario, layout, ET.Element("mujoco", model=f"tetherland_{scenario.name}"))
+
+    def section(self, tag: str) -> ET.Element:
+        """The top-level element ``tag`` (``worldbody``, ``equality``, ``tendon``,
+        ``actuator``, ``sensor``, ...), appended to the document the first time."""
+        found = self.root.find(tag)
+        return found if found is not None else _sub(self.root, tag)
+
+    @property
+    def world(self) -> ET.Element:
+        """The ``worldbody``."""
+        return self.section("worldbody")
+
+    @property
+    def contact_solref(self) -> str:
+        """``solref`` of every contact with the environment (ground, surface)."""
+        sim = self.scenario.sim
+        return _fmt((sim.contact_time_constant, sim.contact_damping_ratio))
+
+    def text(self) -> str:
+        """The MJCF text (compile with ``MjModel.from_xml_string``)."""
+        ET.indent(self.root)
+        return ET.tostring(self.root, encoding="unicode")
+
+
+def add_options_and_assets(scene: SceneXml) -> None:
+    """Compiler and physics options (time step, integrator, solver, gravity), the visual
+    settings, textures and materials, and the default classes ``visual`` (drawn only) and
+    ``collision`` (massless contact geometry)."""
+    sim = scene.scenario.sim
+    root = scene.root
     _sub(root, "compiler", angle="radian", autolimits="true")
     option = _sub(
         root,
@@ -387,7 +444,13 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
     col = _sub(default, "default", class_="collision")
     _sub(col, "geom", group="3", mass="0", condim="3")
 
-    world = _sub(root, "worldbody")
+
+def add_ground_and_surface(scene: SceneXml) -> None:
+    """The light, the horizontal ground plane (the start pad) and the landing surface: a
+    tilted box whose top face is P_S, or a cylinder whose top line lies on P_S (a pipe)."""
+    world = scene.world
+    surf = scene.layout.geometry.surface
+    cfg = scene.scenario.surface
     _sub(
         world,
         "light",
@@ -398,51 +461,44 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
         castshadow="true",
         diffuse=".8 .8 .8",
     )
-    env_contact = {"priority": "1", "condim": "3", "solref": contact_solref}
+    env_contact = {"priority": "1", "condim": "3", "solref": scene.contact_solref}
     _sub(
         world,
         "geom",
         name="ground",
         type="plane",
         size="12 12 0.1",
-        pos=_fmt((0, 0, layout.ground_z)),
+        pos=_fmt((0, 0, scene.layout.ground_z)),
         material="ground",
         friction="1.0 0.005 0.0001",
         **env_contact,
     )
-    friction = f"{mu:.12g} 0.005 0.0001"
+    friction = f"{cfg.friction:.12g} 0.005 0.0001"
     if surf.kind == "pipe":
-        R = scenario.surface.pipe_radius
-        centre = surf.origin - R * surf.z_S
-        _sub(
-            world,
-            "geom",
-            name="surface",
-            type="cylinder",
-            size=_fmt((R, scenario.surface.extent)),
-            pos=_fmt(centre),
-            quat=_quat_of_columns(surf.y_S, surf.z_S, surf.x_S),
-            material="surface",
-            friction=friction,
-            **env_contact,
-        )
+        R = cfg.pipe_radius
+        shape = {
+            "type": "cylinder",
+            "size": _fmt((R, cfg.extent)),
+            "pos": _fmt(surf.origin - R * surf.z_S),
+            "quat": _quat_of_columns(surf.y_S, surf.z_S, surf.x_S),
+        }
     else:
-        centre = surf.origin - SURFACE_HALF_THICKNESS * surf.z_S
-        e = scenario.surface.extent
-        _sub(
-            world,
-            "geom",
-            name="surface",
-            type="box",
-            size=_fmt((e, e, SURFACE_HALF_THICKNESS)),
-            pos=_fmt(centre),
-            quat=_quat_of_columns(surf.x_S, surf.y_S, surf.z_S),
-            material="surface",
-            friction=friction,
-            **env_contact,
-        )
+        e = cfg.extent
+        shape = {
+            "type": "box",
+            "size": _fmt((e, e, SURFACE_HALF_THICKNESS)),
+            "pos": _fmt(surf.origin - SURFACE_HALF_THICKNESS * surf.z_S),
+            "quat": _quat_of_columns(surf.x_S, surf.y_S, surf.z_S),
+        }
+    _sub(world, "geom", name="surface", **shape, material="surface", friction=friction,
+         **env_contact)  # fmt: skip
 
-    # Anchor: the cable end, a short horizontal bar along y_A and the capture disk.
+
+def add_anchor(scene: SceneXml) -> None:
+    """The anchoring mechanism at p_A: the site ``anchor`` (the cable's end), a short bar
+    along y_A and the capture disk (normal: the approach direction; drawn only)."""
+    world = scene.world
+    geom = scene.layout.geometry
     p_A = geom.p_A
     _sub(world, "site", name="anchor", pos=_fmt(p_A), size="0.02", rgba=".9 .2 .1 1")
     _sub(
@@ -461,16 +517,22 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
         name="capture_disk",
         class_="visual",
         type="cylinder",
-        size=_fmt((tether.capture_radius, 0.001)),
+        size=_fmt((scene.scenario.tether.capture_radius, 0.001)),
         pos=_fmt(p_A),
-        quat=_quat_z_to(layout.approach_W),
+        quat=_quat_z_to(scene.layout.approach_W),
         rgba=".9 .6 .1 .25",
         group="2",
     )
 
-    # The vehicle, at the start pad; the plant sets the initial state.
-    start_com = layout.start_position + np.array([0.0, 0.0, v.h_R])
-    body = _sub(world, "body", name="vehicle", pos=_fmt(start_com))
+
+def add_vehicle(scene: SceneXml) -> None:
+    """The vehicle at the start pad (the plant sets the initial state): one rigid body with
+    a free joint, mass and principal inertia, the IMU and cable attachment sites, the hub,
+    the landers (:func:`add_landers`) and the rotors (:func:`add_rotors`)."""
+    v = scene.scenario.vehicle
+    start_com = scene.layout.start_position + np.array([0.0, 0.0, v.h_R])
+    body = _sub(scene.world, "body", name="vehicle", pos=_fmt(start_com))
+    scene.vehicle = body
     _sub(body, "freejoint", name="vehicle_free")
     _sub(body, "inertial", pos="0 0 0", mass=f"{v.mass:.12g}", diaginertia=_fmt(v.inertia))
     _sub(body, "site", name="imu", pos="0 0 0", size="0.01", group="4")
@@ -492,17 +554,19 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
         material="frame",
         group="1",
     )
-    _sub(
-        body,
-        "site",
-        name="frame_zone",
-        type="box",
-        group="4",
-        size=_fmt((v.arm_length + layout.prop_radius, v.arm_length + layout.prop_radius, 0.04)),
-    )
-    w, r, h = v.lander_half_width, v.lander_radius, v.h_R
-    for i, (sx, sy) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
-        tip = np.array([sx * w, sy * w, -(h - r)])
+    reach = v.arm_length + scene.layout.prop_radius
+    _sub(body, "site", name="frame_zone", type="box", group="4", size=_fmt((reach, reach, 0.04)))
+    add_landers(scene, body)
+    add_rotors(scene, body)
+
+
+def add_landers(scene: SceneXml, body: ET.Element) -> None:
+    """The four lander spheres ``lander{i}`` (collision; lowest points on the landers plane,
+    :func:`tetherland.models.airframe.lander_centres_B`), their drawn legs and the touch
+    zones ``lander{i}_zone`` of the touch sensors."""
+    v = scene.scenario.vehicle
+    r = v.lander_radius
+    for i, tip in enumerate(lander_centres_B(v.lander_half_width, v.h_R, r)):
         _sub(
             body,
             "geom",
@@ -521,7 +585,7 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             class_="visual",
             type="capsule",
             size=f"{0.35 * r:.12g}",
-            fromto=_fmt(np.concatenate((np.array([0.5 * sx * w, 0.5 * sy * w, -0.02]), tip))),
+            fromto=_fmt(np.concatenate((np.array([0.5 * tip[0], 0.5 * tip[1], -0.02]), tip))),
             material="frame",
         )
         _sub(
@@ -533,6 +597,12 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             pos=_fmt(tip),
             group="4",
         )
+
+
+def add_rotors(scene: SceneXml, body: ET.Element) -> None:
+    """Per rotor: the site ``rotor{i}`` its thrust acts at, the drawn arm and the rotor
+    guard ``prop{i}`` (collision)."""
+    layout = scene.layout
     for i, r_i in enumerate(layout.rotors.positions_B):
         _sub(body, "site", name=f"rotor{i}", pos=_fmt(r_i), size="0.01", group="4")
         _sub(
@@ -557,32 +627,43 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             group="1",
         )
 
+
+def add_cable(scene: SceneXml) -> None:
+    """The cable by ``tether.cable_model``: the chain's links and hook connection
+    (:func:`add_chain`) and the spatial tendon ``cable`` from the anchor to the attachment
+    (limited to [0, l] for the ideal cable, hidden under the chain's links)."""
+    scenario = scene.scenario
+    sim, tether = scenario.sim, scenario.tether
     cable_model = tether.cable_model
     if cable_model == CableModel.CHAIN:
         add_chain(
-            world,
-            root,
-            p_A,
+            scene.world,
+            scene.root,
+            scene.layout.geometry.p_A,
             chain_spec(scenario),
-            solref=_fmt((hook_timeconst(scenario), sim.cable_dampratio)),
+            solref=_fmt((hook_timeconst(scenario), sim.cable_damping_ratio)),
         )
-    tendon = _sub(root, "tendon")
     cable_attrs = {"width": "0.004", "rgba": ".95 .85 .2 1"}
     if cable_model == CableModel.IDEAL:
         cable_attrs.update(
             limited="true",
             range=_fmt((0.0, tether.length)),
-            solreflimit=_fmt((sim.cable_timeconst, sim.cable_dampratio)),
+            solreflimit=_fmt((sim.cable_time_constant, sim.cable_damping_ratio)),
         )
     elif cable_model == CableModel.CHAIN:
         cable_attrs["group"] = str(CABLE_GROUP_HIDDEN)  # the links are drawn instead
-    cable = _sub(tendon, "spatial", name="cable", **cable_attrs)
+    cable = _sub(scene.section("tendon"), "spatial", name="cable", **cable_attrs)
     _sub(cable, "site", site="anchor")
     _sub(cable, "site", site="attachment")
 
-    act = _sub(root, "actuator")
-    c_tau = layout.rotors.drag_coefficient
-    for i, sigma in enumerate(layout.rotors.spins):
+
+def add_actuators(scene: SceneXml) -> None:
+    """The rotor thrusts ``rotor{i}`` and, for the elastic cable, its tension ``cable``."""
+    act = scene.section("actuator")
+    v = scene.scenario.vehicle
+    rotors = scene.layout.rotors
+    c_tau = rotors.drag_coefficient
+    for i, sigma in enumerate(rotors.spins):
         # ctrl = rotor thrust f_i [N]: force f_i along the site z (= z_B) at the rotor, and
         # the drag torque sigma_i c_tau f_i about z_B.
         _sub(
@@ -593,13 +674,17 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
             gear=_fmt((0, 0, 1, 0, 0, sigma * c_tau)),
             ctrlrange=_fmt((0.0, v.f_max)),
         )
-    if cable_model == CableModel.ELASTIC:
+    if scene.scenario.tether.cable_model == CableModel.ELASTIC:
         # ctrl = cable tension f_L >= 0 [N], set by the plant each step; gear -1 shortens.
         _sub(act, "general", name="cable", tendon="cable", gear="-1", ctrllimited="false")
 
-    sensor = _sub(root, "sensor")
+
+def add_sensors(scene: SceneXml) -> None:
+    """The sensors of :data:`SENSOR_LAYOUT`, in that order."""
+    sensor = scene.section("sensor")
     _sub(sensor, "accelerometer", name="accelerometer", site="imu")
     _sub(sensor, "gyro", name="gyro", site="imu")
+    cable_model = scene.scenario.tether.cable_model
     if cable_model == CableModel.IDEAL:
         _sub(sensor, "tendonlimitfrc", name="cable_force", tendon="cable")
     elif cable_model == CableModel.ELASTIC:
@@ -607,9 +692,39 @@ def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
     else:  # written by the plant from the hook connection's constraint force
         _sub(sensor, "user", name="cable_force", dim="1", needstage="acc", datatype="real")
     _sub(sensor, "tendonpos", name="cable_length", tendon="cable")
-    for i in range(4):
+    for i in range(len(LANDER_CORNERS)):
         _sub(sensor, "touch", name=f"lander{i}_touch", site=f"lander{i}_zone")
     _sub(sensor, "touch", name="frame_touch", site="frame_zone")
+    for partner in CONTACT_PARTNERS:
+        for i in range(4):
+            _sub(sensor, "contact", name=f"lander{i}_{partner}", geom1=f"lander{i}",
+                 geom2=partner, num="1", data="force", reduce="none")  # fmt: skip
 
-    ET.indent(root)
-    return ET.tostring(root, encoding="unicode")
+
+SCENE_BUILDERS: tuple[Callable[[SceneXml], None], ...] = (
+    add_options_and_assets,
+    add_ground_and_surface,
+    add_anchor,
+    add_vehicle,
+    add_cable,
+    add_actuators,
+    add_sensors,
+)
+"""The scene, builder by builder, in document order. A new part of the scene (say a
+mechanism at the anchor or on the vehicle) is one more builder here: it finds the world
+(:attr:`SceneXml.world`), the vehicle's body (:attr:`SceneXml.vehicle`) and the top-level
+sections (:meth:`SceneXml.section`) on the :class:`SceneXml` it is given."""
+
+
+def build_mjcf(scenario: Scenario, layout: SceneLayout | None = None) -> str:
+    """MJCF text of the scene for ``scenario`` (compile with ``MjModel.from_xml_string``):
+    :data:`SCENE_BUILDERS` one after the other.
+
+    The cable tendon is created limited (engaged); the plant disengages it at reset, as
+    the hook model requires.
+    """
+    scene = SceneXml.start(scenario, SceneLayout.from_scenario(scenario) if layout is None
+                           else layout)  # fmt: skip
+    for build in SCENE_BUILDERS:
+        build(scene)
+    return scene.text()

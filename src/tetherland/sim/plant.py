@@ -33,7 +33,7 @@ from tetherland.interfaces import StateEstimate
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.cable import Cable, make_cable
 from tetherland.sim.hook import Hook, HookState
-from tetherland.sim.mjcf import SENSOR_SLICES, SceneLayout, build_mjcf
+from tetherland.sim.mjcf import CONTACT_PARTNERS, SENSOR_SLICES, SceneLayout, build_mjcf
 from tetherland.state import LinkState, RigidBodyState, link_state_of
 
 _BAD_STATE_WARNINGS = (
@@ -102,6 +102,12 @@ class Plant:
         self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
         self.sensordata = self.data.sensordata
+        # the landers' normal forces on the surface and the ground (contact sensors, every
+        # third entry: normal, tangent, tangent) and their peaks since the last read
+        first = SENSOR_SLICES[f"lander0_{CONTACT_PARTNERS[0]}"].start
+        last = SENSOR_SLICES[f"lander3_{CONTACT_PARTNERS[-1]}"].stop
+        self._contact_normals = self.sensordata[first:last:3]
+        self._contact_peak = np.zeros(self._contact_normals.shape)
         geo = self.layout.geometry
         self.cable: Cable = make_cable(m, self.data, scenario, geo.p_A, geo.R_WA[:, 0])
         self.hook = Hook(
@@ -163,6 +169,7 @@ class Plant:
         """
         mujoco.mj_resetData(self.model, self.data)
         self._tick = 0
+        self._contact_peak[:] = 0.0
         self.model.actuator_gear[0:4] = self._gear0
         self._write_state(self.start_state() if state is None else state)
         w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
@@ -382,6 +389,18 @@ class Plant:
             SENSOR_SLICES["lander0_touch"].start : SENSOR_SLICES["lander3_touch"].stop
         ].copy()
 
+    def contact_peaks_into(self, out: FloatArray) -> None:
+        """Write the largest normal force of each lander on the landing surface (4), then
+        on the ground (4), over the physics steps since the last call (or the reset) into
+        ``out[:8]``, and start over [N].
+
+        The contact sensors filter by partner geom (:data:`~tetherland.sim.mjcf.
+        CONTACT_PARTNERS`), and the peak is taken at every physics step: a touch that
+        lasts a single step is seen (the judge's touchdowns and bounces).
+        """
+        out[:8] = self._contact_peak
+        self._contact_peak[:] = 0.0
+
     @property
     def frame_contact_force(self) -> float:
         """Normal force on the hub and rotor guards (a crash when > 0) [N]."""
@@ -407,6 +426,8 @@ class Plant:
         bad_qacc = _BAD_STATE_WARNINGS[2]
         nx, ny, nz, n_dot_p0 = self._hook_plane
         b = self._mean_factor
+        contact_normals, contact_peak = self._contact_normals, self._contact_peak
+        maximum = np.maximum
         for _ in range(n):
             if self._spinning_up:
                 w0, w1, w2, w3 = w
@@ -419,6 +440,7 @@ class Plant:
                 ctrl[2] = c_f * m2 * m2
                 ctrl[3] = c_f * m3 * m3
             advance()
+            maximum(contact_peak, contact_normals, out=contact_peak)
             k = self._tick
             self._tick = k + 1
             if self._spinning_up:

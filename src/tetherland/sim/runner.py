@@ -28,6 +28,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from tetherland.config import Scenario
+from tetherland.config.checks import mocap_rate, ticks_per_sample
 from tetherland.errors import ConfigError, SimulationError, TetherlandError
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import (
@@ -36,12 +37,14 @@ from tetherland.interfaces import (
     Controller,
     Estimator,
     EventSource,
+    InnerLoop,
     MocapSample,
     Reference,
     ReferenceSource,
     StateEstimate,
 )
 from tetherland.provenance import provenance
+from tetherland.randomness import RandomSource
 from tetherland.sim.baselines import ConstantReference, TruthEstimator
 from tetherland.sim.faults import FaultInjector, mocap_outage
 from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
@@ -93,16 +96,6 @@ class ControlTick:
     reference: Reference
 
 
-def _ticks(rate_hz: float, steps_per_second: int, what: str) -> int:
-    n = steps_per_second / rate_hz
-    if abs(n - round(n)) > 1e-9 * n or round(n) < 1:
-        raise ConfigError(
-            f"{what} = {rate_hz:g} Hz must divide the physics rate {steps_per_second} Hz "
-            "(an integer number of physics steps per sample)"
-        )
-    return round(n)
-
-
 @dataclass(frozen=True)
 class Schedule:
     """Integer-tick schedule of every rate (validated against the physics rate).
@@ -127,19 +120,20 @@ class Schedule:
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> Schedule:
+        # the scenario's own rate rules (tetherland.config.checks): a Scenario that
+        # validated has rates that fit; a ValueError here is one built unvalidated
         N = scenario.sim.steps_per_second
-        mocap = scenario.sensors.mocap
-        if mocap.rate_hz > N:
-            raise ConfigError(
-                f"sensors.mocap.rate_hz = {mocap.rate_hz:g} Hz exceeds the physics rate {N} Hz"
+        imu, mocap, control = scenario.sensors.imu, scenario.sensors.mocap, scenario.controller
+        try:
+            return cls(
+                steps_per_second=N,
+                imu_every=ticks_per_sample(imu.rate_hz, N, "sensors.imu.rate_hz"),
+                control_every=ticks_per_sample(control.rate_hz, N, "controller.rate_hz"),
+                mocap_rate=mocap_rate(mocap.rate_hz, N),
+                mocap_latency_ticks=round(mocap.latency * N),
             )
-        return cls(
-            steps_per_second=N,
-            imu_every=_ticks(scenario.sensors.imu.rate_hz, N, "sensors.imu.rate_hz"),
-            control_every=_ticks(scenario.controller.rate_hz, N, "controller.rate_hz"),
-            mocap_rate=Fraction(mocap.rate_hz).limit_denominator(10_000),
-            mocap_latency_ticks=round(mocap.latency * N),
-        )
+        except ValueError as err:
+            raise ConfigError(str(err)) from None
 
     def mocap_tick(self, j: int) -> int:
         """Physics tick of mocap sample j: the first tick at or after j / f_mocap."""
@@ -170,13 +164,17 @@ class Runner:
     reference : ReferenceSource, optional
         Default: hold the initial position in free flight.
     seed : int
-        Seed of the sensor noise (IMU and mocap draw from independent child streams).
+        Seed of the sensor noise: the ``imu`` and ``mocap`` streams of ``RandomSource(seed)``
+        (:mod:`tetherland.randomness`), unless :meth:`run` is given a random source.
     plant : Plant, optional
         Reuse an existing plant (it is reset at each :meth:`run`).
     diagnostic_keys : sequence of str
         ``Command.diagnostics`` entries to record as ``diag.<key>`` columns.
     observers : sequence of callables
         Called as ``observer(t_k, plant)`` after every control tick.
+    inner_loop : InnerLoop, optional
+        A flight controller between the controller and the rotors: it gets each command
+        as a setpoint and each IMU sample, and its output is what the rotors are held at.
     """
 
     def __init__(
@@ -190,6 +188,7 @@ class Runner:
         plant: Plant | None = None,
         diagnostic_keys: Sequence[str] = (),
         observers: Sequence[Observer] = (),
+        inner_loop: InnerLoop | None = None,
     ) -> None:
         if not isinstance(controller, Controller):
             raise TypeError(f"{type(controller).__name__} does not implement Controller.update")
@@ -208,6 +207,9 @@ class Runner:
         self.seed = int(seed)
         self.diagnostic_keys = tuple(diagnostic_keys)
         self.observers = tuple(observers)
+        if inner_loop is not None and not isinstance(inner_loop, InnerLoop):
+            raise TypeError(f"{type(inner_loop).__name__} does not implement InnerLoop")
+        self.inner_loop = inner_loop
         if scenario.faults.active:  # the plant-side faults of [faults] (sim/faults.py)
             self.observers += (FaultInjector(scenario.faults),)
         self._snap = np.zeros(13)  # [qpos (7), qvel (6)] at the control tick
@@ -241,7 +243,7 @@ class Runner:
         initial_state: RigidBodyState | None = None,
         rotor_speeds: FloatArray | None = None,
         cable_engaged: bool = False,
-        rng: np.random.Generator | None = None,
+        random: RandomSource | None = None,
     ) -> SimLog:
         """Simulate ``duration`` seconds (or until the reference asks to terminate).
 
@@ -255,15 +257,16 @@ class Runner:
             Initial rotor speeds and held command (default: stopped) [rad/s].
         cable_engaged
             Start hooked.
-        rng
-            Generator for the sensor noise (default: ``numpy.random.default_rng(seed)``).
+        random
+            Random source of the sensor noise, its ``imu`` and ``mocap`` streams (default:
+            ``RandomSource(seed)``, :mod:`tetherland.randomness`).
 
         Returns
         -------
         SimLog
             One row per control tick; ``log.status`` tells how the run ended.
         """
-        loop = self._loop(duration, initial_state, rotor_speeds, cable_engaged, rng, False)
+        loop = self._loop(duration, initial_state, rotor_speeds, cable_engaged, random, False)
         try:
             next(loop)
         except StopIteration as done:
@@ -277,7 +280,7 @@ class Runner:
         initial_state: RigidBodyState | None = None,
         rotor_speeds: FloatArray | None = None,
         cable_engaged: bool = False,
-        rng: np.random.Generator | None = None,
+        random: RandomSource | None = None,
     ) -> Generator[ControlTick, Command, SimLog]:
         """The loop of :meth:`run`, one control tick at a time, commanded from outside.
 
@@ -287,7 +290,7 @@ class Runner:
         the duration is over, the reference terminates or the run fails. Arguments as for
         :meth:`run`.
         """
-        return self._loop(duration, initial_state, rotor_speeds, cable_engaged, rng, True)
+        return self._loop(duration, initial_state, rotor_speeds, cable_engaged, random, True)
 
     def _loop(
         self,
@@ -295,18 +298,16 @@ class Runner:
         initial_state: RigidBodyState | None,
         rotor_speeds: FloatArray | None,
         cable_engaged: bool,
-        rng: np.random.Generator | None,
+        random: RandomSource | None,
         external: bool,
     ) -> Generator[ControlTick, Command, SimLog]:
         if not (duration > 0 and math.isfinite(duration)):
             raise ValueError(f"duration must be a positive number of seconds, got {duration}")
         sc, sched, plant = self.scenario, self.schedule, self.plant
         plant.reset(initial_state, rotor_speeds=rotor_speeds, cable_engaged=cable_engaged)
-        seeded = rng is None
-        rng = np.random.default_rng(self.seed) if rng is None else rng
-        rng_imu, rng_mocap = rng.spawn(2)
-        imu = Imu(sc.sensors.imu, rng_imu, sc.sensors.noise_scale)
-        mocap = Mocap(sc.sensors.mocap, rng_mocap, sc.sensors.noise_scale,
+        random = RandomSource(self.seed) if random is None else random
+        imu = Imu(sc.sensors.imu, random.stream("imu"), sc.sensors.noise_scale)
+        mocap = Mocap(sc.sensors.mocap, random.stream("mocap"), sc.sensors.noise_scale,
                       mocap_outage(sc.faults))  # fmt: skip
         reference = self.reference
         if reference is None:
@@ -324,7 +325,7 @@ class Runner:
         imu_truth = sd[0:6]
         sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["frame_touch"].stop]
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
-        rotor_buf, scalars = np.zeros(8), np.zeros(9)
+        rotor_buf, scalars, contact_buf = np.zeros(8), np.zeros(9), np.zeros(8)
         # the measurement columns, contiguous in the row: last IMU sample, its true biases,
         # last delivered mocap pose
         meas = np.full(19, np.nan)
@@ -349,10 +350,11 @@ class Runner:
             controller.update,
         )
         command, mocap_measure, mocap_tick = plant.command, mocap.measure, sched.mocap_tick
-        write_row, rotor_state_into, bias_into = (
+        write_row, rotor_state_into, bias_into, contact_peaks_into = (
             self._write_row,
             plant.rotor_state_into,
             imu.bias_into,
+            plant.contact_peaks_into,
         )
         observers = self.observers
         for observer in observers:
@@ -361,14 +363,17 @@ class Runner:
         hook = plant.hook
         # the row's parts, in schema order: fixed buffers refilled in place every tick and
         # slots for the estimate, reference and command (see _write_row)
-        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, meas,
-                                   *([_NAN3] * 11)]  # fmt: skip
+        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, contact_buf,
+                                   meas, *([_NAN3] * 11)]  # fmt: skip
         diag_buf = np.empty(len(diag_keys))
         if diag_keys:
             parts.append(diag_buf)
         nans = [math.nan] * len(diag_keys)
+        inner = self.inner_loop
         wall0 = time.perf_counter()
         try:
+            if inner is not None:
+                inner.start()
             for k in range(n_ticks):
                 control_tick = k % n_ctrl == 0
                 if control_tick or k == next_mocap:
@@ -381,6 +386,8 @@ class Runner:
                 if k % imu_every == 0:
                     sample = imu_sample(k * dt, imu_truth)
                     predict(sample)
+                    if inner is not None:
+                        command(inner.step(sample))
                 if k == next_mocap:
                     t_del = k + lat
                     queue.append((t_del, mocap_measure(k * dt, snap[0:3], snap[3:7], t_del * dt)))
@@ -399,7 +406,11 @@ class Runner:
                 est = estimate()
                 ref = get_reference(t_k, est)
                 cmd = (yield ControlTick(t_k, est, ref)) if external else control(t_k, est, ref)
-                command(cmd.rotor_speeds)
+                if inner is None:
+                    command(cmd.rotor_speeds)
+                else:
+                    inner.setpoint(t_k, est, ref, cmd)
+                    cmd = inner.applied(cmd)
                 if command_aware:
                     estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
                 if reference_aware:
@@ -407,6 +418,7 @@ class Runner:
                 imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
                 imu_y[3:6] = sample.omega_B
                 bias_into(bias_buf)
+                contact_peaks_into(contact_buf)
                 if diag_keys:
                     diag_buf[:] = list(map(cmd.diagnostics.get, diag_keys, nans))
                 write_row(
@@ -422,9 +434,12 @@ class Runner:
             status, message = RunStatus.DIVERGED, str(err)
         except TetherlandError as err:
             status, message = RunStatus.FAILED, f"t = {k * dt:.4f} s: {err}"
+        finally:
+            if inner is not None:
+                inner.stop()
         wall = time.perf_counter() - wall0
         return writer.finish(
-            self._metadata(status, message, k, wall, reference, seeded),
+            self._metadata(status, message, k, wall, reference, random.seed),
             p_A=self._p_A,
             R_WA=self._R_WA,
             r_att_B=self._r_att,
@@ -456,7 +471,7 @@ class Runner:
             math.nan if cmd.thrust is None else cmd.thrust,
         )
         b = est.body
-        parts[6:17] = (
+        parts[7:18] = (
             b.p_W,
             b.v_W,
             b.q_WB,
@@ -478,7 +493,7 @@ class Runner:
         k: int,
         wall: float,
         reference: ReferenceSource,
-        seeded: bool,
+        seed: int,
     ) -> dict[str, Any]:
         events = [dict(e.as_dict(), source="hook") for e in self.plant.hook.events]
         if isinstance(reference, EventSource):
@@ -489,9 +504,7 @@ class Runner:
             self._provenance = provenance(self.scenario, seed=self.seed)
         prov = dict(self._provenance)
         prov["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
-        prov["seed"] = self.seed if seeded else None
-        if not seeded:
-            prov["rng"] = "generator passed to Runner.run"
+        prov["seed"] = seed  # of the random source the run drew from
         return {
             "provenance": prov,
             "status": status.value,
@@ -503,6 +516,7 @@ class Runner:
             "real_time_factor": sim_time / wall if wall > 0 else math.inf,
             "controller": type(self.controller).__name__,
             "estimator": type(self.estimator).__name__,
+            "inner_loop": None if self.inner_loop is None else type(self.inner_loop).__name__,
             "reference": type(reference).__name__,
             "anchor_W": self._p_A,
             "R_WA": self._R_WA,

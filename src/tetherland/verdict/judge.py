@@ -5,15 +5,22 @@
 point of the plant's scenario; the robot may have believed otherwise. The same rules
 serve every landing method (docs/theory.md section 5):
 
-* touchdown t_L: the first logged tick of the method's landing phases at which a lander
-  or the frame carries a normal force above ``verdict.contact_force`` (the plant's contact
-  solver: a real touch, not a distance); t_L- is the tick before;
+* touchdown t_L: the first logged tick of the whole run at which the landing surface
+  presses a lander with a normal force above ``verdict.touchdown_force`` (the plant's
+  contact sensors filtered by partner geom, peak over the physics steps: a real touch,
+  not a distance; the start pad and the ground do not count), whatever the robot
+  declared; t_L- is the tick before (:mod:`tetherland.verdict.touchdown`);
 * (1) ||p_RL(t_L) - p*_L||, p_RL = p - h_R z_B; (2) angle(z_B(t_L), z_S);
   (3) ||p'(t_L-)||, ||omega(t_L-)||; (4) ||p''(t_L-)|| from the true specific force and
-  ||omega'(t_L-)|| from the two ticks before;
-* (5) observed over the first motors-off interval after touchdown: the slip of p_RL along
-  the surface (sliding; its settling along the normal onto all landers is reported apart)
-  over the whole interval and the speed from ``verdict.rest_settle`` after its start;
+  ||omega'(t_L-)|| from the two ticks before; (1)-(4) hold only if they hold at t_L and
+  at every bounce (contact lost for at least ``sim.contact_time_constant`` and regained) up to
+  the contact that starts the rest;
+* (5) observed on the truth: the rest is the first interval after t_L in which the true
+  total rotor thrust is below the motors-off level
+  (:func:`~tetherland.config.verdict.motors_off_thrust`); it must last
+  ``verdict.min_rest_time`` with a lander on the surface; the slip of p_RL along the
+  surface (sliding; its settling along the normal is reported apart) is measured from
+  t_L until spin-up, the speed from ``verdict.rest_settle_time`` after the rest begins;
 * crash: a normal force above ``verdict.crash_force`` on the hub or a rotor guard, at any
   time of the run.
 
@@ -32,13 +39,22 @@ from typing import Any
 import numpy as np
 
 from tetherland import GRAVITY, __version__
-from tetherland.analysis.conditions import LandingTolerances, evaluate_landing
+from tetherland.analysis.conditions import (
+    ConditionResult,
+    LandingTolerances,
+    condition_1,
+    condition_2,
+    condition_3,
+    condition_4,
+    condition_5_observed,
+)
 from tetherland.config import Scenario
+from tetherland.config.verdict import motors_off_thrust
 from tetherland.geometry import LandingGeometry
-from tetherland.interfaces import ControlMode
 from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
 from tetherland.sim.log import RunStatus, SimLog
 from tetherland.verdict.record import RunRecord
+from tetherland.verdict.touchdown import Touchdowns, find_touchdowns
 
 
 class Outcome(enum.Enum):
@@ -59,7 +75,7 @@ class Outcome(enum.Enum):
     """The supervisor moved to a safe state (an operator abort, or a fault whose safe state
     was not verified reached)."""
     NO_TOUCHDOWN = "no_touchdown"
-    """No touchdown in the method's landing phases."""
+    """No touchdown on the landing surface in the whole run."""
     LANDING_CONDITIONS = "landing_conditions"
     """Touchdown happened, but a required landing condition (1)-(5) does not hold."""
     SLACK_CABLE = "slack_cable"
@@ -70,6 +86,16 @@ class Outcome(enum.Enum):
     """The return to the start pad was not completed."""
     UNFINISHED = "unfinished"
     """The run ended before the method's end state."""
+
+    @property
+    def label(self) -> str:
+        """The result in a word or two, as every command prints it: ``success``,
+        ``safe stop``, ``crash``, ``not flown`` or, for every other outcome, ``failure``."""
+        return _LABELS.get(self.value, "failure")
+
+
+_LABELS = {"success": "success", "safe_stop": "safe stop", "crashed": "crash",
+           "no_run": "not flown"}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -107,14 +133,14 @@ def tolerances_of(scenario: Scenario) -> LandingTolerances:
     """The landing tolerances of a scenario's ``[verdict]`` section (SI units)."""
     v = scenario.verdict
     return LandingTolerances(
-        position=v.position_m,
-        attitude=math.radians(v.attitude_deg),
-        speed=v.speed_mps,
-        angular_rate=v.angular_rate_rps,
-        accel=v.accel_mps2,
-        angular_accel=v.angular_accel_rps2,
-        slip=v.slip_m,
-        rest_speed=v.rest_speed_mps,
+        position=v.position_error,
+        attitude=math.radians(v.attitude_error_deg),
+        speed=v.touchdown_speed,
+        angular_rate=v.touchdown_angular_rate,
+        accel=v.touchdown_accel,
+        angular_accel=v.touchdown_angular_accel,
+        slip=v.rest_slip,
+        rest_speed=v.rest_speed,
     )
 
 
@@ -127,32 +153,22 @@ def _in(log: SimLog, record: RunRecord, names: tuple[str, ...]) -> np.ndarray:
     return np.isin(log["phase"].astype(int), codes)
 
 
-def _first_run(mask: np.ndarray, start: int) -> np.ndarray:
-    """Indices of the first contiguous run of True in ``mask`` at or after ``start``."""
-    idx = np.flatnonzero(mask[start:]) + start
-    if idx.size == 0:
-        return idx
-    gaps = np.flatnonzero(np.diff(idx) > 1)
-    return idx[: gaps[0] + 1] if gaps.size else idx
+TOUCHDOWN_KEYS = {
+    "position_error": "position_error_m",
+    "attitude_error": "attitude_error_rad",
+    "speed": "touchdown_speed_mps",
+    "angular_rate": "touchdown_angular_rate_rps",
+    "accel": "touchdown_accel_mps2",
+    "angular_accel": "touchdown_angular_accel_rps2",
+}
+"""Summary keys of the measures of conditions (1)-(4) at a touchdown."""
 
 
-def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
-    cfg = truth.verdict
-    tol = tolerances_of(truth)
-    geo = LandingGeometry.from_scenario(truth)
-    in_landing = _in(log, record, record.landing_phases)
-    if not in_landing.any():
-        return {"reached": False}
-    z_B = _z_axes(log["q_WB"])
-    p_RL = log["p_W"] - geo.h_R * z_B
-    clearance = (p_RL - geo.surface.origin) @ geo.surface.z_S
-    force = np.maximum(np.nan_to_num(log["lander_forces"]).max(axis=1),
-                       np.nan_to_num(log["frame_force"]))  # fmt: skip
-    touching = force > cfg.contact_force
-    idx = np.flatnonzero(in_landing & touching)
-    if idx.size == 0:
-        return {"reached": False, "min_clearance_m": float(clearance[in_landing].min())}
-    k = int(idx[0])
+def _touchdown_conditions(
+    log: SimLog, k: int, p_RL: np.ndarray, z_B: np.ndarray, geo: LandingGeometry,
+    tol: LandingTolerances,
+) -> tuple[ConditionResult, ...]:  # fmt: skip
+    """Conditions (1)-(4) at a touchdown at tick ``k``; t_L- is the tick before."""
     k_prev = max(k - 1, 0)
     t = log["t"]
     dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
@@ -160,53 +176,143 @@ def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     a_W = R_prev @ log["specific_force_B"][k_prev] + np.array([0.0, 0.0, -GRAVITY])
     w = log["omega_B"]
     w_dot = (w[k_prev] - w[max(k_prev - 1, 0)]) / dt
-    rest_idx = _first_run(log["mode"].astype(int) == int(ControlMode.MOTORS_OFF), k)
-    rested = bool(rest_idx.size)
-    rest_p = p_RL[rest_idx] if rested else p_RL[k : k + 1]
-    settled = rest_idx[t[rest_idx] >= t[rest_idx[0]] + cfg.rest_settle] if rested else rest_idx
-    rest_v = log["v_W"][settled] if settled.size else np.zeros((1, 3))
-    verdict = evaluate_landing(
-        p_RL=p_RL[k], z_B=z_B[k], v_W=log["v_W"][k_prev], omega_B=w[k_prev], a_W=a_W,
-        omega_dot_B=w_dot, p_L_star=geo.p_L, z_S=geo.surface.z_S, rest_p_RL=rest_p,
-        rest_v_W=rest_v, tol=tol,
+    return (
+        condition_1(p_RL[k], geo.p_L, tol),
+        condition_2(z_B[k], geo.surface.z_S, tol),
+        condition_3(log["v_W"][k_prev], w[k_prev], tol),
+        condition_4(a_W, w_dot, tol),
+    )
+
+
+def _measures(conditions: tuple[ConditionResult, ...]) -> dict[str, float]:
+    return {
+        TOUCHDOWN_KEYS[m.name]: m.value
+        for c in conditions
+        for m in c.measures
+        if m.name in TOUCHDOWN_KEYS
+    }
+
+
+def _rest_condition(
+    log: SimLog, found: Touchdowns, p_RL: np.ndarray, geo: LandingGeometry, truth: Scenario
+) -> tuple[dict[str, Any], str | None]:
+    """Condition (5) on the truth: the measures, and why it fails (None if it holds).
+
+    The slip and the settle are measured from the touchdown until spin-up, the rest speed
+    from ``verdict.rest_settle_time`` after the rest begins; the rest must last
+    ``verdict.min_rest_time`` with a lander on the surface.
+    """
+    cfg = truth.verdict
+    rest, k_L = found.rest, found.first
+    assert k_L is not None
+    if rest is None:
+        none = {"slip_m": None, "settle_m": None, "rest_speed_mps": None}
+        return none | {"rest_interval_s": None}, (
+            "no rest: the true rotor thrust never went below the motors-off level "
+            f"({motors_off_thrust(truth.vehicle):.3g} N) after the touchdown"
+        )
+    t = log["t"]
+    ticks = np.arange(rest.start, rest.end)
+    settled = ticks[t[ticks] >= rest.t_start + cfg.rest_settle_time]
+    result = condition_5_observed(
+        p_RL[k_L : max(rest.end, k_L + 1)], log["v_W"][settled], tolerances_of(truth),
+        geo.surface.z_S,
     )  # fmt: skip
-    measures = {m.name: m.value for c in verdict.conditions for m in c.measures}
-    conditions = {str(c.number): c.holds and (c.number != 5 or rested) for c in verdict.conditions}
+    m = {x.name: x.value for x in result.measures}
+    out = {
+        "slip_m": m["slip"],
+        "settle_m": m["settle"],
+        "rest_speed_mps": m["rest_speed"] if settled.size else None,
+        "rest_interval_s": [rest.t_start, rest.t_end],
+    }
+    if rest.duration < cfg.min_rest_time:
+        return out, (
+            f"the rest lasted {rest.duration:.3g} s < verdict.min_rest_time = "
+            f"{cfg.min_rest_time:g} s (true thrust below the motors-off level)"
+        )
+    if found.rest_contact is None:
+        return out, "no lander on the landing surface during the rest"
+    if not result.holds:
+        failed = [x for x in result.measures if not x.ok]
+        return out, ", ".join(f"{x.name} {x.value:.3g} {x.unit} > {x.limit:g}" for x in failed)
+    return out, None
+
+
+def _landing(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
+    cfg = truth.verdict
+    tol = tolerances_of(truth)
+    geo = LandingGeometry.from_scenario(truth)
+    found = find_touchdowns(
+        log, cfg.touchdown_force, motors_off_thrust(truth.vehicle), truth.sim.contact_time_constant
+    )
+    z_B = _z_axes(log["q_WB"])
+    p_RL = log["p_W"] - geo.h_R * z_B
+    if found.first is None:
+        return {"reached": False, "min_clearance_m": _min_clearance(p_RL, geo, truth)}
+    k = found.first
+    t = log["t"]
+    judged = {j: _touchdown_conditions(log, j, p_RL, z_B, geo, tol) for j in found.judged}
+    bounces = [
+        {"t": float(t[j]), **_measures(c), "conditions": {str(x.number): x.holds for x in c}}
+        for j, c in judged.items()
+        if j != k
+    ]
+    rest, why_5 = _rest_condition(log, found, p_RL, geo, truth)
+    notes: dict[str, str] = {}
+    conditions = {}
+    for n in (1, 2, 3, 4):
+        missed = [j for j, c in judged.items() if not c[n - 1].holds]
+        conditions[str(n)] = not missed
+        if missed and missed[0] != k:
+            notes[str(n)] = f"missed at the bounce at t = {t[missed[0]]:.3f} s"
+    conditions["5"] = why_5 is None
+    if why_5 is not None:
+        notes["5"] = why_5
     required = record.expects.required_conditions
-    tension: dict[str, float | None] = {"min_tension_N": None, "min_tension_all_N": None}
-    if record.tension_phases:
-        # the cable must be taut during the tethered maneuvers wherever the vehicle flies on
-        # a plan that needs tension: not while the landers carry it (on a gentle slope
-        # friction alone may hold it and the cable slackens), nor where the plan itself is
-        # slack (flat ground)
-        min_tension = record.belief_scenario().planner.min_tension
-        airborne = np.nan_to_num(log["lander_forces"]).max(axis=1) <= cfg.contact_force
-        planned = _in(log, record, record.tension_phases) & airborne
-        if "diag.ff_tension" in log:
-            planned &= np.nan_to_num(log["diag.ff_tension"]) >= min_tension
-        tethered = _in(log, record, record.tethered_phases)
-        tension = {
-            "min_tension_N": float(log["tension"][planned].min()) if planned.any() else None,
-            "min_tension_all_N": float(log["tension"][tethered].min()) if tethered.any() else None,
-        }
     return {
         "reached": True,
         "t_L": float(t[k]),
-        "position_error_m": measures["position_error"],
-        "attitude_error_rad": measures["attitude_error"],
-        "touchdown_speed_mps": measures["speed"],
-        "touchdown_angular_rate_rps": measures["angular_rate"],
-        "touchdown_accel_mps2": measures["accel"],
-        "touchdown_angular_accel_rps2": measures["angular_accel"],
-        "slip_m": measures["slip"] if rested else None,
-        "settle_m": measures["settle"] if rested else None,
-        "rest_speed_mps": measures["rest_speed"] if rested else None,
-        "motors_off_t": float(t[rest_idx[0]]) if rested else None,
-        **tension,
+        **_measures(judged[k]),
+        "bounces": bounces,
+        "rest_contact_t": None if found.rest_contact is None else float(t[found.rest_contact]),
+        **rest,
+        **_tension(log, record, cfg.touchdown_force),
         "conditions": conditions,
+        "condition_notes": notes,
         "required_conditions": [str(n) for n in required],
         "all_conditions": all(conditions[str(n)] for n in required),
     }
+
+
+def _tension(log: SimLog, record: RunRecord, contact_force: float) -> dict[str, float | None]:
+    """Least true tension where the plan needs it while airborne, and over every tethered
+    phase [N] (None: no such tick)."""
+    if not record.tension_phases:
+        return {"min_tension_N": None, "min_tension_all_N": None}
+    # the cable must be taut during the tethered maneuvers wherever the vehicle flies on
+    # a plan that needs tension: not while the landers carry it (on a gentle slope
+    # friction alone may hold it and the cable slackens), nor where the plan itself is
+    # slack (flat ground)
+    min_tension = record.belief_scenario().planner.min_tension
+    airborne = np.nan_to_num(log["lander_forces"]).max(axis=1) <= contact_force
+    planned = _in(log, record, record.tension_phases) & airborne
+    if "diag.ff_tension" in log:
+        planned &= np.nan_to_num(log["diag.ff_tension"]) >= min_tension
+    tethered = _in(log, record, record.tethered_phases)
+    return {
+        "min_tension_N": float(log["tension"][planned].min()) if planned.any() else None,
+        "min_tension_all_N": float(log["tension"][tethered].min()) if tethered.any() else None,
+    }
+
+
+def _min_clearance(p_RL: np.ndarray, geo: LandingGeometry, truth: Scenario) -> float | None:
+    """Least height of p_RL above the surface plane over the ticks above the simulated
+    patch (the start pad and the ground lie outside it) [m]; None if never above it."""
+    d = p_RL - geo.surface.origin
+    over = (np.abs(d @ geo.surface.x_S) <= truth.surface.extent) & (
+        np.abs(d @ geo.surface.y_S) <= truth.surface.extent
+    )
+    return float((d[over] @ geo.surface.z_S).min()) if over.any() else None
 
 
 def _takeoff(log: SimLog, record: RunRecord, geo: LandingGeometry) -> dict[str, Any]:
@@ -243,7 +349,7 @@ def _return(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any]:
     unhooked = not bool(log["hook"][-1]) if "hook" in log else True
     return {
         "required": True,
-        "completed": unhooked and error <= truth.verdict.return_position_m,
+        "completed": unhooked and error <= truth.verdict.return_position_error,
         "unhooked": unhooked,
         "position_error_m": error,
         "speed_mps": float(np.linalg.norm(log["v_W"][-1])),
@@ -281,12 +387,9 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
     if crashed:
         checks.append((Outcome.CRASHED, "the frame touched something (crash)"))
     if not landing.get("reached", False):
-        checks.append((Outcome.NO_TOUCHDOWN, "no touchdown in the landing phases"))
+        checks.append((Outcome.NO_TOUCHDOWN, "no touchdown on the landing surface"))
     elif not landing["all_conditions"]:
-        failed = [n for n in landing["required_conditions"] if not landing["conditions"][n]]
-        checks.append(
-            (Outcome.LANDING_CONDITIONS, f"landing condition(s) {', '.join(failed)} not met")
-        )
+        checks.append((Outcome.LANDING_CONDITIONS, _conditions_reason(landing)))
     if record.expects.tension and not (
         landing.get("min_tension_N") is None or landing["min_tension_N"] > 0.0
     ):
@@ -306,7 +409,7 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
         elif "position_error_m" in ret:
             why = (
                 f"ended {ret['position_error_m']:.3g} m from the start pad (tolerance "
-                f"{truth.verdict.return_position_m:g} m)"
+                f"{truth.verdict.return_position_error:g} m)"
             )
         else:
             why = "not flown to the end"
@@ -355,6 +458,14 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
     return Verdict(success=success, outcome=outcome, reasons=reasons, summary=summary)
 
 
+def _conditions_reason(landing: Mapping[str, Any]) -> str:
+    """``landing condition(s) 1, 5 not met`` with the judge's notes, e.g. why (5) failed."""
+    failed = [n for n in landing["required_conditions"] if not landing["conditions"][n]]
+    notes = landing.get("condition_notes", {})
+    why = "; ".join(f"({n}) {notes[n]}" for n in failed if n in notes)
+    return f"landing condition(s) {', '.join(failed)} not met" + (f": {why}" if why else "")
+
+
 OPERATOR_ABORT = "operator abort"
 """Prefix of the abort reason of an operator abort (never a safe stop: nothing failed)."""
 
@@ -368,7 +479,7 @@ def _safe_stop(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any
         return {"reached": False, "why": "no safe state reached by the end of the run"}
     speed = float(np.linalg.norm(log["v_W"][-1])) if len(log) else math.nan
     crashed = bool(np.any(np.nan_to_num(log["frame_force"]) > truth.verdict.crash_force))
-    limit = truth.verdict.safe_stop_speed_mps
+    limit = truth.verdict.safe_stop_speed
     out: dict[str, Any] = {"state": record.safe_state, "final_speed_mps": speed}
     if crashed:
         return out | {"reached": False, "why": "crashed"}

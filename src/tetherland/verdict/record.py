@@ -9,13 +9,14 @@ from these two alone, so a saved run can be re-judged (``tetherland judge RUN_DI
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 from tetherland.config import Scenario, scenario_from_dict
-from tetherland.errors import TetherlandError
+from tetherland.errors import ConfigError, TetherlandError
 from tetherland.io import atomic_write_json
 
 RECORD_FORMAT = "tetherland-run"
@@ -105,8 +106,6 @@ class RunRecord:
         What the judge requires of this method.
     phase_codes : mapping of str to int
         The method's phase names and the codes its log's ``phase`` column holds.
-    landing_phases : tuple of str
-        Phases in which touchdown is looked for.
     tension_phases : tuple of str
         Airborne tethered maneuvers in which the cable must be taut where the plan needs
         tension (landing and takeoff tracking).
@@ -147,7 +146,6 @@ class RunRecord:
     expects: Expectations
     controller: str | None = None
     phase_codes: Mapping[str, int] = field(default_factory=dict)
-    landing_phases: tuple[str, ...] = ()
     tension_phases: tuple[str, ...] = ()
     tethered_phases: tuple[str, ...] = ()
     phases: tuple[PhaseSpan, ...] = ()
@@ -164,12 +162,12 @@ class RunRecord:
     provenance: Mapping[str, Any] = field(default_factory=dict)
 
     def truth_scenario(self) -> Scenario:
-        """The plant's scenario, validated."""
-        return scenario_from_dict(dict(self.truth), str(self.truth.get("name", "custom")))
+        """The plant's scenario, validated (:class:`RunRecordError` naming ``truth``)."""
+        return _scenario(self.truth, "truth")
 
     def belief_scenario(self) -> Scenario:
-        """The believed scenario, validated."""
-        return scenario_from_dict(dict(self.belief), str(self.belief.get("name", "custom")))
+        """The believed scenario, validated (:class:`RunRecordError` naming ``belief``)."""
+        return _scenario(self.belief, "belief")
 
     # ------------------------------------------------------------------ JSON
     def to_dict(self) -> dict[str, Any]:
@@ -182,7 +180,6 @@ class RunRecord:
             "controller": self.controller,
             "expects": asdict(self.expects),
             "phase_codes": {k: int(v) for k, v in self.phase_codes.items()},
-            "landing_phases": list(self.landing_phases),
             "tension_phases": list(self.tension_phases),
             "tethered_phases": list(self.tethered_phases),
             "phases": [p.to_dict() for p in self.phases],
@@ -212,43 +209,60 @@ class RunRecord:
                 f"(this tetherland reads version {RECORD_VERSION})"
             )
         try:
-            return cls(
-                method=str(data["method"]),
-                seed=int(data["seed"]),
+            record = cls(
+                method=_text(data["method"], "method"),
+                seed=_seed(data["seed"]),
                 controller=data.get("controller"),
-                truth=data["truth"],
-                belief=data["belief"],
+                truth=_mapping(data["truth"], "truth"),
+                belief=_mapping(data["belief"], "belief"),
                 expects=Expectations(
-                    required_conditions=tuple(data["expects"]["required_conditions"]),
-                    tension=bool(data["expects"]["tension"]),
-                    takeoff=bool(data["expects"]["takeoff"]),
-                    return_home=bool(data["expects"]["return_home"]),
+                    required_conditions=tuple(
+                        _condition(c) for c in data["expects"]["required_conditions"]
+                    ),
+                    tension=_flag(data["expects"]["tension"], "expects.tension"),
+                    takeoff=_flag(data["expects"]["takeoff"], "expects.takeoff"),
+                    return_home=_flag(data["expects"]["return_home"], "expects.return_home"),
                 ),
-                phase_codes={str(k): int(v) for k, v in data["phase_codes"].items()},
-                landing_phases=tuple(data.get("landing_phases", ())),
+                phase_codes={
+                    str(k): _integer(v, "phase_codes") for k, v in data["phase_codes"].items()
+                },
                 tension_phases=tuple(data.get("tension_phases", ())),
                 tethered_phases=tuple(data.get("tethered_phases", ())),
-                phases=tuple(PhaseSpan(**p) for p in data.get("phases", [])),
-                times={k: float(v) for k, v in data.get("times", {}).items()},
+                phases=tuple(
+                    PhaseSpan(
+                        str(p["name"]),
+                        _number(p["start"], "phases.start"),
+                        _number(p["end"], "phases.end"),
+                        str(p["exit_reason"]),
+                    )
+                    for p in data.get("phases", [])
+                ),
+                times={str(k): _number(v, f"times.{k}") for k, v in data.get("times", {}).items()},
                 abort_reason=data.get("abort_reason"),
                 safe_state=data.get("safe_state"),
-                finished=bool(data.get("finished", False)),
-                takeoff_target=_tuple(data.get("takeoff_target")),
-                home_pad_W=_tuple(data.get("home_pad_W")),
-                hook_attempts=data.get("hook_attempts"),
+                finished=_flag(data.get("finished", False), "finished"),
+                takeoff_target=_vector(data.get("takeoff_target"), "takeoff_target", 4),
+                home_pad_W=_vector(data.get("home_pad_W"), "home_pad_W", 3),
+                hook_attempts=None
+                if data.get("hook_attempts") is None
+                else _integer(data["hook_attempts"], "hook_attempts"),
                 switches=tuple(
                     SwitchSpan(
-                        s["t"], s["from"], s["to"], s["thrust_jump_N"],
-                        s["rotor_speed_jump_radps"],
+                        _number(s["t"], "switches.t"),
+                        str(s["from"]),
+                        str(s["to"]),
+                        _number(s["thrust_jump_N"], "switches.thrust_jump_N", None),
+                        _number(s["rotor_speed_jump_radps"], "switches.rotor_speed_jump", None),
                     )
                     for s in data.get("switches", [])
                 ),
-                plans=data.get("plans", {}),
-                wall_time_s=float(data.get("wall_time_s", 0.0)),
-                provenance=data.get("provenance", {}),
+                plans=_mapping(data.get("plans", {}), "plans"),
+                wall_time_s=_number(data.get("wall_time_s", 0.0), "wall_time_s"),
+                provenance=_mapping(data.get("provenance", {}), "provenance"),
             )
-        except (KeyError, TypeError, ValueError) as err:
+        except (KeyError, TypeError, ValueError, AttributeError) as err:
             raise RunRecordError(f"run record is incomplete or malformed: {err!r}") from None
+        return record
 
     def save(self, directory: str | Path) -> Path:
         """Write ``run.json`` into ``directory`` atomically."""
@@ -264,12 +278,69 @@ class RunRecord:
                 "records cannot be re-judged; run the mission again)"
             )
         try:
-            data = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as err:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as err:  # JSON and UTF-8 decoding errors are ValueErrors
             raise RunRecordError(f"{path}: unreadable run record ({err})") from None
+        except RecursionError:
+            raise RunRecordError(f"{path}: unreadable run record (nested too deeply)") from None
         return cls.from_dict(data)
 
 
-def _tuple(v: Any) -> Any:
-    return None if v is None else tuple(float(x) for x in v)
+def _scenario(data: Mapping[str, Any], what: str) -> Scenario:
+    try:
+        return scenario_from_dict(dict(data), str(data.get("name", "custom")))
+    except ConfigError as err:
+        raise RunRecordError(f"run record: {what}: {err}") from None
 
+
+def _number(value: Any, what: str, low: float | None = 0.0, high: float = math.inf) -> float:
+    """A finite number in [low, high] (no boolean), else :class:`RunRecordError`."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise RunRecordError(f"run record: {what} must be a number (got {value!r:.40})")
+    x = float(value)
+    if not math.isfinite(x) or (low is not None and x < low) or x > high:
+        span = f"[{low:g}, {high:g}]" if low is not None else "finite"
+        raise RunRecordError(f"run record: {what} = {x!r} is out of range ({span})")
+    return x
+
+
+def _integer(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise RunRecordError(f"run record: {what} must be an integer >= 0 (got {value!r:.40})")
+    return value
+
+
+def _condition(value: Any) -> int:
+    if _integer(value, "expects.required_conditions") not in (1, 2, 3, 4, 5):
+        raise RunRecordError(f"run record: landing condition {value} is not one of 1-5")
+    return value
+
+
+def _seed(value: Any) -> int:
+    return _integer(value, "seed")
+
+
+def _flag(value: Any, what: str) -> bool:
+    if not isinstance(value, bool):
+        raise RunRecordError(f"run record: {what} must be true or false (got {value!r:.40})")
+    return value
+
+
+def _text(value: Any, what: str) -> str:
+    if not isinstance(value, str):
+        raise RunRecordError(f"run record: {what} must be text (got {value!r:.40})")
+    return value
+
+
+def _mapping(value: Any, what: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise RunRecordError(f"run record: {what} must be a table (got {value!r:.40})")
+    return value
+
+
+def _vector(value: Any, what: str, n: int) -> tuple[float, ...] | None:
+    if value is None:
+        return None
+    if not isinstance(value, list) or len(value) != n:
+        raise RunRecordError(f"run record: {what} must be {n} numbers (got {value!r:.40})")
+    return tuple(_number(x, what, None) for x in value)

@@ -187,7 +187,7 @@ class PerchSpec:
         ----------
         start : (10,) array, optional
             Initial extended state in plane coordinates (see :meth:`plane_state`); by
-            default a hover at ``perching.start_position`` or ``start_distance`` along
+            default a hover at ``perching.hover_position`` or ``hover_distance`` along
             the normal through the landing point.
         approach_speed : float, optional
             Overrides ``perching.approach_speed`` [m/s].
@@ -222,10 +222,10 @@ class PerchSpec:
             weights=cfg.weights,
         )
         if start is None:
-            if cfg.start_position is not None:
-                p0 = np.asarray(cfg.start_position, dtype=float)
+            if cfg.hover_position is not None:
+                p0 = np.asarray(cfg.hover_position, dtype=float)
             else:
-                p0 = spec.p_landed_W + cfg.start_distance * spec.z_S_W
+                p0 = spec.p_landed_W + cfg.hover_distance * spec.z_S_W
             start = spec.hover_state(p0)
         x0 = np.asarray(start, dtype=float).reshape(-1)
         if x0.shape != (NX,) or not np.all(np.isfinite(x0)):

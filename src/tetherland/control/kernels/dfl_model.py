@@ -2,8 +2,9 @@
 
 The symbolic statement (CasADi) of the model in :mod:`tetherland.control.dfl`'s docstring,
 with the vehicle parameters symbolic, so that one generated kernel
-(:mod:`tetherland.control.dfl_terms`) serves every vehicle. The controller is in
-:mod:`tetherland.control.dfl`, the compiled law in :mod:`tetherland.control.dfl_kernels`.
+(:mod:`tetherland.control.kernels.dfl_terms`) serves every vehicle. The controller is
+:class:`tetherland.control.DflController`, the law (plain and compiled) in
+:mod:`tetherland.control.kernels.dfl`.
 """
 
 from __future__ import annotations
@@ -14,20 +15,33 @@ import casadi as ca
 import numpy as np
 
 from tetherland import GRAVITY
+from tetherland.control.kernels.packing import Fields
 
 DFL_RELATIVE_DEGREES = (4, 4, 2, 2)
 """Relative degrees of (phi, delta, theta_A, psi): 12 in total, the extended state."""
 MODEL_PARAMETERS = ("mass", "length", "J_xx", "J_yy", "J_zz", "g")
 """The symbolic parameters p of :func:`dfl_expression`, in order [kg, m, kg m^2 (3), m/s^2]."""
 
+_yab = Fields()
+YAB_Y = _yab.vector(sum(DFL_RELATIVE_DEGREES))
+"""y and its derivatives up to r - 1, output by output (phi, phi', ..., psi')."""
+YAB_A = _yab.vector(16)
+"""The decoupling matrix A = L_G L_f^{r-1} y, row-major 4x4."""
+YAB_B = _yab.vector(4)
+"""The drift b = L_f^r y."""
+YAB_WIDTH = _yab.width
+"""Length of the packed output yAb of :func:`dfl_expression`."""
+
 
 def dfl_expression() -> tuple[ca.SX, ca.SX, ca.SX]:
-    """(x (12), p (6), yAb (32)) for the model of :mod:`tetherland.control.dfl`.
+    """(x (12), p (6), yAb (:data:`YAB_WIDTH`)) for the model of
+    :mod:`tetherland.control.dfl`.
 
-    yAb = [y and its derivatives up to r - 1 (12), A (4x4, row-major), b (4)], with the
+    yAb = [y and its derivatives up to r - 1 (:data:`YAB_Y`), A (4x4, row-major,
+    :data:`YAB_A`), b (:data:`YAB_B`)], with the
     vehicle parameters p = (m, l, J_xx, J_yy, J_zz, g) symbolic, so that one compiled
-    kernel (:mod:`tetherland.control.dfl_terms`, generated from this expression) serves
-    every vehicle.
+    kernel (:mod:`tetherland.control.kernels.dfl_terms`, generated from this expression)
+    serves every vehicle.
     """
     x = ca.SX.sym("x", 12)
     p = ca.SX.sym("p", len(MODEL_PARAMETERS))
@@ -76,7 +90,7 @@ def dfl_expression() -> tuple[ca.SX, ca.SX, ca.SX]:
 @lru_cache(maxsize=1)
 def dfl_function() -> ca.Function:
     """The CasADi function (x, p) -> yAb of :func:`dfl_expression` (the reference of the
-    compiled :func:`tetherland.control.dfl_terms.dfl_terms_into`)."""
+    compiled :func:`tetherland.control.kernels.dfl_terms.dfl_terms_into`)."""
     x, p, yAb = dfl_expression()
     return ca.Function("dfl", [x, p], [yAb], ["x", "p"], ["yAb"])
 
