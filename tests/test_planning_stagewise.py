@@ -25,14 +25,17 @@ def _landing_problem(form: str = "wrench", extra: tuple[str, ...] = ()):
     return build_ocp(ManeuverSpec.from_scenario(load_scenario("slope50", list(extra))), form)
 
 
-def _double_integrator():
-    """min int u^2 from rest at 0 to rest at 1 (no path constraint)."""
+def _double_integrator(v_max: float | None = None):
+    """min int u^2 from rest at 0 to rest at 1 (no path constraint, or the one row
+    v <= v_max [m/s])."""
     x, u = ca.SX.sym("x", 2), ca.SX.sym("u")
+    path, bound = (ca.SX(0, 1), []) if v_max is None else (x[1], [v_max])
     return OcpProblem(
         x=x, u=u, p=ca.SX.sym("p", 0), t=ca.SX.sym("t"), T=ca.SX.sym("T"), h=ca.SX.sym("h"),
-        ode=ca.vertcat(x[1], u), stage_cost=u**2, terminal_cost=ca.SX(0), path=ca.SX(0, 1),
-        terminal=x - ca.DM([1, 0]), duration=1.0, x0=[0, 0], p_value=[], path_lb=[],
-        path_ub=[], x_lb=[-5, -5], x_ub=[5, 5], u_lb=[-50], u_ub=[50],
+        ode=ca.vertcat(x[1], u), stage_cost=u**2, terminal_cost=ca.SX(0), path=path,
+        terminal=x - ca.DM([1, 0]), duration=1.0, x0=[0, 0], p_value=[],
+        path_lb=[-v for v in bound], path_ub=bound, x_lb=[-5, -5], x_ub=[5, 5], u_lb=[-50],
+        u_ub=[50],
     )  # fmt: skip
 
 
@@ -42,6 +45,7 @@ def _double_integrator():
         pytest.param(_landing_problem, 2, id="landing-wrench"),
         pytest.param(lambda: _landing_problem("rotor"), 1, id="landing-rotor"),
         pytest.param(_double_integrator, 3, id="no-path"),
+        pytest.param(lambda: _double_integrator(1.3), 2, id="one-path-row"),
     ],
 )
 def test_stagewise_functions_equal_casadis_own_derivatives(problem, steps):

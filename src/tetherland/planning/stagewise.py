@@ -145,7 +145,7 @@ def functions(tr: Transcript) -> dict[str, ca.Function]:
     F_j, path_j, JF, Jg = fs["stage_jac"].map(N)(*args)
     h_j, Jh = fs["terminal_jac"](x_N, p)
     pattern, order = _jacobian_pattern(tr, fs)
-    values = [-JF.nz[:], Jg[:, nz:].nz[:], Jh.nz[:], ca.DM.ones((N + 1) * nx)]
+    values = [ca.vec(v.nz[:]) for v in (-JF, Jg[:, nz:], Jh)] + [ca.DM.ones((N + 1) * nx)]
     jac = ca.sparsity_cast(ca.vertcat(*values)[order.tolist()], pattern)
     # Hessian of lam_f f + lam_g . g: block-diagonal in the z_k and x_N
     end = 2 * nx + (N - 1) * (nx + ng)
