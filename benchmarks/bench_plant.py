@@ -4,7 +4,9 @@ Cases (each the best of ``REPEATS`` runs of ``DURATION`` simulated seconds, one 
 
 1. ``mj_step``: bare MuJoCo step of the scene, hovering (no contacts) and landed (four
    contacts and the cable limit): the floor.
-2. ``plant``: :meth:`Plant.step` (rotor lag, thrust actuators, hook check), hovering.
+2. ``plant``: :meth:`Plant.step` (rotor lag, thrust actuators, hook check), hovering; with
+   every ``[aero]`` effect off (the plain plant), and 5 cm above the landing pose with
+   the effects on (surface factors and rotor drag every step).
 3. ``runner/hover``: the full multi-rate loop (IMU 1 kHz, mocap 120 Hz, control 500 Hz,
    log) with the truth estimator and an open-loop constant-speed controller.
 4. ``runner/changing``: as 3, with a controller whose command changes every tick (no
@@ -28,7 +30,7 @@ import mujoco
 import numpy as np
 
 from tetherland import GRAVITY
-from tetherland.config import load_scenario
+from tetherland.config import load_scenario, with_overrides
 from tetherland.interfaces import Command
 from tetherland.sim.baselines import ConstantSpeedController
 from tetherland.sim.plant import Plant
@@ -95,6 +97,25 @@ def main() -> None:
 
     rows.append(("plant (hover)", best(plant_only)))
 
+    # [aero] (issue 23): the per-step surface factors and drag kernel, near the surface
+    # and with every effect off (the plain plant)
+    plain = Plant(with_overrides(sc, ["aero.ground_effect=false", "aero.rotor_drag=[0, 0]"]))
+
+    def plant_plain() -> None:
+        plain.reset(air, rotor_speeds=np.full(4, w_hover))
+        plain.step(n)
+
+    rows.append(("plant (hover, no aero)", best(plant_plain)))
+    landed0 = plant.landed_state()
+    z_S = plant.layout.geometry.surface.z_S
+    near = RigidBodyState.at_rest(landed0.p_W + 0.05 * z_S, landed0.q_WB)
+
+    def plant_near() -> None:
+        plant.reset(near, rotor_speeds=np.full(4, w_hover))
+        plant.step(n)
+
+    rows.append(("plant (5 cm up, aero)", best(plant_near)))
+
     hover_speeds = np.full(4, w_hover)
     hover = Runner(sc, ConstantSpeedController.hover(v), seed=0)
     rows.append(
@@ -122,9 +143,9 @@ def main() -> None:
         f"tetherland plant benchmark: {DURATION:g} s simulated, best of {REPEATS}, "
         f"mujoco {mujoco.__version__}, one core"
     )
-    print(f"{'case':<20} {'wall [s]':>9} {'us/step':>9} {'x real time':>12}")
+    print(f"{'case':<24} {'wall [s]':>9} {'us/step':>9} {'x real time':>12}")
     for name, wall in rows:
-        print(f"{name:<20} {wall:9.3f} {wall / n * 1e6:9.2f} {DURATION / wall:12.1f}")
+        print(f"{name:<24} {wall:9.3f} {wall / n * 1e6:9.2f} {DURATION / wall:12.1f}")
 
     prof = cProfile.Profile()
     prof.enable()

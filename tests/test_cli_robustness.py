@@ -442,6 +442,6 @@ def test_the_contact_free_run_lists_only_its_required_conditions(saved_run, caps
     assert "success" in out.splitlines()[0]
     from tetherland.cli.mission import _print_summary  # the table of `mission`
 
-    _print_summary(summary, {"summary": saved_run / "summary.json"})
+    _print_summary(summary, {"summary": saved_run / "summary.json"}, [])  # a success: none
     table = capsys.readouterr().out
     assert "conditions (required)" in table and "4:" not in table and "(4 not required)" in table

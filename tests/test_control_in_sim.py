@@ -9,6 +9,7 @@ import pytest
 
 from tetherland.analysis import LandingTolerances, evaluate_landing
 from tetherland.control import FreeFlightController, SwitchingController
+from tetherland.control.rotor_drag import with_aero_belief
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Reference
@@ -57,7 +58,9 @@ def tethered_landing(slope50):
 
     x0, w0 = plan_start_state(traj, slope50)  # taut at the plan's start tension
     est = UkfEstimator(slope50, x0, 0.0, rotor_speeds0=w0)
-    log = Runner(slope50, SwitchingController(slope50), estimator=est, reference=Track(), seed=4,
+    # as the mission composes it: the believed ground effect and rotor drag modelled
+    ctrl = with_aero_belief(SwitchingController(slope50), slope50)
+    log = Runner(slope50, ctrl, estimator=est, reference=Track(), seed=4,
                  plant=Plant(slope50)).run(traj.duration + 0.5, initial_state=x0, rotor_speeds=w0,
                                            cable_engaged=True)  # fmt: skip
     return log, traj

@@ -17,6 +17,7 @@ from tetherland.design import (
     DesignSpace,
     feasibility_map,
     hooking_pass,
+    is_robust,
     pass_clearance,
     plan_rotor_margin,
     rotor_margin,
@@ -39,6 +40,8 @@ def _gamma(h: float, length: float, beta: float, mass: float = 1.0) -> float:
         gamma = math.asin(h / (length + s))
         s = mass * g * math.sin(beta) / math.cos(gamma) * length / EA
     return math.asin(h / (length + s))
+
+
 """Hooking settings with which walls are reachable (see test_wall_needs_a_short_overshoot)."""
 
 
@@ -59,8 +62,10 @@ def wall(planner):
 
 def test_designs_are_ranked_and_keep_the_margins(at_60):
     assert at_60.feasible and at_60.limit is None and at_60.reason == "ok"
-    margins = [d.min_rotor_margin for d in at_60.designs]
-    assert margins == sorted(margins, reverse=True)
+    # robust designs first (margins kept with the belief off), then by the robust margin
+    sc = load_scenario("slope50", ["surface.slope_deg=60"])
+    keys = [(not is_robust(d, sc), -d.robust_rotor_margin) for d in at_60.designs]
+    assert keys == sorted(keys)
     for d in at_60.designs:
         assert d.min_rotor_margin >= 0.25 - 1e-9  # the control margin, over both plans
         assert d.min_rotor_margin <= d.landed_rotor_margin + 1e-9  # the plans contain it

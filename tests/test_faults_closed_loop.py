@@ -74,7 +74,7 @@ def test_cable_snap_in_tethered_landing_hovers_away_from_the_slope():
     assert clearance > 0.2
 
 
-@pytest.mark.parametrize(("t_snap", "phase"), [(35.0, "motors_off"), (36.6, "spin_up")])
+@pytest.mark.parametrize(("t_snap", "phase"), [(35.0, "motors_off"), (36.3, "spin_up")])
 def test_cable_snap_while_landed_starts_the_motors_and_hovers_away(t_snap, phase):
     """On 50 deg (steeper than the landers' friction angle, atan 0.6 = 31 deg) only the
     cable holds the landed vehicle: when it breaks the vehicle slides or falls off. The

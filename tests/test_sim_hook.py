@@ -15,6 +15,10 @@ from tetherland.sim.mjcf import hook_timeconst
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
+# the passes are flown kinematically against the plain rotor model: no rotor drag or
+# surface effects (those are tested in test_sim_aero.py)
+NO_AERO = ["aero.ground_effect=false", "aero.rotor_drag=[0, 0]"]
+
 
 def test_hook_state_machine_unit():
     hook = Hook([0, 0, 0], [0, 0, -1], capture_radius=0.1, hook_drop=0.0, miss_radius=1.0)
@@ -70,7 +74,7 @@ CABLES = {
 
 @pytest.fixture(scope="module", params=sorted(CABLES))
 def plant(request):
-    return Plant(load_scenario("slope50", CABLES[request.param]))
+    return Plant(load_scenario("slope50", CABLES[request.param] + NO_AERO))
 
 
 def _slack_tension(plant: Plant, speed: float = 0.3) -> float:
@@ -179,7 +183,9 @@ DIRECTIONS = {
 @pytest.fixture(scope="module", params=[(d, c) for d in sorted(DIRECTIONS) for c in sorted(CABLES)])
 def directed_plant(request):
     direction, cable = request.param
-    return Plant(load_scenario("slope50", _WALL_DESIGN + DIRECTIONS[direction] + CABLES[cable]))
+    return Plant(
+        load_scenario("slope50", _WALL_DESIGN + DIRECTIONS[direction] + CABLES[cable] + NO_AERO)
+    )
 
 
 def _fly_pass(plant: Plant, across: float, speed: float = 0.3) -> tuple[float, np.ndarray]:

@@ -20,7 +20,9 @@ from tetherland.state import RigidBodyState
 
 @pytest.fixture(scope="module")
 def scenario():
-    return load_scenario("slope50")
+    # the plain rotor model, out of ground effect and without rotor drag (the aero
+    # effects near surfaces are tested in test_sim_aero.py)
+    return load_scenario("slope50", ["aero.ground_effect=false", "aero.rotor_drag=[0, 0]"])
 
 
 @pytest.fixture

@@ -31,8 +31,16 @@ from tetherland.state import RigidBodyState
 
 @pytest.fixture(scope="module")
 def scenario():
+    # out of ground effect and without rotor drag: hovering settled rotors hold still
+    # (the aero effects are tested in test_sim_aero.py)
     return load_scenario(
-        "slope50", ["sensors.mocap.dropout_rate=1.0", "sensors.mocap.dropout_duration=0.05"]
+        "slope50",
+        [
+            "sensors.mocap.dropout_rate=1.0",
+            "sensors.mocap.dropout_duration=0.05",
+            "aero.ground_effect=false",
+            "aero.rotor_drag=[0, 0]",
+        ],
     )
 
 

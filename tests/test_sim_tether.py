@@ -36,7 +36,17 @@ cable compliance (``sim.cable_time_constant`` = 4 ms)."""
 def test_tethered_swing_matches_the_3d_link_model():
     """Cable engaged at the CoM (r_att = 0), constant tilted thrust: (phi, delta) follow
     models/tethered.py integrated by scipy with the same thrust vector."""
-    sc = load_scenario("flat", ["vehicle.cable_attachment=[0,0,0]", IDEAL])
+    # the link model has a constant thrust: no rotor drag, no ground effect of the swing
+    # near the ground (the aero effects are tested in test_sim_aero.py)
+    sc = load_scenario(
+        "flat",
+        [
+            "vehicle.cable_attachment=[0,0,0]",
+            IDEAL,
+            "aero.rotor_drag=[0, 0]",
+            "aero.ground_effect=false",
+        ],
+    )
     plant = Plant(sc)
     geo = plant.layout.geometry
     m, l = sc.vehicle.mass, sc.tether.length

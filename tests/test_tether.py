@@ -20,6 +20,7 @@ from tetherland.analysis.statics import landing_hover, tethered_rest_tension
 from tetherland.cli import main
 from tetherland.config import TETHER_MATERIALS, CableModel, load_scenario
 from tetherland.control import SwitchingController
+from tetherland.control.rotor_drag import with_aero_belief
 from tetherland.errors import ConfigError
 from tetherland.estimation import UkfEstimator, elastic_tension
 from tetherland.estimation.tension import (
@@ -565,7 +566,9 @@ def test_nylon_tethered_landing_with_the_ukf_in_the_loop():
             D = float(np.linalg.norm(plant.attachment_point() - plant.layout.geometry.p_A))
             rows.append((est.cable().distance, D))
 
-    log = Runner(sc, SwitchingController(sc), estimator=est, reference=Track(), seed=4,
+    # as the mission composes it: the believed ground effect and rotor drag modelled
+    ctrl = with_aero_belief(SwitchingController(sc), sc)
+    log = Runner(sc, ctrl, estimator=est, reference=Track(), seed=4,
                  plant=plant, observers=[watch]).run(
         traj.duration + 0.5, initial_state=x0, rotor_speeds=w0, cable_engaged=True)  # fmt: skip
     t = log["t"]

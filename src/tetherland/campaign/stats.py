@@ -41,6 +41,11 @@ def _get(record: dict[str, Any], dotted: str) -> Any:
     return node
 
 
+def succeeded(record: dict[str, Any]) -> bool:
+    """Did a campaign run succeed (it ran without error and its verdict says success)?"""
+    return record.get("status") == "ok" and _get(record, "success") is True
+
+
 @dataclass(frozen=True)
 class RateSummary:
     """Success rate of one method at one sweep value.
@@ -84,7 +89,7 @@ def summarize(records: list[dict[str, Any]]) -> list[RateSummary]:
         groups.items(), key=lambda kv: (kv[0][0], -math.inf if kv[0][1] is None else kv[0][1])
     ):
         n = len(rs)
-        k = sum(1 for r in rs if r.get("status") == "ok" and _get(r, "success") is True)
+        k = sum(1 for r in rs if succeeded(r))
         lo, hi = wilson_interval(k, n)
         medians = {}
         for f in ERROR_FIELDS:

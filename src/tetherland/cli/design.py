@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -11,6 +13,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from tetherland import __version__
+from tetherland.campaign.executors import make_executor
 from tetherland.cli.common import (
     JsonOption,
     OverwriteOption,
@@ -19,7 +22,7 @@ from tetherland.cli.common import (
     console,
     resolve_scenario,
 )
-from tetherland.design import DesignResult, feasibility_map, search_designs
+from tetherland.design import DesignResult, feasibility_map, search_designs, verify_designs
 from tetherland.design.map import MAP_LENGTHS, MAP_SLOPES_DEG
 from tetherland.design.plot import save_map_figure
 from tetherland.io import OutputDir, atomic_write_json, atomic_write_text, dumps_json
@@ -43,6 +46,26 @@ OutOption = Annotated[
         file_okay=False,
     ),
 ]
+VerifyOption = Annotated[
+    int,
+    typer.Option(
+        "--verify",
+        help="Fly this many perturbed missions (the campaign's perturbations) of each of the "
+        "--candidates best designs and rank them by the lower bound of their success rate's "
+        "95 % interval (0: do not fly).",
+        min=0,
+    ),
+]
+CandidatesOption = Annotated[
+    int, typer.Option("--candidates", help="How many of the best designs --verify flies.", min=1)
+]
+SeedOption = Annotated[
+    int, typer.Option("--seed", help="Base seed of the --verify missions (a campaign's --seed).")
+]
+WorkersOption = Annotated[
+    int | None,
+    typer.Option("--workers", help="Parallel workers for --verify (default: all cores).", min=1),
+]
 _FILES = {"map": "feasibility_map.png", "map_data": "feasibility_map.json",
           "map_csv": "feasibility_map.csv", "design": "design.json"}  # fmt: skip
 """What ``--out`` holds, by role."""
@@ -50,18 +73,25 @@ _FILES = {"map": "feasibility_map.png", "map_data": "feasibility_map.json",
 
 def _table(result: DesignResult) -> Table:
     table = Table(title=f"Designs for {result.slope_deg:g} deg, best first")
-    for name in ("#", "l [m]", "r_att z [m]", "h_A [m]", "approach elev. [deg]",
-                 "hook drop [m]", "rotor margin [N]", "clearance [cm]"):  # fmt: skip
+    verified = any(d.verified is not None for d in result.designs)
+    columns = ["#", "l [m]", "r_att z [m]", "h_A [m]", "approach elev. [deg]", "hook drop [m]",
+               "rotor margin [N] robust (nominal)", "clearance [cm] robust (nominal)"]  # fmt: skip
+    for name in columns + (["verified (95 % low)"] if verified else []):
         table.add_column(name, justify="right")
     for k, d in enumerate(result.designs, 1):
         p = d.point
         x, y, z = p.approach_A
         # elevation below the horizontal toward the surface: 90 lowers the hook, 0 is level
         elevation = round(math.degrees(math.atan2(-z, math.hypot(x, y))))  # int: no "-0"
-        table.add_row(
+        row = [
             str(k), f"{p.length:g}", f"{p.attachment[2]:g}", f"{p.h_A:g}", f"{elevation:.0f}",
-            f"{p.hook_drop:g}", f"{d.min_rotor_margin:.3f}", f"{100 * d.min_clearance:.1f}",
-        )  # fmt: skip
+            f"{p.hook_drop:g}", f"{d.robust_rotor_margin:.3f} ({d.min_rotor_margin:.3f})",
+            f"{100 * d.robust_clearance:.1f} ({100 * d.min_clearance:.1f})",
+        ]  # fmt: skip
+        if verified:
+            v = d.verified
+            row.append("-" if v is None else f"{v.successes}/{v.runs} ({100 * v.ci_low:.0f} %)")
+        table.add_row(*row)
     return table
 
 
@@ -72,13 +102,20 @@ def design(
     out: OutOption = None,
     overwrite: OverwriteOption = False,
     json: JsonOption = False,
+    verify: VerifyOption = 0,
+    candidates: CandidatesOption = 3,
+    seed: SeedOption = 0,
+    workers: WorkersOption = None,
 ) -> int:
     """Search the cable length, attachment offset along z_B, anchor height and hooking
     approach with which the scenario's vehicle can land on and take off from the slope.
 
     Candidates pass the landed-hover analysis, the hooking clearance and the planner
     (landing and takeoff OCPs solved and verified); they are ranked by the rotor margin
-    over both plans, cable-offset torque included, then by clearance while hooking. The
+    over both plans, cable-offset torque included, then by clearance while hooking, both
+    with the belief off by the [perturbation] bounds (robust first). --verify N flies N
+    perturbed missions of each of the --candidates best and ranks them by the lower bound
+    of their success rate's 95 % interval, then by those margins. The
     overrides of a design reproduce it with any other command (--set). Exits with 1 and
     a one-line reason when no design exists, with 2 on bad input.
     """
@@ -86,10 +123,20 @@ def design(
     target = OutputDir(out, overwrite=overwrite) if out is not None else None
     planner = Planner()
     result = search_designs(sc, slope_deg, planner=planner)
+    if verify and result.feasible:
+        executor = make_executor("local", workers or os.cpu_count() or 1)
+        try:
+            ranked = verify_designs(sc, result.designs, verify, seed, executor, candidates)
+        finally:
+            executor.close()
+        result = replace(result, designs=ranked)
     doc: dict[str, Any] = result.to_dict()
     files: dict[str, str] = {}
     doc["files"] = files
-    doc["provenance"] = provenance(sc, extra={"slope_deg": result.slope_deg})
+    extra: dict[str, Any] = {"slope_deg": result.slope_deg}
+    if verify:
+        extra.update(verify=verify, candidates=candidates, verify_seed=seed)
+    doc["provenance"] = provenance(sc, extra=extra)
     if target is not None:
         fmap = feasibility_map(sc, planner=planner, slopes_deg=MAP_SLOPES_DEG, lengths=MAP_LENGTHS)
         record = provenance(sc, extra={"slope_deg": result.slope_deg})

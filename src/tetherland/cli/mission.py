@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Annotated, Any
 
 import typer
@@ -210,7 +211,9 @@ def _firmware(name: str | None) -> Any:
     return BetaflightSitl()
 
 
-def _print_summary(summary: dict, files: dict[str, Path], failures: list[dict]) -> None:
+def _print_summary(
+    summary: dict, files: dict[str, Path], failures: Sequence[dict] = ()
+) -> None:
     import math
 
     landing = summary.get("landing", {})

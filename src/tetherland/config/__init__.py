@@ -6,8 +6,10 @@
 60.0
 """
 
+from tetherland.config.aero import AeroConfig
 from tetherland.config.base import Section, Vec3
 from tetherland.config.control import ControllerConfig, FreeFlightGains, TetheredGains
+from tetherland.config.estimation import EstimatorConfig
 from tetherland.config.faults import FaultDetectionConfig, FaultKind, FaultsConfig
 from tetherland.config.loader import (
     ScenarioInfo,
@@ -49,10 +51,12 @@ from tetherland.config.verdict import VerdictConfig
 __all__ = [
     "RENAMES",
     "TETHER_MATERIALS",
+    "AeroConfig",
     "AnchorConfig",
     "CableModel",
     "ContactConfig",
     "ControllerConfig",
+    "EstimatorConfig",
     "FaultDetectionConfig",
     "FaultKind",
     "FaultsConfig",

@@ -11,6 +11,7 @@ from typing import Literal
 
 from pydantic import Field
 
+from tetherland.config.aero import DragCoefficient
 from tetherland.config.base import Section
 
 
@@ -81,6 +82,16 @@ class ControllerConfig(Section):
 
     kind: Literal["hierarchical", "dfl"] = "hierarchical"
     """Tethered controller: hierarchical Gamma_HC^b or dynamic feedback linearisation."""
+    ground_effect_compensation: bool = True
+    """Divide each rotor's commanded speed by the square root of its ground-effect factor
+    over the believed surface at the estimated pose, so that the thrust believed acting is
+    the thrust wanted (false: the integrals absorb the ground effect)."""
+    rotor_drag: tuple[DragCoefficient, DragCoefficient] = (0.0, 0.0)
+    """Believed rotor drag (d_x, d_y) of the vehicle (the same published fit as the
+    plant's default, ``aero.rotor_drag``, which the robot never reads): the position
+    references' acceleration gets the drag of the reference velocity as a feed-forward;
+    [0, 0] (the default, as the plant's) leaves the drag to the feedback and the
+    integrals [N s/m]."""
     rate_hz: float = Field(500.0, gt=0, le=5000)
     """Control rate (rotor-speed commands to the ESCs, section 6.6.4) [Hz]."""
     free_flight: FreeFlightGains = FreeFlightGains()

@@ -8,6 +8,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from tetherland import surface as geo
+from tetherland.config.aero import AeroConfig
 from tetherland.config.base import Section
 from tetherland.config.checks import (
     check_name,
@@ -16,6 +17,7 @@ from tetherland.config.checks import (
     check_timing,
 )
 from tetherland.config.control import ControllerConfig
+from tetherland.config.estimation import EstimatorConfig
 from tetherland.config.faults import FaultsConfig
 from tetherland.config.mission import MissionConfig
 from tetherland.config.perching import PerchingConfig
@@ -46,6 +48,8 @@ class Scenario(Section):
     sensors: SensorsConfig = SensorsConfig()
     planner: PlannerConfig = PlannerConfig()
     controller: ControllerConfig = ControllerConfig()
+    estimator: EstimatorConfig = EstimatorConfig()
+    """What the robot's state estimator models (its belief of the rotors near surfaces)."""
     mission: MissionConfig = MissionConfig()
     sim: SimConfig = SimConfig()
     perturbation: PerturbationConfig = PerturbationConfig()
@@ -53,6 +57,8 @@ class Scenario(Section):
     verdict: VerdictConfig = VerdictConfig()
     faults: FaultsConfig = FaultsConfig()
     """Injected faults (the plant's truth; the robot's belief never has them)."""
+    aero: AeroConfig = AeroConfig()
+    """Rotors near surfaces and rotor drag (the plant's truth)."""
 
     @field_validator("name")
     @classmethod

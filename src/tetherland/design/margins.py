@@ -33,11 +33,19 @@ def plan_rotor_margin(scenario: Scenario, plans: Sequence[PlanResult]) -> float:
     The OCP plans with the chapter's model (cable at the centre of mass). The rotors of
     a vehicle with the attachment offset r_att must also cancel the cable torque
     r_att x (f_L d) (6.6.5); the flatness map with ``with_cable_offset`` gives those
-    thrusts for the planned output, sampled every :data:`SAMPLE_STEP` and at the nodes.
+    thrusts (:func:`plan_thrust_range`).
     """
     v = scenario.vehicle
+    f_low, f_high = plan_thrust_range(scenario, plans)
+    return rotor_margin([f_low, f_high], v.f_min, v.f_max)
+
+
+def plan_thrust_range(scenario: Scenario, plans: Sequence[PlanResult]) -> tuple[float, float]:
+    """Least and largest rotor thrust over the planned maneuvers [N], the cable-offset
+    torque included: the flatness map with ``with_cable_offset`` on the planned output,
+    sampled every :data:`SAMPLE_STEP` and at the nodes."""
     flat = FlatnessMap.from_scenario(scenario, with_cable_offset=True)
-    margin = math.inf
+    low, high = math.inf, -math.inf
     for plan in plans:
         traj = plan.require()
         T = traj.duration
@@ -46,5 +54,5 @@ def plan_rotor_margin(scenario: Scenario, plans: Sequence[PlanResult]) -> float:
         if nodes is not None:
             times = np.union1d(times, nodes)
         thrusts = flat.evaluate_many(traj.sample(times).outputs())["rotor_thrusts"]
-        margin = min(margin, rotor_margin(thrusts, v.f_min, v.f_max))
-    return margin
+        low, high = min(low, float(np.min(thrusts))), max(high, float(np.max(thrusts)))
+    return low, high

@@ -18,7 +18,11 @@ three stages, cheapest first:
    (:func:`~tetherland.design.margins.plan_rotor_margin`), which must keep the control
    margin.
 
-Designs are ranked by that rotor margin, then by hooking clearance.
+Designs are ranked robust first (:func:`rank_key`): those that keep the control margin
+and ``min_clearance`` when the belief is off by the campaign's error bounds
+(:mod:`tetherland.design.robust`), then by the robust rotor margin, then by the robust
+hooking clearance (counted up to ``target_clearance``). ``tetherland design --verify N``
+then flies perturbed missions of the best (:mod:`tetherland.design.verify`).
 """
 
 from __future__ import annotations
@@ -42,8 +46,10 @@ from tetherland.analysis import (
     tethered_slope_limit,
 )
 from tetherland.config import Scenario, with_overrides
-from tetherland.design.margins import plan_rotor_margin, rotor_margin
+from tetherland.design.margins import plan_thrust_range, rotor_margin
+from tetherland.design.robust import BeliefBounds, robust_pass_clearance, robust_rotor_margin
 from tetherland.design.space import DesignPoint, DesignSpace
+from tetherland.design.verification import Verification
 from tetherland.errors import ConfigError
 from tetherland.geometry import (
     LandingGeometry,
@@ -94,6 +100,15 @@ class Design:
         Smallest distance of the vehicle from the surface on the hooking pass [m].
     landing, takeoff : PlanResult
         The verified plans.
+    robust_rotor_margin : float
+        Rotor margin over the plans with the thrusts commanded under the belief's mass and
+        thrust-coefficient errors (:func:`~tetherland.design.robust.robust_rotor_margin`) [N].
+    robust_clearance : float
+        Clearance of the hooking pass from the true surface when the believed surface,
+        anchor and mass are off by the error bounds
+        (:func:`~tetherland.design.robust.robust_pass_clearance`) [m].
+    verified : Verification or None
+        Perturbed missions flown with the design (``design --verify``; None: not flown).
     """
 
     point: DesignPoint
@@ -102,6 +117,9 @@ class Design:
     min_clearance: float
     landing: PlanResult
     takeoff: PlanResult
+    robust_rotor_margin: float
+    robust_clearance: float
+    verified: Verification | None = None
 
     @property
     def overrides(self) -> tuple[str, ...]:
@@ -114,6 +132,9 @@ class Design:
             "min_rotor_margin_N": self.min_rotor_margin,
             "min_clearance_m": self.min_clearance,
             "landed_rotor_margin_N": self.landed_rotor_margin,
+            "robust_rotor_margin_N": self.robust_rotor_margin,
+            "robust_clearance_m": self.robust_clearance,
+            "verified": None if self.verified is None else self.verified.to_dict(),
         }
 
 
@@ -343,7 +364,7 @@ def search_designs(
         limit, why = min(failures, key=lambda f: order.index(f[0]))
         reason = f"no design lands on {B:g} deg: {why}"
         return result((), limit, None, reason, len(candidates), planned)
-    designs.sort(key=lambda d: (-d.min_rotor_margin, -min(d.min_clearance, space.target_clearance)))
+    designs.sort(key=lambda d: rank_key(d, base, space))
     return result(designs[: space.max_designs], None, None, "ok", len(candidates), planned)
 
 
@@ -457,6 +478,26 @@ def _hook_score(h: _Hooking, space: DesignSpace) -> tuple[float, float]:
     return (min(h.clearance, space.target_clearance), -h.hook_drop)
 
 
+def is_robust(design: Design, scenario: Scenario) -> bool:
+    """Does ``design`` keep the control margin and ``mission.hooking.min_clearance`` when the
+    belief is off by the error bounds?"""
+    return (
+        design.robust_rotor_margin >= scenario.vehicle.control_margin - _TOL
+        and design.robust_clearance >= scenario.mission.hooking.min_clearance - _TOL
+    )
+
+
+def rank_key(design: Design, scenario: Scenario, space: DesignSpace) -> tuple[float, ...]:
+    """Sort key of a design, best first: robust ones (:func:`is_robust`) first, then the larger
+    robust rotor margin, then the larger robust clearance counted up to
+    ``space.target_clearance``."""
+    return (
+        0.0 if is_robust(design, scenario) else 1.0,
+        -design.robust_rotor_margin,
+        -min(design.robust_clearance, space.target_clearance),
+    )
+
+
 def _plan_stage(
     sc: Scenario, planner: Planner, cand: _Candidate, hook: _Hooking, point: DesignPoint
 ) -> Design | tuple[DesignLimit, str]:
@@ -469,7 +510,9 @@ def _plan_stage(
                 f"{cand.describe()}: {maneuver.value} plan {plan.status.value}: {plan.message}",
             )
         plans.append(plan)
-    margin = plan_rotor_margin(sc, plans)
+    v, bounds = sc.vehicle, BeliefBounds.from_scenario(sc)
+    f_low, f_high = plan_thrust_range(sc, plans)
+    margin = rotor_margin([f_low, f_high], v.f_min, v.f_max)
     floor = sc.vehicle.control_margin
     if margin < floor - _TOL:
         return (
@@ -484,6 +527,8 @@ def _plan_stage(
         min_clearance=hook.clearance,
         landing=plans[0],
         takeoff=plans[1],
+        robust_rotor_margin=robust_rotor_margin(f_low, f_high, v.f_min, v.f_max, bounds),
+        robust_clearance=robust_pass_clearance(sc, bounds),
     )
 
 

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike
 
 from tetherland.config import Scenario
 from tetherland.estimation import kernels
+from tetherland.estimation.ground_effect import BelievedGroundEffect
 from tetherland.estimation.tension import (
     CableEstimate,
     MotorLagThrust,
@@ -96,6 +97,10 @@ class UkfEstimator:
         )
         w0 = np.zeros(4) if rotor_speeds0 is None else np.asarray(rotor_speeds0, dtype=float)
         self.motors = MotorLagThrust(v.thrust_coefficient, v.motor_time_constant, w0)
+        self.ground_effect = (
+            BelievedGroundEffect(scenario) if scenario.estimator.ground_effect_belief else None
+        )
+        """The believed ground effect on the predicted thrust (None: not modelled)."""
         self._motor_t = t0
         self._w_cmd = [float(w) for w in w0]
         self._buf = np.empty((_BUFFER, 7))  # rows [t, f_B (3), omega_B (3)]
@@ -143,9 +148,13 @@ class UkfEstimator:
         ukf = self.ukf
         t = ukf.t
         out = np.empty(kernels.WIDTH)  # fresh: the record's arrays are views into it
-        kernels.estimate_into(
-            ukf.x_view, ukf.imu_view, self._thrust_at(t), self.mass, self._geo, out
-        )
+        thrust = self._thrust_at(t)
+        if self.ground_effect is not None:
+            x = ukf.x_view
+            thrust = self.ground_effect.total_thrust(
+                x[0:3], x[6:10], self.motors.c_f * np.square(self.motors.w)
+            )
+        kernels.estimate_into(ukf.x_view, ukf.imu_view, thrust, self.mass, self._geo, out)
         phi, delta, phi_dot, delta_dot = out[kernels.LINK].tolist()
         # tension: thrust (motor lag) and the specific force projected on the link
         tension = self.tension.filter(t, float(out[kernels.TENSION]))

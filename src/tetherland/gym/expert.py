@@ -27,6 +27,7 @@ import numpy as np
 
 from tetherland.config import Scenario
 from tetherland.control import SwitchingController
+from tetherland.control.ground_effect import GroundEffectCompensation
 from tetherland.geometry import FloatArray
 from tetherland.gym.env import estimate_of
 from tetherland.interfaces import Reference
@@ -109,7 +110,10 @@ class ExpertPolicy:
             belief = self._belief_source()
             if belief != self.scenario:
                 self._believe(belief)
-        self.controller = SwitchingController(self.scenario, self.kind)
+        controller = SwitchingController(self.scenario, self.kind)
+        if self.scenario.controller.ground_effect_compensation:  # as the mission composes it
+            controller = GroundEffectCompensation(controller, self.scenario)
+        self.controller = controller
         self._contact = ContactRule(self.scenario)
         self._hold: Reference | None = None
 

@@ -19,7 +19,7 @@ from tetherland.analysis.clearance import HookingClearance, level_vehicle_distan
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.geometry import FloatArray, LandingGeometry, link_direction
-from tetherland.mission.hooking import check_pass, hooking_pass, unhooking_path
+from tetherland.mission.hooking import check_pass, hooking_pass, hooking_pass_for, unhooking_path
 from tetherland.mission.paths import segment_duration
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
@@ -178,6 +178,37 @@ def _clear_radius(
     return hi
 
 
+HOOK_DROP_STEP = 0.01
+"""Step of the hook drops :func:`working_hook_drop` tries [m]."""
+
+
+def design_hint(scenario: Scenario) -> str:
+    """The command that finds a design for ``scenario``'s vehicle and surface."""
+    return (
+        f"`tetherland design {scenario.name}` (with the same --set values) finds a cable length, "
+        "attachment, anchor height and hooking approach (tether.approach_direction, "
+        "tether.hook_drop) that work"
+    )
+
+
+def working_hook_drop(scenario: Scenario, geo: LandingGeometry, first: float) -> float | None:
+    """The shortest hook drop from ``first`` [m] up, in steps of :data:`HOOK_DROP_STEP`, whose
+    hooking pass keeps ``mission.hooking.min_clearance`` with hook_drop + capture_radius <
+    length (None: none does)."""
+    t, cfg = scenario.tether, scenario.mission.hooking
+    k = max(math.ceil(first / HOOK_DROP_STEP - 1e-9), 0)
+    while (drop := round(k * HOOK_DROP_STEP, 6)) + t.capture_radius < t.length:
+        trial = hooking_pass_for(
+            geo, approach_A=t.approach_direction, hook_drop=drop,
+            r_att_B=scenario.vehicle.cable_attachment, approach_distance=cfg.approach_distance,
+            hook_overshoot=cfg.overshoot,
+        )  # fmt: skip
+        if check_pass(scenario, geo, trial).ok:
+            return drop
+        k += 1
+    return None
+
+
 def plan_mission(
     scenario: Scenario, start: RigidBodyState, planner: Planner | None = None
 ) -> MissionPlan:
@@ -199,7 +230,9 @@ def plan_mission(
     takeoff = planner.plan(scenario, Maneuver.TAKEOFF)
     for result in (landing, takeoff):
         if not result.success:
-            raise MissionError(f"no {result.maneuver.value} plan: {result.message}")
+            raise MissionError(
+                f"no {result.maneuver.value} plan: {result.message}; {design_hint(scenario)}"
+            )
     R_WA = geo.R_WA
     hooking = hooking_pass(scenario, geo)
     yaw = hooking.yaw
@@ -210,13 +243,18 @@ def plan_mission(
     clearance = check_pass(scenario, geo, hooking)
     if not clearance.ok:
         t = scenario.tether
+        drop = working_hook_drop(scenario, geo, clearance.required_hook_drop_m)
+        fix = (
+            f"set tether.hook_drop={drop:g}"
+            if drop is not None
+            else f"no hook drop fits inside tether.length = {t.length:g} m (with "
+            f"capture_radius {t.capture_radius:g} m); {design_hint(scenario)}"
+        )
         raise MissionError(
             f"tether.hook_drop = {t.hook_drop:g} m is too short for this "
             f"{math.degrees(geo.surface.slope):.1f} deg surface: the frame would pass "
             f"{clearance.clearance_m * 100:.1f} cm from it while hooking (needs >= "
-            f"{clearance.margin_m * 100:.0f} cm); use hook_drop >= "
-            f"{clearance.required_hook_drop_m:.2f} m with hook_drop + capture_radius < "
-            f"length = {t.length:g} m"
+            f"{clearance.margin_m * 100:.0f} cm): {fix}"
         )
     length = scenario.tether.length
     phi0 = float(landing.require().output(0.0).phi[0])
@@ -247,7 +285,8 @@ def plan_mission(
             raise MissionError(
                 f"the {what} would bring the frame within mission.hooking.min_clearance = "
                 f"{cfg.hooking.min_clearance * 100:.0f} cm of the surface anywhere more than "
-                f"{SLACK_MIN * 100:.0f} cm inside the cable length {length:g} m"
+                f"{SLACK_MIN * 100:.0f} cm inside the cable length {length:g} m; "
+                + design_hint(scenario)
             )
     assert r_slack is not None and r_release is not None
     z_safe = max(float(hook_start[2]), float(p_start[2]) + cfg.flight.takeoff_height)
@@ -340,7 +379,7 @@ def _check_stretch_tension(scenario: Scenario, d0_W: FloatArray) -> None:
             f"{limit:.3g} N of tension along the cable at the planned start (4 x f_max = "
             f"{4 * scenario.vehicle.f_max:g} N, max_tilt_deg "
             f"{scenario.controller.free_flight.max_tilt_deg:g}); the hook would count as "
-            "missed: lower the threshold"
+            f"missed: set mission.stretch.tension_threshold={math.floor(50 * limit) / 100:g}"
         )
 
 
@@ -395,7 +434,7 @@ def _check_duration(scenario: Scenario, bound: float) -> None:
         raise MissionError(
             f"mission.time_limit = {cfg.time_limit:g} s is too short: the plans, "
             f"deploy_time {cfg.deploy_time:g} s and the flight legs take at least {bound:.0f} s; "
-            f"raise time_limit above {bound:.0f} s or shorten deploy_time"
+            f"set mission.time_limit={math.ceil(bound) + 1:d} (or shorten deploy_time)"
         )
 
 
@@ -412,7 +451,8 @@ def _check_legs(
             raise MissionError(
                 f"the {name} leg would pass {c * 100:.1f} cm from the surface (needs >= "
                 f"{margin * 100:.0f} cm, mission.hooking.min_clearance): move the start pad "
-                f"(sim.start_position) or raise mission.flight.safe_height_margin"
+                f"(sim.start_position) or raise mission.flight.safe_height_margin; "
+                + design_hint(scenario)
             )
         smallest = min(smallest, c)
     return smallest

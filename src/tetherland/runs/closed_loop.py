@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 from tetherland.config import Scenario
+from tetherland.control.rotor_drag import with_aero_belief
 from tetherland.errors import InfeasibleError
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import FloatArray
@@ -181,8 +182,9 @@ def run_mission(
     flight = how.fly(plan, belief, controller)
     if on_flight is not None:
         on_flight(flight)
+    controller_ = with_aero_belief(flight.controller, belief)
     runner = Runner(
-        scenario, flight.controller,
+        scenario, controller_,
         estimator=estimator(belief, flight.initial_state, 0.0, flight.rotor_speeds),
         reference=flight.reference, seed=seed, plant=plant,
         diagnostic_keys=flight.diagnostic_keys, observers=observers,

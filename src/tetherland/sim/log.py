@@ -92,7 +92,9 @@ TRUTH: tuple[Column, ...] = (
     _c("lander_forces", 4, "N", "normal force on each lander"),
     _c("frame_force", 1, "N", "normal force on hub and rotor guards (crash if > 0)"),
     _c("rotor_speeds", 4, "rad/s", "rotor speeds"),
-    _c("rotor_thrusts", 4, "N", "rotor thrusts"),
+    _c("rotor_thrusts", 4, "N", "acting rotor thrusts (surface factors included)"),
+    _c("ground_effect", 4, "-", "surface factor T/T_OGE of each rotor (ground, ceiling)"),
+    _c("drag_force_W", 3, "N", "rotor drag (and wall pull) at the centre of mass, F_W"),
     _c("lander_surface_forces", 4, "N", "largest normal force of the landing surface on "
        "each lander over the physics steps since the previous control tick"),
     _c("lander_ground_forces", 4, "N", "largest normal force of the ground (start pad) on "

@@ -13,6 +13,14 @@ Limits: the plant clamps commanded speeds to [0, w_max] with c_f w_max^2 = f_max
 spinning for attitude authority), while a zero command stops the motor and gives zero
 thrust, as when the mission switches the motors off on the slope.
 
+Surfaces and air (``[aero]``, :mod:`tetherland.models.aero`): with any effect on, every
+physics step multiplies each rotor's thrust (and so its drag torque, both through the
+actuator's control) by its surface factor, from the rotor's pose at the start of the
+step and the scene's real shapes (:func:`tetherland.sim.aero.scene_shapes`), and applies
+the rotor drag (and the wall pull) as a force and torque at the centre of mass through
+``qfrc_applied`` of the vehicle's free joint (a compiled kernel). With every effect off,
+none of this runs and the plant is the plain c_f w^2 plant.
+
 Time: ``step()`` advances from t_k to t_{k+1}. MuJoCo evaluates sensors before integrating,
 so after ``step()`` the sensor readings (IMU, cable force, touch) refer to t_k, while
 :meth:`Plant.state` is the state at t_{k+1} = :attr:`Plant.time`.
@@ -30,7 +38,9 @@ from tetherland.config import Scenario
 from tetherland.errors import SimulationError
 from tetherland.geometry import FloatArray, landed_rotation
 from tetherland.interfaces import StateEstimate
+from tetherland.models.aero import aero_into
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.aero import aero_model
 from tetherland.sim.cable import Cable, make_cable
 from tetherland.sim.hook import Hook, HookState
 from tetherland.sim.mjcf import CONTACT_PARTNERS, SENSOR_SLICES, SceneLayout, build_mjcf
@@ -41,6 +51,10 @@ _BAD_STATE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQVEL),
     int(mujoco.mjtWarning.mjWARN_BADQACC),
 )
+ROTOR_STATE_WIDTH = 15
+"""Width of :meth:`Plant.rotor_state_into`'s row: speeds, thrusts, factors, aero force."""
+
+
 def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
     """R_WB with third column ``z_B`` and x_B the projection of ``x_hint`` orthogonal to it."""
     z = np.asarray(z_B, dtype=float)
@@ -96,8 +110,18 @@ class Plant:
         self._spinning_up = True  # False once the speeds equal the command (no work to do)
         self._settle_tol = 1e-12 * self._w_max
         self._gear0 = self.model.actuator_gear[0:4].copy()  # nominal rotor gears
+        self.aero = aero_model(scenario, m)
+        """The ``[aero]`` model (None: every effect off)."""
+        self._f_base = np.zeros(4)  # thrusts c_f wbar^2 before the surface factors [N]
+        self._factors = np.ones(4)  # surface factor of each rotor, last step [-]
+        if self.aero is not None:
+            a = self.aero
+            # the acting thrust may exceed f_max by the factor's bound
+            m.actuator_ctrlrange[0:4, 1] *= a.factor_bound
+            self._aero_args = (a.rotor_centres_B, a.samples, a.shapes, a.params)
         # Views into MjData (stable for the life of ``data``).
         self._ctrl = self.data.ctrl[0:4]  # rotor thrusts (the elastic cable owns ctrl[4])
+        self._wrench = self.data.qfrc_applied[0:6]  # aero force F_W and torque F_B
         self._p_att_view = self.data.site_xpos[self._att_site]
         self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
@@ -237,8 +261,18 @@ class Plant:
 
     def forward(self) -> None:
         """Recompute kinematics, forces and sensors at the current state (no time step)."""
-        self._ctrl[:] = [self._c_f * w * w for w in self._w]
+        if self.aero is None:
+            self._ctrl[:] = [self._c_f * w * w for w in self._w]
+        else:
+            self._f_base[:] = [self._c_f * w * w for w in self._w]
+            self._apply_aero()
         self.cable.forward()
+
+    def _apply_aero(self) -> None:
+        """Acting thrusts into the actuators and the aero wrench into the free joint, from
+        the state at :attr:`time` and the thrusts ``_f_base``."""
+        aero_into(self._qpos, self._qvel, self._f_base, *self._aero_args, self._factors,
+                  self._ctrl, self._wrench)  # fmt: skip
 
     def attachment_point(self) -> FloatArray:
         """Cable attachment point p_R + R_WB r_att at :attr:`time` [m]."""
@@ -322,23 +356,45 @@ class Plant:
 
     @property
     def rotor_thrusts(self) -> FloatArray:
-        """Rotor thrusts c_f w_i^2 at :attr:`time` [N]."""
-        return self._c_f * np.square(self._w)
+        """Acting rotor thrusts at :attr:`time`: c_f w_i^2 times the surface factor [N]."""
+        out = np.empty(ROTOR_STATE_WIDTH)
+        self.rotor_state_into(out)
+        return out[4:8]
+
+    @property
+    def surface_factors(self) -> FloatArray:
+        """Surface factor T / T_OGE of each rotor at :attr:`time` (1 with ``[aero]`` off) [-]."""
+        out = np.empty(ROTOR_STATE_WIDTH)
+        self.rotor_state_into(out)
+        return out[8:12]
+
+    @property
+    def aero_force(self) -> FloatArray:
+        """Rotor drag (and wall pull) on the vehicle at :attr:`time`, F_W [N]."""
+        out = np.empty(ROTOR_STATE_WIDTH)
+        self.rotor_state_into(out)
+        return out[12:15]
 
     def rotor_state_into(self, out: FloatArray) -> None:
-        """Write [w (4), f (4)] at :attr:`time` into ``out[:8]`` (no allocation)."""
+        """Write [w (4), thrusts (4), surface factors (4), aero force F_W (3)] at
+        :attr:`time` into ``out[:15]`` (:data:`ROTOR_STATE_WIDTH`; no allocation).
+
+        The thrusts are c_f w_i^2 times the factors; factors and aero force are those the
+        plant computed last (at the start of the last step, or by :meth:`reset` /
+        :meth:`forward`): one physics step old in a running loop (the step loop does not
+        evaluate the model twice).
+        """
         w = self._w
         c_f = self._c_f
-        out[:8] = [
-            w[0],
-            w[1],
-            w[2],
-            w[3],
-            c_f * w[0] * w[0],
-            c_f * w[1] * w[1],
-            c_f * w[2] * w[2],
-            c_f * w[3] * w[3],
-        ]
+        if self.aero is None:
+            out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0], c_f * w[1] * w[1],
+                        c_f * w[2] * w[2], c_f * w[3] * w[3], 1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
+                        0.0]  # fmt: skip
+            return
+        k, F = self._factors, self._wrench
+        out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0] * k[0], c_f * w[1] * w[1] * k[1],
+                    c_f * w[2] * w[2] * k[2], c_f * w[3] * w[3] * k[3], k[0], k[1], k[2], k[3],
+                    F[0], F[1], F[2]]  # fmt: skip
 
     # -- cable ----------------------------------------------------------------------------
 
@@ -426,6 +482,12 @@ class Plant:
         bad_qacc = _BAD_STATE_WARNINGS[2]
         nx, ny, nz, n_dot_p0 = self._hook_plane
         b = self._mean_factor
+        aero = self.aero is not None
+        # thrusts out of ground effect go to the actuators, or through the aero kernel
+        tgt = self._f_base if aero else ctrl
+        if aero:
+            qpos, qvel, factors, wrench = self._qpos, self._qvel, self._factors, self._wrench
+            centres, samples, shapes, params = self._aero_args
         contact_normals, contact_peak = self._contact_normals, self._contact_peak
         maximum = np.maximum
         for _ in range(n):
@@ -435,10 +497,13 @@ class Plant:
                 # thrust from the exact mean speed over the step, the command held
                 m0, m1, m2 = c0 + (w0 - c0) * b, c1 + (w1 - c1) * b, c2 + (w2 - c2) * b
                 m3 = c3 + (w3 - c3) * b
-                ctrl[0] = c_f * m0 * m0  # element-wise: cheaper than a slice from a list
-                ctrl[1] = c_f * m1 * m1
-                ctrl[2] = c_f * m2 * m2
-                ctrl[3] = c_f * m3 * m3
+                tgt[0] = c_f * m0 * m0  # element-wise: cheaper than a slice from a list
+                tgt[1] = c_f * m1 * m1
+                tgt[2] = c_f * m2 * m2
+                tgt[3] = c_f * m3 * m3
+            if aero:
+                aero_into(qpos, qvel, tgt, centres, samples, shapes, params, factors, ctrl,
+                          wrench)  # fmt: skip
             advance()
             maximum(contact_peak, contact_normals, out=contact_peak)
             k = self._tick
@@ -453,7 +518,7 @@ class Plant:
                     abs(w[0] - c0) + abs(w[1] - c1) + abs(w[2] - c2) + abs(w[3] - c3)
                 ) < self._settle_tol:
                     w[:] = cmd
-                    ctrl[:] = [c_f * c0 * c0, c_f * c1 * c1, c_f * c2 * c2, c_f * c3 * c3]
+                    tgt[:] = [c_f * c0 * c0, c_f * c1 * c1, c_f * c2 * c2, c_f * c3 * c3]
                     self._spinning_up = False
             # Kinematics in ``data`` refer to t_k after mj_step; a hook crossing found
             # now takes effect from the next step.

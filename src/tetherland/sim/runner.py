@@ -49,7 +49,7 @@ from tetherland.sim.baselines import ConstantReference, TruthEstimator
 from tetherland.sim.faults import FaultInjector, mocap_outage
 from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
 from tetherland.sim.mjcf import SENSOR_SLICES
-from tetherland.sim.plant import Plant, link_state_of
+from tetherland.sim.plant import ROTOR_STATE_WIDTH, Plant, link_state_of
 from tetherland.sim.sensors import Imu, Mocap
 from tetherland.state import RigidBodyState
 
@@ -325,7 +325,8 @@ class Runner:
         imu_truth = sd[0:6]
         sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["frame_touch"].stop]
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
-        rotor_buf, scalars, contact_buf = np.zeros(8), np.zeros(9), np.zeros(8)
+        rotor_buf, scalars = np.zeros(ROTOR_STATE_WIDTH), np.zeros(9)
+        contact_buf = np.zeros(8)
         # the measurement columns, contiguous in the row: last IMU sample, its true biases,
         # last delivered mocap pose
         meas = np.full(19, np.nan)

@@ -1,0 +1,175 @@
+"""Margins of a design when the robot's belief is off by the campaign's error bounds.
+
+A campaign run (:mod:`tetherland.campaign.perturb`) flies a belief whose surface is tilted
+(slope, azimuth) and moved along its normal, whose anchor is off along x_S, y_S and in
+height h_A, and whose mass and rotor thrust coefficient are off, each by up to the
+``[perturbation]`` half-widths. The robot flies the hooking pass of its belief; the plant's
+surface is the true one. This module bounds what is left of the design's margins:
+
+* :func:`robust_pass_clearance`: the least distance of the vehicle from the *true* surface
+  along the pass the robot plans from a believed anchor height and mass at the corners of
+  their bounds (:func:`~tetherland.campaign.perturb.apply_perturbation`, exactly as a
+  campaign builds its belief), with the true surface tilted, moved and the pass shifted
+  along the surface at the corners of the other bounds (:func:`true_surfaces`).
+* :func:`robust_rotor_margin`: the rotor margin when the commanded thrusts scale with the
+  believed mass and thrust coefficient (:meth:`BeliefBounds.thrust_scale`).
+
+The errors are small, so each margin is extreme at a corner of the error box (to first
+order the distances are linear in the errors); the corners are what is evaluated.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from tetherland.analysis.clearance import level_vehicle_distance
+from tetherland.campaign.perturb import Perturbation, apply_perturbation
+from tetherland.config import Scenario
+from tetherland.geometry import LandingGeometry
+from tetherland.mission.hooking import PIPE_SAMPLES, HookingPass, hooking_pass
+from tetherland.surface import Surface, surface_frame_from_slope
+
+
+@dataclass(frozen=True)
+class BeliefBounds:
+    """Half-widths of the belief errors a campaign draws (the scenario's ``[perturbation]``).
+
+    Attributes
+    ----------
+    mass_rel, thrust_coefficient_rel : float
+        Relative errors of the believed mass and rotor thrust coefficient [-].
+    slope_error_deg, azimuth_error_deg : float
+        Errors of the believed slope and downhill azimuth [deg].
+    anchor_error : float
+        Error of the believed anchor along x_S, y_S and in height h_A [m].
+    surface_offset_error : float
+        Error of the believed surface position along its normal [m].
+    pipe_radius_error : float
+        Error of the believed pipe radius [m] (a pipe only).
+    """
+
+    mass_rel: float = 0.0
+    thrust_coefficient_rel: float = 0.0
+    slope_error_deg: float = 0.0
+    azimuth_error_deg: float = 0.0
+    anchor_error: float = 0.0
+    surface_offset_error: float = 0.0
+    pipe_radius_error: float = 0.0
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> BeliefBounds:
+        """The bounds of ``scenario``'s ``[perturbation]`` section."""
+        c = scenario.perturbation
+        return cls(
+            mass_rel=c.mass_rel, thrust_coefficient_rel=c.thrust_coefficient_rel,
+            slope_error_deg=c.slope_error_deg, azimuth_error_deg=c.azimuth_error_deg,
+            anchor_error=c.anchor_error, surface_offset_error=c.surface_offset_error,
+            pipe_radius_error=c.pipe_radius_error,
+        )  # fmt: skip
+
+    def thrust_scale(self) -> tuple[float, float]:
+        """Least and largest ratio of a commanded to the nominal rotor thrust [-].
+
+        The robot plans and feeds forward with its believed mass m (1 + e_m) and converts
+        thrusts to rotor speeds with its believed coefficient c_f (1 + e_k): to produce the
+        thrust f that the true vehicle needs it commands about f (1 + e_m)(1 + e_k), and its
+        limits [f_min, f_max] apply to that command.
+        """
+        m, k = self.mass_rel, self.thrust_coefficient_rel
+        return ((1.0 - m) * (1.0 - k), (1.0 + m) * (1.0 + k))
+
+
+def robust_rotor_margin(f_low: float, f_high: float, f_min: float, f_max: float,
+                        bounds: BeliefBounds) -> float:  # fmt: skip
+    """Rotor margin of thrusts in [f_low, f_high] [N] commanded with the belief's errors.
+
+    min(s_lo f_low - f_min, f_max - s_hi f_high) [N] with (s_lo, s_hi) =
+    :meth:`BeliefBounds.thrust_scale`: the closest a command comes to either limit.
+    """
+    s_lo, s_hi = bounds.thrust_scale()
+    return float(min(s_lo * f_low - f_min, f_max - s_hi * f_high))
+
+
+def _slope_azimuth(surface: Surface) -> tuple[float, float]:
+    """Slope beta and downhill azimuth of ``surface`` [rad] (x_S gives it on the level)."""
+    z = surface.z_S
+    beta = math.acos(max(-1.0, min(1.0, float(z[2]))))
+    x = surface.x_S if math.hypot(z[0], z[1]) < 1e-9 else z
+    return beta, math.atan2(float(x[1]), float(x[0]))
+
+
+def true_surfaces(believed: Surface, bounds: BeliefBounds) -> list[Surface]:
+    """The true surfaces at the corners of the surface errors, seen from the belief.
+
+    The true surface is the believed one tilted by -/+ the slope and azimuth errors about
+    its origin, moved by -/+ the offset error along its normal (a pipe's radius by -/+ its
+    error): 2 x 2 x 2 (x 2) corners.
+    """
+    beta, az = _slope_azimuth(believed)
+    d_beta, d_az = math.radians(bounds.slope_error_deg), math.radians(bounds.azimuth_error_deg)
+    radii = [believed.pipe_radius]
+    if believed.kind == "pipe":
+        radii = [believed.pipe_radius + s * bounds.pipe_radius_error for s in (-1.0, 1.0)]
+    out = []
+    for sb, sa, so, radius in itertools.product((-1.0, 1.0), (-1.0, 1.0), (-1.0, 1.0), radii):
+        R_WS = surface_frame_from_slope(min(max(beta + sb * d_beta, 0.0), math.pi), az + sa * d_az)
+        origin = believed.origin + so * bounds.surface_offset_error * R_WS[:, 2]
+        out.append(Surface(origin, R_WS, believed.kind, radius, believed.friction,
+                           believed.f_N_min))  # fmt: skip
+    return out
+
+
+PassOf = Callable[[Scenario], tuple[LandingGeometry, HookingPass]]
+"""The hooking pass a scenario flies, with the geometry it is planned on."""
+
+
+def scenario_pass(scenario: Scenario) -> tuple[LandingGeometry, HookingPass]:
+    """``scenario``'s own hooking pass (:func:`~tetherland.mission.hooking.hooking_pass`)."""
+    geo = LandingGeometry.from_scenario(scenario)
+    return geo, hooking_pass(scenario, geo)
+
+
+def belief_corners(scenario: Scenario, bounds: BeliefBounds) -> list[Scenario]:
+    """Believed scenarios at the corners of the anchor-height and mass errors, built as a
+    campaign builds its belief (:func:`~tetherland.campaign.perturb.apply_perturbation`);
+    only the mass of an elastic cable changes the pass (its stretch)."""
+    masses = (1.0,)
+    if scenario.tether.effective_axial_stiffness is not None and bounds.mass_rel > 0:
+        masses = (1.0 - bounds.mass_rel, 1.0 + bounds.mass_rel)
+    heights = (0.0,) if bounds.anchor_error == 0 else (-bounds.anchor_error, bounds.anchor_error)
+    return [
+        apply_perturbation(scenario, Perturbation(mass_factor=m, anchor_error_S=(0.0, 0.0, e)))[1]
+        for m in masses
+        for e in heights
+    ]
+
+
+def robust_pass_clearance(
+    scenario: Scenario, bounds: BeliefBounds, pass_of: PassOf = scenario_pass
+) -> float:
+    """Least distance of the vehicle from the true surface along the hooking pass the robot
+    flies when its belief is off by ``bounds`` [m] (negative: it would touch).
+
+    For every believed anchor height and mass (:func:`belief_corners`) the believed pass
+    (``pass_of``) is shifted by -/+ ``anchor_error`` along x_S and y_S (the believed anchor's
+    lateral error) and its points' distance from every corner of :func:`true_surfaces`
+    is taken with the vehicle's collision shape
+    (:func:`~tetherland.analysis.clearance.level_vehicle_distance`).
+    """
+    clearance = math.inf
+    for belief in belief_corners(scenario, bounds):
+        geo, hooking = pass_of(belief)
+        count = PIPE_SAMPLES if geo.surface.kind == "pipe" else 2
+        points = hooking.points(count)
+        e = bounds.anchor_error
+        signs = ((-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)) if e > 0 else ((0.0, 0.0),)
+        shifts = [e * (sx * geo.surface.x_S + sy * geo.surface.y_S) for sx, sy in signs]
+        for truth in true_surfaces(geo.surface, bounds):
+            for shift in shifts:
+                for p in points:
+                    d = level_vehicle_distance(scenario, truth, p + shift, hooking.yaw)
+                    clearance = min(clearance, d)
+    return float(clearance)

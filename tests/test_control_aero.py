@@ -1,0 +1,100 @@
+"""The controllers' model of the rotors near surfaces and of the rotor drag, from the
+belief (issue 23): the ground-effect compensation leads the motor lag, the believed
+rotor drag is a feed-forward of the reference. Expected values derived here."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tetherland import GRAVITY
+from tetherland.config import load_scenario
+from tetherland.control.ground_effect import GroundEffectCompensation
+from tetherland.control.rotor_drag import RotorDragCompensation, drag_acceleration
+from tetherland.estimation.ground_effect import BelievedGroundEffect
+from tetherland.geometry import LandingGeometry
+from tetherland.interfaces import Command, Reference, StateEstimate
+from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
+from tetherland.state import RigidBodyState
+
+
+class Recorder:
+    """A controller that returns fixed rotor speeds and keeps the reference it was given."""
+
+    def __init__(self, speeds):
+        self.speeds = np.asarray(speeds, dtype=float)
+        self.seen: list[Reference] = []
+
+    def update(self, t, estimate, reference):
+        self.seen.append(reference)
+        return Command(rotor_speeds=self.speeds.copy())
+
+
+def estimate_at(p_W, R_WB, v_W=(0.0, 0.0, 0.0), omega_B=(0.0, 0.0, 0.0)):
+    body = RigidBodyState(
+        p_W=np.asarray(p_W, dtype=float), v_W=np.asarray(v_W, dtype=float),
+        q_WB=rotmat_to_quat(R_WB), omega_B=np.asarray(omega_B, dtype=float),
+    )  # fmt: skip
+    return StateEstimate(t=0.0, body=body)
+
+
+def test_compensation_uses_the_factor_one_motor_lag_ahead():
+    """Approaching the believed slope at 0.5 m/s along -z_S, aligned with it: the command is
+    w / sqrt(k) with k at p + v tau_m (not at p): the factor rises over the lag."""
+    sc = load_scenario("slope50")
+    geo = LandingGeometry.from_scenario(sc)
+    z_S = geo.surface.z_S
+    R = rotation_from_z_and_yaw(z_S, 0.0)
+    p = geo.p_L + 0.16 * z_S
+    v = -0.5 * z_S
+    w = np.full(4, 500.0)
+    ctrl = GroundEffectCompensation(Recorder(w), sc)
+    cmd = ctrl.update(0.0, estimate_at(p, R, v), Reference(t=0.0))
+    tau = sc.vehicle.motor_time_constant
+    belief = BelievedGroundEffect(sc)
+    k_ahead = belief.factors_at(p + tau * v, rotmat_to_quat(R)).copy()
+    k_now = belief.factors_at(p, rotmat_to_quat(R)).copy()
+    assert np.all(k_ahead > k_now + 1e-4)  # closer to the surface: a larger factor
+    np.testing.assert_allclose(cmd.rotor_speeds, w / np.sqrt(k_ahead), rtol=1e-12)
+    # at rest the prediction is the present pose
+    cmd0 = ctrl.update(0.0, estimate_at(p, R), Reference(t=0.0))
+    np.testing.assert_allclose(cmd0.rotor_speeds, w / np.sqrt(k_now), rtol=1e-12)
+
+
+def test_drag_acceleration_is_the_drag_in_the_rotor_plane_scaled_with_rotor_speed():
+    d = np.array([0.45, 0.3])
+    m = 1.2
+    # level, hovering thrust (a = 0): exactly D v / m in the rotor plane, none along z_B
+    a = drag_acceleration(np.eye(3), np.array([1.0, -2.0, 3.0]), np.zeros(3), d, m)
+    np.testing.assert_allclose(a, [0.45 / m, -0.6 / m, 0.0], atol=1e-15)
+    # tilted 30 deg about y: only the velocity in the rotor plane counts
+    c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    v = 0.7 * R[:, 2] + 1.1 * R[:, 0]  # along z_B (no drag) and x_B
+    a = drag_acceleration(R, v, np.zeros(3), d, m)
+    np.testing.assert_allclose(a, 0.45 * 1.1 / m * R[:, 0], atol=1e-15)
+    # twice the hover thrust: rotor speed sqrt(2) times hover, drag sqrt(2) times larger
+    a2 = drag_acceleration(np.eye(3), np.array([1.0, 0.0, 0.0]), np.array([0, 0, GRAVITY]), d, m)
+    assert a2[0] == pytest.approx(math.sqrt(2.0) * 0.45 / m, rel=1e-12)
+
+
+def test_drag_feedforward_goes_on_the_acceleration_and_jerk_rows():
+    sc = load_scenario("slope50", ["controller.rotor_drag=[0.4, 0.4]"])
+    m = sc.vehicle.mass
+    inner = Recorder(np.full(4, 500.0))
+    ctrl = RotorDragCompensation(inner, sc)
+    rows = np.array([[1.0, 2.0, 3.0], [1.5, 0.0, 0.0], [0.0, 0.0, 0.0], [-2.0, 0.0, 0.0]])
+    est = estimate_at([0, 0, 1], np.eye(3))
+    ctrl.update(0.0, est, Reference(t=0.0, p_W=rows))
+    got = inner.seen[-1].p_W
+    np.testing.assert_array_equal(got[0:2], rows[0:2])  # position and velocity untouched
+    np.testing.assert_allclose(got[2], [0.4 * 1.5 / m, 0.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(got[3], [-2.0, 0.0, 0.0], atol=1e-15)  # a_ref = 0: no rate
+    assert rows[2, 0] == 0.0  # the caller's rows are not changed
+    # a position-only reference (hover) and no reference pass through untouched
+    ctrl.update(0.0, est, Reference(t=0.0, p_W=rows[:1]))
+    assert inner.seen[-1].p_W is not None and inner.seen[-1].p_W.shape == (1, 3)
+    ctrl.update(0.0, est, Reference(t=0.0))
+    assert inner.seen[-1].p_W is None
