@@ -42,7 +42,7 @@ BEFORE_TICK_US = {
     "runner (scheduling, the rest)": 15.9,
 }
 """Wall time per control tick at commit d57bf1a, hierarchical controller, seed 0, measured
-with this script right before the after-numbers of the README [us]."""
+with this script right before the after-numbers of CHANGELOG.md [us]."""
 TARGET_RTF = {"hierarchical": 20.0, "dfl": 15.0}
 
 ROLES = (

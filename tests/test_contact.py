@@ -272,7 +272,7 @@ def test_the_rate_hold_backs_the_clock_while_the_frame_rotates_near_the_surface(
 
 # ---------------------------------------------------------------------- campaign regressions
 STUDY = ["tether.length=1.2", "tether.hook_drop=1.0"]
-"""The README's 1000-run slope study: base overrides, 100 runs per slope, seed 2026."""
+"""The 1000-run slope study of docs/results.md: base overrides, 100 runs per slope, seed 2026."""
 
 
 def study_run(slope: float, seed: int) -> Job:

@@ -1,5 +1,5 @@
 """The same campaign flown through the firmware and on tetherland's own inner loop, compared
-(docs/firmware.md, README).
+(docs/firmware.md, docs/results.md).
 
 Run: .venv/bin/python docs/scripts/firmware_campaign.py FIRMWARE_DIR OWN_DIR
 

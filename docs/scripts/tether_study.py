@@ -1,5 +1,5 @@
-"""Table and figure of the cable study (README): tethered success and landing error against
-cable material and attachment offset, from the study's campaign directories.
+"""Table and figure of the cable study (docs/results.md): tethered success and landing error
+against cable material and attachment offset, from the study's campaign directories.
 
 Run: .venv/bin/python docs/scripts/tether_study.py RUNS_DIR [--png docs/tether_study.png]
 

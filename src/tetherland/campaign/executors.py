@@ -107,7 +107,8 @@ def check_handshake(engine: str, address: str, timeout: float = HANDSHAKE_TIMEOU
         raise ConfigError(
             f"--address {address}: accepts connections but no {engine} client got in within "
             f"{timeout:g} s (not a {engine} {kind}, or it refuses this client: for a Ray "
-            "cluster with token authentication set RAY_AUTH_TOKEN, see docs/campaigns.md)"
+            "cluster with token authentication set RAY_AUTH_TOKEN, see "
+            "docs/howto/cluster_campaigns.md)"
         ) from None
     if proc.returncode != 0:
         lines = [line.strip() for line in stderr.splitlines() if line.strip()]

@@ -88,7 +88,8 @@ def campaign(
     address: Annotated[
         str | None,
         typer.Option(
-            "--address", help="Dask scheduler or Ray cluster address (docs/campaigns.md)."
+            "--address",
+            help="Dask scheduler or Ray cluster address (docs/howto/cluster_campaigns.md).",
         ),
     ] = None,
     out: Annotated[Path | None, typer.Option("--out", help="Output directory.")] = None,
