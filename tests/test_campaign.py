@@ -28,6 +28,7 @@ from tetherland.campaign import (
     wilson_interval,
 )
 from tetherland.campaign.executors import DaskExecutor, InlineExecutor, LocalPoolExecutor
+from tetherland.campaign.run import campaign_job
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry
@@ -48,7 +49,7 @@ def analysis_spec(runs: int = 4, sweep: str | None = "surface.slope_deg=20:80:30
 
 def comparable(records: list[dict]) -> list[dict]:
     return sorted(
-        ({k: v for k, v in r.items() if k != "wall_time_s"} for r in records),
+        ({k: v for k, v in r.items() if k not in ("wall_time_s", "cpu_time_s")} for r in records),
         key=lambda r: r["run_id"],
     )
 
@@ -395,3 +396,30 @@ def test_contact_free_mission_job_flies_with_the_campaigns_tethered_controller_n
     assert record["status"] == "ok", record["error"]
     assert record["verdict"]["outcome"] != "no_run"  # planned and flown
     assert record["verdict"]["sim_time_s"] > load_scenario("flat").perching.hover_time
+
+
+def test_a_record_keeps_the_cpu_time_of_its_run_alone(monkeypatch):
+    """``cpu_time_s`` is the process CPU spent inside the run: a run whose analysis burns
+    0.3 s of CPU records at least that; one that sleeps 0.3 s records (almost) none of it,
+    while its wall time holds the sleep."""
+    from tetherland.campaign import jobs
+
+    spec = analysis_spec(runs=1, sweep=None)
+    job = campaign_job(spec, spec.expand()[0])
+
+    def busy(*args):
+        end = time.process_time() + 0.3
+        while time.process_time() < end:
+            pass
+        return {"success": True}
+
+    def idle(*args):
+        time.sleep(0.3)
+        return {"success": True}
+
+    monkeypatch.setattr(jobs, "_analysis_verdict", busy)
+    record, _ = jobs.run_job(job)
+    assert record["cpu_time_s"] >= 0.3
+    monkeypatch.setattr(jobs, "_analysis_verdict", idle)
+    record, _ = jobs.run_job(job)
+    assert record["wall_time_s"] >= 0.3 > record["cpu_time_s"] + 0.2

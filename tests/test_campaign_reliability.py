@@ -55,7 +55,7 @@ def spec_of(runs: int, sweep: str | None = None, seed: int = 0) -> CampaignSpec:
 
 def comparable(records: list[dict]) -> list[dict]:
     return sorted(
-        ({k: v for k, v in r.items() if k != "wall_time_s"} for r in records),
+        ({k: v for k, v in r.items() if k not in ("wall_time_s", "cpu_time_s")} for r in records),
         key=lambda r: r["run_id"],
     )
 

@@ -11,8 +11,17 @@ from hypothesis import strategies as st
 
 from tetherland.config import load_scenario
 from tetherland.control import FreeFlightController, HierarchicalController
-from tetherland.control.kernels import dfl, dfl_model, free_flight, hierarchical, mixer, so3
+from tetherland.control.kernels import (
+    dfl,
+    dfl_model,
+    free_flight,
+    hierarchical,
+    mixer,
+    so3,
+    tracker,
+)
 from tetherland.control.kernels.packing import Fields
+from tetherland.control.tracking import FreeFlightTracker
 from tetherland.rotations import exp_so3, rotmat_to_quat
 
 SEEDS = st.integers(0, 2**32 - 1)
@@ -76,6 +85,61 @@ def test_compiled_free_flight_matches_the_reference(scenario, seed, rows, integr
                                  ctrl.mixer.packed, out)  # fmt: skip
     np.testing.assert_allclose(out, expected, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(integral, i_ref, rtol=1e-12, atol=1e-15)
+
+
+@settings(max_examples=150, deadline=None)
+@given(SEEDS, st.integers(1, 5), st.booleans(), st.booleans())
+def test_compiled_tracker_matches_the_reference(scenario, seed, rows, lag, at_rest):
+    """Three ticks of the contact-free tracker (integral, feed-forward rates, lag
+    compensation across ticks 2 ms, 2 ms and 9 ms apart, the last beyond the lag window),
+    compiled against plain: the same out, integral and state after every tick."""
+    ctrl = FreeFlightTracker(scenario, lag_compensation=lag)
+    layout, rotors = ctrl.mixer.layout, ctrl.mixer.rotors
+    rng = np.random.default_rng(seed)
+    integral, state = rng.normal(0, 0.1, 3), tracker.tracker_state()
+    i_ref, s_ref = integral.copy(), state.copy()
+    ref = rng.normal(0, 1, (rows, 3)) * np.array([1.0, 2.0, 5.0, 20.0, 100.0])[:rows, None]
+    if at_rest and rows > 1:
+        ref[1] *= 0.04 / np.linalg.norm(ref[1])  # below the hold speed: the integral runs
+    yaw = rng.uniform(-math.pi, math.pi)
+    for t in (1.0, 1.002, 1.004, 1.013):
+        p, v, q, w = rng.normal(0, 1, 3), rng.normal(0, 1, 3), _quat(rng), rng.normal(0, 2, 3)
+        ref = ref + rng.normal(0, 0.01, ref.shape)
+        expected = tracker.tracker_reference(t, p, v, q, w, ref, yaw, i_ref, s_ref, ctrl._par,
+                                             layout, rotors)  # fmt: skip
+        out = np.empty(tracker.OUT_WIDTH)
+        tracker.tracker_into(t, p, v, q, w, ref, yaw, integral, state, ctrl._par,
+                             ctrl.mixer.packed, out)  # fmt: skip
+        np.testing.assert_allclose(out, expected, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(integral, i_ref, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(state, s_ref, rtol=1e-9, atol=1e-9, equal_nan=True)
+
+
+def test_compiled_tracker_reports_the_singularities_of_the_reference(scenario):
+    """Zero nominal force and its thrust axis along the heading (the feed-forward's
+    singularities; F_d itself cannot turn horizontal under the tilt limit): the same
+    status from both; a hover reference is regular."""
+    ctrl = FreeFlightTracker(scenario)
+    g = ctrl.position.g
+    q, zero = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
+    heading = np.array([[0, 0, 0], [0, 0, 0], [g, 0, -g], [0, 0, 1], [0, 0, 0.0]])
+    cases = [
+        (np.array([[0, 0, 0], [0, 0, 0], [0, 0, -g], [0, 0, 1.0]]), 2.0),  # F_n = 0
+        (heading, 3.0),  # F_n along x_C
+        (np.zeros((1, 3)), 0.0),  # hover
+    ]  # fmt: skip
+    for rows, status in cases:
+        outs = []
+        plain, compiled = tracker.tracker_reference, tracker.tracker_into
+        for fn, mix in ((plain, None), (compiled, ctrl.mixer.packed)):
+            out, state = np.empty(tracker.OUT_WIDTH), tracker.tracker_state()
+            args = (1.0, zero, zero, q, zero, rows, 0.0, np.zeros(3), state, ctrl._par)
+            if mix is None:
+                out = fn(*args, ctrl.mixer.layout, ctrl.mixer.rotors)
+            else:
+                fn(*args, mix, out)
+            outs.append(out[tracker.OUT_SINGULAR])
+        assert outs == [status, status]
 
 
 def _hierarchical_inputs(rng: np.random.Generator, ctrl: HierarchicalController):
@@ -156,7 +220,7 @@ def test_compiled_attitude_feedforward_reports_the_same_singularities():
 LAYOUTS = [(mixer, "MIX"), (mixer, "OUT"), (so3, "ATT"), (so3, "CABLE"), (free_flight, "PAR"),
            (free_flight, "OUT"), (hierarchical, "PAR"), (hierarchical, "STATE"),
            (hierarchical, "OUT"), (dfl, "PAR"), (dfl, "STATE"), (dfl, "OUT"),
-           (dfl_model, "YAB")]  # fmt: skip
+           (dfl_model, "YAB"), (tracker, "PAR"), (tracker, "STATE"), (tracker, "OUT")]  # fmt: skip
 
 
 def test_fields_are_laid_out_in_the_order_declared():

@@ -18,6 +18,7 @@ from tetherland.models.planar import (
     NUMPY,
     ExtendedPlanarModel,
     PlanarParams,
+    offset_arms,
     planar_flat_inputs,
     planar_terms,
 )
@@ -55,6 +56,23 @@ def test_planar_model_equals_3d_model_at_zero_azimuth(rng):
         assert planar["tension"] == pytest.approx(full.tension, abs=1e-12)
         assert full.delta_ddot == pytest.approx(0.0, abs=1e-12)  # the motion stays planar
         assert planar["theta_ddot"] == pytest.approx(tau / PARAMS.inertia)
+
+
+def test_offset_arms_are_those_of_the_rotated_offset(rng):
+    """(4.13): a = t.w, b = d.w with w = y_A x r, r = R_y(theta_A) r0 (the link direction d
+    and t = dd/dphi in the plane), which the models evaluate from s = phi + theta_A alone."""
+    for _ in range(20):
+        phi, theta = rng.uniform(-math.pi, math.pi, 2)
+        r0 = rng.normal(scale=0.05, size=2)  # (r_x, r_z)
+        c_t, s_t = math.cos(theta), math.sin(theta)
+        r = np.array([[c_t, 0, s_t], [0, 1, 0], [-s_t, 0, c_t]]) @ np.array([r0[0], 0, r0[1]])
+        w = np.cross([0.0, 1.0, 0.0], r)
+        d = np.array([math.cos(phi), 0.0, math.sin(phi)])
+        t = np.array([-math.sin(phi), 0.0, math.cos(phi)])
+        a, b = offset_arms(phi, theta, (r0[0], r0[1]), NUMPY)
+        assert a == pytest.approx(t @ w, abs=1e-15)
+        assert b == pytest.approx(d @ w, abs=1e-15)
+        assert b == pytest.approx(t @ r, abs=1e-15) and a == pytest.approx(-(d @ r), abs=1e-15)
 
 
 def test_inclined_hover_is_an_equilibrium():

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -16,6 +18,7 @@ from tetherland.planning import (
     SolverSettings,
     SolveStatus,
     build_ocp,
+    stagewise,
 )
 
 SOLVERS = ("fatrop", "ipopt")
@@ -135,17 +138,46 @@ def test_problem_validation():
         )  # fmt: skip
 
 
+def test_with_numbers_validates_what_it_changes():
+    """with_numbers checks the numbers it is given (their sizes, finiteness, the bounds
+    they pair with) and keeps the statement."""
+    problem = double_integrator(v_max=1.3)
+    other = problem.with_numbers(x0=[0.5, 0.0], duration=2.0)
+    assert other.structure_key == problem.structure_key
+    np.testing.assert_array_equal(other.x0, [0.5, 0.0])
+    assert other.duration == 2.0 and problem.duration == 1.0
+    for numbers, match in (
+        ({"x0": [0.0, np.nan]}, "NaN"),
+        ({"x0": [0.0]}, "x0 must have 2"),
+        ({"duration": -1.0}, "duration"),
+        ({"x_lb": [2.0, 2.0], "x_ub": [1.0, 1.0]}, "x_lb > x_ub"),
+        ({"u_lb": [1.0], "u_ub": [0.0]}, "u_lb > u_ub"),
+        ({"path_lb": [2.0]}, "path_lb > path_ub"),
+        ({"p_value": [1.0, np.inf]}, "finite"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            problem.with_numbers(**numbers)
+    with pytest.raises(TypeError, match="unexpected"):
+        problem.with_numbers(x=[0.0])
+
+
+@pytest.mark.skipif(not stagewise.available(), reason="no C compiler")
 def test_jit_compiled_solver_finds_the_same_optimum(tmp_path, monkeypatch):
-    """SolverSettings.jit compiles the NLP's functions to C: same iterates, same optimum,
-    and no compiler files left in the working directory."""
-    monkeypatch.chdir(tmp_path)
+    """SolverSettings.jit compiles the NLP's interval functions to C: same iterates, same
+    optimum, no compiler files left in the working directory (the library goes to the
+    cache directory)."""
+    work, cache = tmp_path / "work", tmp_path / "cache"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    monkeypatch.setenv(stagewise.CACHE_ENV, str(cache))
     tr = MultipleShooting(20, "rk4", 1)
-    plain = OcpSolver(tr, SolverSettings("fatrop", tol=1e-9)).solve(double_integrator(v_max=1.3))
-    jit = OcpSolver(tr, SolverSettings("fatrop", tol=1e-9, jit=True)).solve(
-        double_integrator(v_max=1.3)
-    )
+    settings = SolverSettings("fatrop", tol=1e-9, jit=False)
+    plain = OcpSolver(tr, settings).solve(double_integrator(v_max=1.3))
+    solver = OcpSolver(tr, replace(settings, jit=True))
+    jit = solver.solve(double_integrator(v_max=1.3))
+    assert solver.compiled and len(list(cache.iterdir())) == 1
     assert plain.success and jit.success
     assert jit.iterations == plain.iterations
     np.testing.assert_allclose(jit.U, plain.U, atol=1e-10)
     assert jit.X[1:-1, 1].max() <= 1.3 + 1e-6
-    assert list(tmp_path.iterdir()) == []
+    assert list(work.iterdir()) == []

@@ -7,7 +7,10 @@ import pytest
 
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
+from tetherland.models.integrators import rk4
+from tetherland.models.planar import ExtendedPlanarModel, offset_derivatives, parametric_rk4_step
 from tetherland.planning import (
+    ManeuverSpec,
     Planner,
     PlanStatus,
     PolynomialTrajectory,
@@ -16,7 +19,9 @@ from tetherland.planning import (
     trajectory_from_csv,
 )
 from tetherland.planning.plot import save_plan_figure
+from tetherland.planning.shooting import HeldInputSimulator
 from tetherland.planning.spline import rest_to_rest, smoothstep9
+from tetherland.planning.trajectory import PlanarSimulator
 
 SCENARIO = load_scenario("slope50")
 
@@ -133,6 +138,44 @@ def test_derivatives_are_consistent_with_finite_differences(ocp, spline, rng):
                     assert fd == pytest.approx(q[1, k + 1], rel=1e-4, abs=1e-5)
             fd = (s.thrusts[2] - s.thrusts[0]) / (2 * h)
             np.testing.assert_allclose(fd, s.thrust_rates[1], rtol=1e-5, atol=1e-6)
+
+
+def test_compiled_resimulation_equals_the_casadi_chains(rng):
+    """The planner's re-simulation kernels (through all intervals, and restarted at every
+    node) follow the CasADi RK4 chains of the same model step by step, and its compiled
+    single steps are the generic RK4 on the model's numpy right-hand side (offset
+    included)."""
+    params = ManeuverSpec.from_scenario(SCENARIO).params
+    assert params.has_offset
+    model = ExtendedPlanarModel(params)
+    c = params.coefficients
+    fast, reference = PlanarSimulator(), HeldInputSimulator(parametric_rk4_step())
+    N, sub = 12, 7
+    times = np.cumsum(np.concatenate(([0.0], rng.uniform(0.02, 0.1, N))))
+    x0 = model.hover_state(0.9, 0.3) + rng.normal(scale=0.05, size=12)
+    U = rng.normal(scale=5.0, size=(N, 4))
+    X = x0 + rng.normal(scale=0.05, size=(N + 1, 12))
+    for a, b in (
+        (fast.run(c, times, x0, U, sub), reference.run(c, times, x0, U, sub)),
+        (fast.restart(c, times, X, U, sub), reference.restart(c, times, X, U, sub)),
+    ):
+        assert a.shape == (N, sub, 12)
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+    x, u, h = X.T, rng.normal(scale=5.0, size=(4, N + 1)), rng.uniform(0.0, 2e-3, N + 1)
+    np.testing.assert_allclose(fast.advance(c, model.rhs, x, u, h), rk4(model.rhs, x, u, h),
+                               rtol=1e-13, atol=1e-13)  # fmt: skip
+
+
+def test_check_samples_are_the_trajectorys_samples(ocp, rng):
+    """The states the re-simulation check reads (:meth:`Trajectory.states_at`, no higher
+    derivatives) are :meth:`Trajectory.sample`'s, and the closed-form tension is the
+    automatic differentiation's of the exact offset model."""
+    traj = ocp.trajectory
+    t = np.concatenate((rng.uniform(-0.5, traj.duration + 0.5, 50), traj.times))
+    s = traj.sample(t)
+    np.testing.assert_array_equal(traj.states_at(t), s.states())
+    ad = offset_derivatives(s.states().T, None, traj.params)["tension"]
+    np.testing.assert_allclose(s.tension, ad, rtol=1e-12, atol=1e-12)
 
 
 def test_nominal_values_from_flatness_agree_with_the_plan(ocp, spline):

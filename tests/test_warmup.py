@@ -7,11 +7,12 @@ import numpy as np
 from tetherland import state, warmup
 from tetherland.config import load_scenario, with_overrides
 from tetherland.control import DflController, HierarchicalController
-from tetherland.control.kernels import dfl, free_flight, hierarchical
+from tetherland.control.kernels import dfl, free_flight, hierarchical, tracker
+from tetherland.control.tracking import FreeFlightTracker
 from tetherland.estimation import UkfEstimator, ukf_kernels
 from tetherland.estimation import kernels as estimation_kernels
 from tetherland.geometry import LandingGeometry
-from tetherland.interfaces import ImuSample
+from tetherland.interfaces import ImuSample, Reference
 from tetherland.methods import Planners
 from tetherland.planning import Planner
 from tetherland.planning.tracking import TrajectoryTrack
@@ -21,6 +22,7 @@ from tetherland.sim.analytic import estimate_of
 
 KERNELS = (
     free_flight.free_flight_into,
+    tracker.tracker_into,
     hierarchical.hierarchical_into,
     dfl.dfl_into,
     ukf_kernels.predict_into,
@@ -55,4 +57,11 @@ def test_the_loop_needs_no_specialisation_beyond_the_warm_up():
     for ctrl in (HierarchicalController(sc), DflController(sc)):
         ctrl.update(1.0, estimate, track.reference(1.0))
         ctrl.update(1.002, estimate, track.reference(traj.duration + 0.5))  # held end
+    # ... and the contact-free tracker on hover, continuation and maneuver rows (read-only
+    # or views of a larger array, as the perching reference hands them out)
+    free = FreeFlightTracker(sc)
+    held = np.zeros((3, 3))
+    held.setflags(write=False)
+    for i, rows in enumerate((np.zeros((1, 3)), held, np.zeros((2, 5, 3))[1])):
+        free.update(1.0 + 2e-3 * i, estimate, Reference(t=1.0, p_W=rows))
     assert _signatures() == warmed

@@ -17,6 +17,7 @@ import numpy as np
 
 from tetherland.config import load_scenario
 from tetherland.control import DflController, FreeFlightController, HierarchicalController
+from tetherland.control.tracking import FreeFlightTracker
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import ControlMode, Feedforward, ImuSample, MocapSample, Reference
@@ -39,6 +40,7 @@ def warm_up() -> float:
     held.setflags(write=False)  # a free-flight path's pause hands out read-only rows
     for rows in (np.zeros((3, 3)), held):
         FreeFlightController(sc).update(2e-3, e, Reference(t=2e-3, p_W=rows))
+    FreeFlightTracker(sc).update(2e-3, e, Reference(t=2e-3, p_W=np.zeros((5, 3))))
     output = np.zeros((5, 4))
     output[0, 0] = e.link.phi if e.link is not None else 0.5
     ff = Feedforward(omega_B=np.zeros(3), omega_dot_B=np.zeros(3), f_R=sc.vehicle.mass * 9.81)

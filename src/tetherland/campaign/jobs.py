@@ -259,9 +259,10 @@ def run_job(
     :class:`~tetherland.randomness.RandomSource`): the perturbation, the wind, the fault,
     and the sensor noise (``run_mission`` with the run's seed). Bad inputs and failures
     inside the run are recorded (``status = "error"``), not raised, so one broken run
-    cannot stop a campaign.
+    cannot stop a campaign. The record keeps the run's wall time and its process CPU time
+    (``wall_time_s``, ``cpu_time_s`` [s]; the worker's start-up is not in them).
     """
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     run = job.run
     record: dict[str, Any] = {
         "run_id": run.run_id,
@@ -298,6 +299,7 @@ def run_job(
         record.update(status="error", error_kind="run", error=f"internal error: {last}",
                       verdict={"success": False})  # fmt: skip
     record["wall_time_s"] = time.perf_counter() - start
+    record["cpu_time_s"] = time.process_time() - cpu
     return record, result
 
 

@@ -23,7 +23,7 @@ from tetherland.campaign.spec import RunSpec
 from tetherland.io import to_jsonable
 from tetherland.runs import RunResult
 
-MACHINE_FIELDS = ("wall_time_s", "run_dir", "run_dir_error")
+MACHINE_FIELDS = ("wall_time_s", "cpu_time_s", "run_dir", "run_dir_error")
 """Record fields that say how the run was executed, not what it did (the verdict's
 :data:`~tetherland.campaign.jobs.VOLATILE` fields are left out too)."""
 

@@ -10,6 +10,9 @@ Motor-lag compensation (optional): the speed command leads the first-order lag a
 J omega_d' + omega_d x J omega_d], whose rate is the difference of two successive control
 ticks. The nominal thrusts depend on the reference only, so estimation noise is not
 differentiated.
+
+The update is one compiled call, :func:`tetherland.control.kernels.tracker.tracker_into`
+(plain reference beside it: ``tracker_reference``).
 """
 
 from __future__ import annotations
@@ -19,14 +22,20 @@ import math
 import numpy as np
 
 from tetherland.config import Scenario
+from tetherland.control.kernels import free_flight
+from tetherland.control.kernels import tracker as kernel
+from tetherland.control.kernels.mixer import OUT_SATURATION
+from tetherland.control.mixer import Mixer, command_from
 from tetherland.control.position import PositionController, PositionReference
-from tetherland.errors import TetherlandError
+from tetherland.errors import SingularityError, TetherlandError
 from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
 from tetherland.models.quadrotor import RotorLayout, RotorModel
 from tetherland.rotations import cross3
 
 _DIAGNOSTICS = ("position_error", "saturated")
+HOLD_SPEED = 0.05
+"""Largest reference speed at which the position-error integral runs (hover) [m/s]."""
 
 
 class FreeFlightTracker:
@@ -67,12 +76,19 @@ class FreeFlightTracker:
         self._period = 1.0 / scenario.controller.rate_hz
 
         self._Gi = self.layout.allocation_inverse
-        self._t_int: float | None = None
-        self._last: tuple[float, FloatArray] | None = None
+        self.mixer = Mixer(v)
+        pos, att = self.position, self.position.attitude
+        law = free_flight.pack_free_flight(
+            pos.mass, pos.g, pos.k_x, pos.k_v, pos.k_i, pos.integral_max, pos.tan_max_tilt,
+            pos.min_vertical, att.J, att.gains.k_R, att.gains.k_w,
+        )  # fmt: skip
+        self._par = kernel.pack_tracker(law, self._period, self.lag_compensation, HOLD_SPEED)
+        self._state = kernel.tracker_state()
 
     def reset(self) -> None:
         """Forget the previous tick (lag compensation restarts)."""
-        self._last = None
+        fresh = kernel.tracker_state()
+        self._state[kernel.STATE_T_NOMINAL] = fresh[kernel.STATE_T_NOMINAL]
 
     def nominal_thrusts(
         self, ref: PositionReference, rates: tuple[FloatArray, FloatArray] | None = None
@@ -89,10 +105,10 @@ class FreeFlightTracker:
         return self._Gi @ np.concatenate(([float(np.linalg.norm(F))], tau))
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
-        """Rotor speed commands for ``reference`` from ``estimate``."""
+        """Rotor speed commands for ``reference`` from ``estimate`` (one compiled call,
+        :func:`tetherland.control.kernels.tracker.tracker_into`)."""
         if reference.mode is ControlMode.MOTORS_OFF:
-            self._last = None
-            self._t_int = None
+            self._state[:] = kernel.tracker_state()
             return Command.motors_off()
         if reference.mode is not ControlMode.FREE_FLIGHT:
             raise TetherlandError(
@@ -100,32 +116,21 @@ class FreeFlightTracker:
             )
         if reference.p_W is None:
             raise TetherlandError("FreeFlightTracker needs a position reference (p_W rows)")
-        ref = PositionReference.from_rows(reference.p_W, reference.yaw)
         body = estimate.body
-        # integral action, learnt while hovering (reference at rest) and frozen during the
-        # maneuver: the bias of the thrust and mass model errors keeps being cancelled
-        dt = None if self._t_int is None else t - self._t_int
-        self._t_int = t
-        if float(np.linalg.norm(ref.v_W)) > 0.05:
-            dt = None
-        rates = None if ref.j_W is None else self.position.feedforward_rates(ref)
-        wrench = self.position.update(body, ref, dt, rates)
-        alloc = self.layout.allocate(np.concatenate(([wrench.thrust], wrench.torque_B)))
-        f_dot = None
-        if self.lag_compensation:
-            f_n = self.nominal_thrusts(ref, rates)
-            last = self._last
-            if last is not None and 0.0 < t - last[0] <= 2.5 * self._period:
-                f_dot = (f_n - last[1]) / (t - last[0])
-            self._last = (t, f_n)
-        speeds = self.rotors.speed_command(alloc.thrusts, f_dot)
-        err = float(np.linalg.norm(body.p_W - ref.p_W))
-        return Command(
-            rotor_speeds=speeds,
-            thrust=float(alloc.wrench[0]),
-            torque_B=alloc.wrench[1:].copy(),
-            diagnostics={"position_error": err, "saturated": float(alloc.saturated)},
-        )
+        rows = np.array(reference.p_W, dtype=float).reshape(-1, 3)  # one compiled signature
+        out = np.empty(kernel.OUT_WIDTH)
+        kernel.tracker_into(
+            float(t), body.p_W, body.v_W, body.q_WB, body.omega_B, rows, float(reference.yaw),
+            self.position.integral, self._state, self._par, self.mixer.packed, out,
+        )  # fmt: skip
+        singular = int(out[kernel.OUT_SINGULAR])
+        if singular:
+            raise SingularityError(kernel.SINGULAR_MESSAGES[singular])
+        diag = {
+            "position_error": float(out[kernel.OUT_POSITION_ERROR]),
+            "saturated": float(out[OUT_SATURATION] > 0.0),
+        }
+        return command_from(out, diag)
 
     @property
     def hover_speeds(self) -> FloatArray:

@@ -160,14 +160,18 @@ class PlanarParams:
         )
 
     @classmethod
-    def from_scenario(cls, scenario: Scenario, heading: float = 0.0) -> PlanarParams:
+    def from_scenario(
+        cls, scenario: Scenario, heading: float = 0.0, geometry: LandingGeometry | None = None
+    ) -> PlanarParams:
         """The scenario's vehicle on its taut link of length l + s: the cable stretched by
         the landed hover's tension (:attr:`LandingGeometry.link_length`, docs/theory.md
-        section 4.2; l for an inextensible cable)."""
+        section 4.2; l for an inextensible cable). ``geometry``: the scenario's
+        :class:`LandingGeometry` when the caller has it (computed otherwise)."""
         v = scenario.vehicle
+        geometry = geometry or LandingGeometry.from_scenario(scenario)
         return cls.from_matrices(
             v.mass,
-            LandingGeometry.from_scenario(scenario).link_length,
+            geometry.link_length,
             v.inertia,
             RotorLayout.from_config(v).allocation,
             heading,
@@ -244,17 +248,14 @@ def planar_terms(
     cs, ss = ops.cos(s), ops.sin(s)
     cp, sp = ops.cos(phi), ops.sin(phi)
     ddtheta = tau / c.inertia
-    a, b = offset_arms(phi, theta, c.offset, ops)
+    a, b = _arms(cs, ss, c.offset)
     ddphi = a1 * cp + a2 * cs * F + (a * ddtheta - b * dtheta**2) / c.length  # (6.18), (4.20)
     out = {
         "phi_ddot": ddphi,
         "theta_ddot": ddtheta,
         "phi_dddot": -a1 * sp * dphi - a2 * ss * ds * F + a2 * cs * dF,
         "theta_dddot": dtau / c.inertia,
-        "tension": F * ss
-        - c.mass * c.gravity * sp
-        + c.mass * c.length * dphi**2
-        + c.mass * (a * dtheta**2 + b * ddtheta),  # (4.21)
+        "tension": _tension(F, ss, sp, dphi, dtheta, ddtheta, a, b, c),
     }
     if ddF is not None:
         dds = ddphi + ddtheta
@@ -270,14 +271,41 @@ def planar_terms(
     return out
 
 
+def _tension(
+    F: Any, ss: Any, sp: Any, dphi: Any, dtheta: Any, ddtheta: Any, a: Any, b: Any, c: Any
+) -> Any:
+    """f_L (4.21) from f_R, sin(s), sin(phi), the rates, theta_A'' and the arms (a, b)."""
+    return (
+        F * ss
+        - c.mass * c.gravity * sp
+        + c.mass * c.length * dphi**2
+        + c.mass * (a * dtheta**2 + b * ddtheta)
+    )
+
+
+def planar_tension(
+    phi: Any, theta: Any, dphi: Any, dtheta: Any, F: Any, tau: Any, c: Any, ops: SimpleNamespace
+) -> Any:
+    """The tension f_L (4.21) of :func:`planar_terms` alone (no jerks or snaps) [N]."""
+    s = phi + theta
+    cs, ss = ops.cos(s), ops.sin(s)
+    a, b = _arms(cs, ss, c.offset)
+    return _tension(F, ss, ops.sin(phi), dphi, dtheta, tau / c.inertia, a, b, c)
+
+
 def offset_arms(phi: Any, theta: Any, r0: tuple[Any, Any], ops: SimpleNamespace) -> tuple[Any, Any]:
     """(a, b) = (t.w, d.w), w = y_A x r, r = R_y(theta_A) r0 in the plane (docs/theory.md
-    (4.14)): the lever arms of the offset along and across the link [m]."""
-    ct, st = ops.cos(theta), ops.sin(theta)
-    rx = ct * r0[0] + st * r0[1]
-    rz = -st * r0[0] + ct * r0[1]
-    cp, sp = ops.cos(phi), ops.sin(phi)
-    return -sp * rz - cp * rx, cp * rz - sp * rx
+    (4.13)): the lever arms of the offset along and across the link [m]."""
+    s = phi + theta
+    return _arms(ops.cos(s), ops.sin(s), r0)
+
+
+def _arms(cs: Any, ss: Any, r0: tuple[Any, Any]) -> tuple[Any, Any]:
+    """(a, b) of (4.13) from cos(s), sin(s), s = phi + theta_A: with r = R_y(theta_A) r0,
+    a = -sin(phi) r_z - cos(phi) r_x = -(r0_x cos s + r0_z sin s) and
+    b = cos(phi) r_z - sin(phi) r_x = r0_z cos s - r0_x sin s (two trigonometric
+    evaluations instead of four)."""
+    return -(r0[0] * cs + r0[1] * ss), r0[1] * cs - r0[0] * ss
 
 
 def rotor_torque(phi: Any, theta: Any, tau: Any, tension: Any, c: Any, ops: SimpleNamespace) -> Any:
@@ -529,6 +557,17 @@ class ExtendedPlanarModel:
             x, None if u is None else np.asarray(u, dtype=float), self.params, NUMPY
         )
 
+    def tension(self, x: ArrayLike) -> Any:
+        """Cable tension f_L (4.21) of rotor-form states ``x`` (12,) or (12, n) [N]: the
+        closed form, exact with the attachment offset (what :meth:`derivatives` returns as
+        ``tension``, without the jerks and snaps)."""
+        x = np.asarray(x, dtype=float)
+        p = self.params
+        f, row = x[THRUSTS], p.torque_row
+        F = f[0] + f[1] + f[2] + f[3]
+        tau = row[0] * f[0] + row[1] * f[1] + row[2] * f[2] + row[3] * f[3]
+        return planar_tension(x[0], x[1], x[2], x[3], F, tau, p, NUMPY)
+
     def wrench(self, x: ArrayLike) -> FloatArray:
         """[f_R, tau_y, f_R', tau_y'] of a rotor-form state [N, N m, N/s, N m/s]."""
         x = np.asarray(x, dtype=float)
@@ -554,7 +593,7 @@ class ExtendedPlanarModel:
         x = np.asarray(x, dtype=float)
         if not self.params.has_offset:
             return x[THRUSTS].copy()
-        f_L = self.derivatives(x)["tension"] if tension is None else np.asarray(tension)
+        f_L = self.tension(x) if tension is None else np.asarray(tension)
         b = offset_arms(x[0], x[1], self.params.offset, NUMPY)[1]
         G1 = self.params.G[:, 1]
         return x[THRUSTS] + (G1[:, None] * (b * f_L) if x.ndim > 1 else G1 * (b * f_L))

@@ -125,13 +125,17 @@ class ManeuverSpec:
 
     @classmethod
     def from_scenario(
-        cls, scenario: Scenario, maneuver: Maneuver | str = Maneuver.LANDING
+        cls,
+        scenario: Scenario,
+        maneuver: Maneuver | str = Maneuver.LANDING,
+        geometry: LandingGeometry | None = None,
     ) -> ManeuverSpec:
-        """The maneuver of ``scenario`` (``planner`` section, vehicle, cable and surface)."""
+        """The maneuver of ``scenario`` (``planner`` section, vehicle, cable and surface);
+        ``geometry``: its :class:`LandingGeometry` when the caller has it."""
         maneuver = Maneuver(maneuver)
         cfg, v = scenario.planner, scenario.vehicle
-        geo = LandingGeometry.from_scenario(scenario)
-        params = PlanarParams.from_scenario(scenario, heading=math.radians(cfg.heading_deg))
+        geo = geometry or LandingGeometry.from_scenario(scenario)
+        params = PlanarParams.from_scenario(scenario, math.radians(cfg.heading_deg), geo)
         phi_s, theta_s = geo.phi_star, geo.theta_A_star
         phi_0 = phi_s + math.radians(cfg.start_elevation_offset_deg)
         theta_0 = hover_tilt_for_tension(phi_0, cfg.start_tension, v.mass, params.gravity)
@@ -176,7 +180,7 @@ class ManeuverSpec:
         """f_L at the start: of the start hover, or of ``start_state`` [N] (computed once)."""
         if self.start_state is None:
             return self.hover("start")[1]
-        return float(self.model.derivatives(self.start_state)["tension"])
+        return float(self.model.tension(self.start_state))
 
     def remainder(self, x0: ArrayLike, elapsed: float) -> ManeuverSpec:
         """The rest of this maneuver from the state ``x0`` reached ``elapsed`` s after its

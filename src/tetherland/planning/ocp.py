@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -98,11 +99,18 @@ class OcpProblem:
     state_names: tuple[str, ...] = ()
     input_names: tuple[str, ...] = ()
     _key: str = field(init=False, repr=False, compare=False)
+    _sizes: dict[str, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        sizes = {
+            "x0": self.x.numel(), "p_value": self.p.numel(), "path_lb": self.path.numel(),
+            "path_ub": self.path.numel(), "x_lb": self.x.numel(), "x_ub": self.x.numel(),
+            "u_lb": self.u.numel(), "u_ub": self.u.numel(),
+        }  # fmt: skip
+        object.__setattr__(self, "_sizes", sizes)
         if self.ode.numel() != self.nx:
             raise ValueError(f"ode has {self.ode.numel()} entries for {self.nx} states")
-        self._check_numbers()
+        self._check_numbers(self._NUMBERS)
         f = ca.Function(
             "ocp_structure",
             [self.x, self.u, self.p, self.t, self.T, self.h],
@@ -110,19 +118,18 @@ class OcpProblem:
         )
         object.__setattr__(self, "_key", hashlib.sha1(f.serialize().encode()).hexdigest())
 
-    def _check_numbers(self) -> None:
-        nx, nu, npar, ng = self.nx, self.nu, self.p.numel(), self.path.numel()
-        if not (self.duration > 0 and np.isfinite(self.duration)):
+    def _check_numbers(self, names: Iterable[str]) -> None:
+        """Validate (and store as float vectors) the numbers ``names``."""
+        names = set(names)
+        if "duration" in names and not (self.duration > 0 and np.isfinite(self.duration)):
             raise ValueError(f"duration must be a positive number, got {self.duration}")
-        for name, n in (
-            ("x0", nx), ("p_value", npar), ("path_lb", ng), ("path_ub", ng),
-            ("x_lb", nx), ("x_ub", nx), ("u_lb", nu), ("u_ub", nu),
-        ):  # fmt: skip
-            object.__setattr__(self, name, _vec(getattr(self, name), n, name))
-        if not np.all(np.isfinite(self.x0)) or not np.all(np.isfinite(self.p_value)):
-            raise ValueError("x0 and p_value must be finite")
+        for name in names - {"duration"}:
+            object.__setattr__(self, name, _vec(getattr(self, name), self._sizes[name], name))
+        for name in names & {"x0", "p_value"}:
+            if not np.all(np.isfinite(getattr(self, name))):
+                raise ValueError("x0 and p_value must be finite")
         for lo, hi in (("path_lb", "path_ub"), ("x_lb", "x_ub"), ("u_lb", "u_ub")):
-            if np.any(getattr(self, lo) > getattr(self, hi)):
+            if names & {lo, hi} and np.any(getattr(self, lo) > getattr(self, hi)):
                 raise ValueError(f"{lo} > {hi} for some entry")
 
     _NUMBERS = ("duration", "x0", "p_value", "path_lb", "path_ub", "x_lb", "x_ub", "u_lb", "u_ub")
@@ -139,16 +146,16 @@ class OcpProblem:
         new = copy.copy(self)
         for name, value in numbers.items():
             object.__setattr__(new, name, value)
-        new._check_numbers()
+        new._check_numbers(numbers)
         return new
 
     @property
     def nx(self) -> int:
-        return int(self.x.numel())
+        return int(self._sizes["x0"])
 
     @property
     def nu(self) -> int:
-        return int(self.u.numel())
+        return int(self._sizes["u_lb"])
 
     @property
     def structure_key(self) -> str:

@@ -171,8 +171,9 @@ class ReplanSettings:
         (:func:`~tetherland.planning.verify.verify_nodes`, about 0.1 ms);
         RESIMULATION: the dense re-simulation of :meth:`Planner.plan` (about 5 ms).
     jit : bool
-        Compile the NLP's functions to C first (about 20 s once, then 2-3x faster
-        evaluations; the speed needed for 2 ms re-plans, see ``bench_planner.py``).
+        Evaluate the NLP through its compiled interval functions
+        (:attr:`SolverSettings.jit`; the speed needed for 2 ms re-plans, see
+        ``bench_planner.py``).
     max_refinements : int
         Integrator-step doublings after a failed check (0: report the failure; the
         caller keeps flying the previous plan).
@@ -184,7 +185,7 @@ class ReplanSettings:
     max_iter: int = 30
     warm_mu_init: float = 1e-8
     check: CheckScope = CheckScope.NODES
-    jit: bool = False
+    jit: bool = True
     max_refinements: int = 0
 
     def solver_settings(self) -> SolverSettings:
@@ -194,9 +195,12 @@ class ReplanSettings:
         )  # fmt: skip
 
 
-def trajectory_meta(scenario: Scenario, spec: ManeuverSpec) -> TrajectoryMeta:
-    """The :class:`TrajectoryMeta` of a scenario's maneuver."""
-    geo = LandingGeometry.from_scenario(scenario)
+def trajectory_meta(
+    scenario: Scenario, spec: ManeuverSpec, geometry: LandingGeometry | None = None
+) -> TrajectoryMeta:
+    """The :class:`TrajectoryMeta` of a scenario's maneuver (``geometry``: the scenario's
+    :class:`LandingGeometry` when the caller has it)."""
+    geo = geometry or LandingGeometry.from_scenario(scenario)
     p = spec.params
     return TrajectoryMeta(
         scenario=scenario.name,
@@ -331,8 +335,9 @@ class Planner:
         """
         cfg = scenario.planner
         method = method or cfg.method
-        spec = ManeuverSpec.from_scenario(scenario, maneuver)
-        meta = trajectory_meta(scenario, spec)
+        geometry = LandingGeometry.from_scenario(scenario)
+        spec = ManeuverSpec.from_scenario(scenario, maneuver, geometry)
+        meta = trajectory_meta(scenario, spec, geometry)
         base = PlanResult(
             status=PlanStatus.FAILED, message="", maneuver=spec.maneuver, method=method, spec=spec
         )

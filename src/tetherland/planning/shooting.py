@@ -70,6 +70,13 @@ class HeldInputSimulator:
         ends = self._chain("through", N * sub, 1)(x0, np.repeat(U.T, sub, axis=1), h, c)
         return np.asarray(ends).T.reshape(N, sub, self.nx)
 
+    def advance(
+        self, c: FloatArray, rhs: NumpyRhs, x: FloatArray, u: FloatArray, h: FloatArray
+    ) -> FloatArray:
+        """One RK4 step of length h (n,) [s] from each state x (nx, n) under u (nu, n), with
+        the model's numpy right-hand side ``rhs`` (a subclass may run its own kernel)."""
+        return rk4(rhs, x, u, h)
+
     def restart(
         self, c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
     ) -> FloatArray:
@@ -170,5 +177,12 @@ class HeldInputMotion:
         h_sub = (self.times[k + 1] - self.times[k]) / self.sub
         j = np.clip(np.floor((t - self.times[k]) / h_sub).astype(int), 0, self.sub - 1)
         u = self.U[k].T
-        x = rk4(self.rhs, self.table[k, j].T, u, t - (self.times[k] + j * h_sub))
+        x = self.table[k, j].T
+        dt = t - (self.times[k] + j * h_sub)
+        inside = dt > 0.0  # samples on a substep are table entries: no partial step
+        if np.any(inside):
+            x = x.copy()
+            x[:, inside] = self.simulator.advance(
+                self.coefficients, self.rhs, x[:, inside], u[:, inside], dt[inside]
+            )
         return x, u

@@ -4,13 +4,20 @@
 for every later problem of the same structure (same symbolic statement, transcription and
 solver settings): only numbers change between solves. A solve can be warm-started from
 a previous :class:`OcpSolution` (primal values, and the multipliers for IPOPT).
+
+fatrop evaluates the NLP through its interval functions compiled to C
+(:mod:`.stagewise`, :attr:`SolverSettings.jit`); IPOPT, the fallback, through CasADi's
+own functions of the flat NLP (the plain statement). Both are called on numpy arrays
+(CasADi's buffer interface), without converting the numbers to CasADi matrices.
 """
 
 from __future__ import annotations
 
 import enum
 import time
+import warnings
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Literal
 
 import casadi as ca
@@ -18,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
-from tetherland.planning import jit
+from tetherland.planning import stagewise
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.transcription import MultipleShooting, Transcript
 
@@ -99,8 +106,11 @@ class SolverSettings:
         Constraint violation tolerance of the converged point (None: the solver's
         default, 1e-4) [constraint units].
     jit : bool
-        Compile the NLP's functions to C with the system compiler (:mod:`.jit`) before
-        the first solve: about 20 s once per structure, then 2-3x faster evaluations.
+        fatrop: evaluate the NLP through its interval functions compiled to C
+        (:mod:`.stagewise`; a few seconds once per structure and machine, then loaded
+        from the disk cache; 5-10x faster evaluations than CasADi's virtual machine).
+        Without the C compiler, or with IPOPT, the solver evaluates CasADi's own NLP
+        functions (:attr:`~tetherland.planning.transcription.Transcript.nlp`).
     """
 
     name: SolverName = "fatrop"
@@ -110,7 +120,7 @@ class SolverSettings:
     verbose: bool = False
     warm_mu_init: float | None = None
     constr_viol_tol: float | None = None
-    jit: bool = False
+    jit: bool = True
 
     def __post_init__(self) -> None:
         if self.name not in SOLVERS:
@@ -121,8 +131,6 @@ class SolverSettings:
             value = getattr(self, name)
             if value is not None and not value > 0:
                 raise ValueError(f"{name} must be > 0 (or None), got {value}")
-        if self.jit and not jit.available():
-            raise ValueError(f"jit needs the C compiler '{jit.COMPILER}', which is not installed")
 
     def options(self, transcript: Transcript, warm: bool) -> dict[str, Any]:
         """CasADi ``nlpsol`` options (warm: tuned to start near a solution)."""
@@ -224,9 +232,37 @@ class InitialGuess:
     U: FloatArray
 
 
-def _vector(value: ca.DM) -> FloatArray:
-    """A dense CasADi column as a 1-D numpy array."""
-    return np.array(value.nonzeros(), dtype=float)
+_NLPSOL_DEFAULTS = {"lbx": -np.inf, "ubx": np.inf, "lbg": -np.inf, "ubg": np.inf}
+"""Values of the nlpsol inputs that a call does not set (the others: 0)."""
+
+
+class _BufferedCall:
+    """Calls an ``nlpsol`` on numpy arrays it keeps (CasADi's buffer interface): no
+    conversion of the inputs and outputs to CasADi matrices, which costs about 0.1 us per
+    number and call (a tenth of a warm re-plan)."""
+
+    def __init__(self, solver: ca.Function) -> None:
+        self.buffer, self.trigger = solver.buffer()
+        self.args = {
+            name: np.zeros(solver.nnz_in(i)) for i, name in enumerate(solver.name_in())
+        }
+        self.res = {
+            name: np.zeros(solver.nnz_out(i)) for i, name in enumerate(solver.name_out())
+        }
+        for i, name in enumerate(solver.name_in()):
+            self.buffer.set_arg(i, memoryview(self.args[name]))
+        for i, name in enumerate(solver.name_out()):
+            self.buffer.set_res(i, memoryview(self.res[name]))
+
+    def __call__(self, args: dict[str, ArrayLike]) -> tuple[dict[str, FloatArray], dict[str, Any]]:
+        """Outputs (copies) and statistics of a call with ``args`` (the other inputs at
+        their defaults)."""
+        for name, value in self.args.items():
+            value[:] = args[name] if name in args else _NLPSOL_DEFAULTS.get(name, 0.0)
+        self.trigger()
+        if self.buffer.ret():
+            raise RuntimeError(f"solver returned code {self.buffer.ret()}")
+        return {k: v.copy() for k, v in self.res.items()}, self.buffer.stats()
 
 
 def _classify(solver: str, stats: dict[str, Any]) -> tuple[SolveStatus, str]:
@@ -262,7 +298,9 @@ class OcpSolver:
         self.settings = settings or SolverSettings()
         self._transcripts: dict[str, Transcript] = {}
         self._solvers: dict[tuple[str, bool], ca.Function] = {}
-        self._bounds: dict[tuple[str, bytes], dict[str, ca.DM]] = {}
+        self._bounds: dict[tuple[str, bytes], dict[str, FloatArray]] = {}
+        self._calls: dict[tuple[str, bool], _BufferedCall] = {}
+        self._libraries: dict[str, Path | None] = {}
 
     def transcript(self, problem: OcpProblem) -> Transcript:
         """The (cached) transcript of ``problem``'s structure."""
@@ -271,6 +309,11 @@ class OcpSolver:
             self._transcripts[key] = self.transcription.transcribe(problem)
         return self._transcripts[key]
 
+    @property
+    def compiled(self) -> bool:
+        """Whether this solver evaluates the NLP through the compiled interval functions."""
+        return self.settings.jit and self.settings.name == "fatrop" and stagewise.available()
+
     def _nlpsol(self, transcript: Transcript, warm: bool) -> tuple[ca.Function, float]:
         key = (transcript.structure_key, warm)
         if key in self._solvers:
@@ -278,16 +321,29 @@ class OcpSolver:
         t0 = time.perf_counter()
         opts = self.settings.options(transcript, warm)
         name = f"ocp_{self.settings.name}"
-        if self.settings.jit:
-            solver = jit.compiled(
-                lambda compile_opts: ca.nlpsol(
-                    name, self.settings.name, transcript.nlp, {**opts, **compile_opts}
-                )
-            )
+        library = self._library(transcript) if self.compiled else None
+        if library is not None:
+            del opts["expand"]  # a library holds no expressions
+            solver = ca.nlpsol(name, self.settings.name, str(library), opts)
         else:
             solver = ca.nlpsol(name, self.settings.name, transcript.nlp, opts)
         self._solvers[key] = solver
+        self._calls[key] = _BufferedCall(solver)
         return solver, time.perf_counter() - t0
+
+    def _library(self, transcript: Transcript) -> Path | None:
+        """The compiled NLP of the transcript, or None (with a warning) when it cannot be
+        built: the solver then evaluates CasADi's own functions."""
+        key = transcript.structure_key
+        if key not in self._libraries:
+            try:
+                self._libraries[key] = stagewise.library(transcript)
+            except (OSError, RuntimeError) as err:
+                warnings.warn(
+                    f"compiled NLP functions unavailable ({err}); using CasADi's", stacklevel=3
+                )
+                self._libraries[key] = None
+        return self._libraries[key]
 
     def prepare(self, problem: OcpProblem, warm: bool = False) -> float:
         """Build (or find) the solver for ``problem``'s structure; returns the build time [s]."""
@@ -310,7 +366,7 @@ class OcpSolver:
         N = tr.nodes
         if warm is None:
             warm = isinstance(guess, OcpSolution)
-        solver, build_time = self._nlpsol(tr, warm)
+        build_time = self._nlpsol(tr, warm)[1]
         if guess is None:
             X0 = np.tile(problem.x0, (N + 1, 1))
             U0 = np.zeros((N, problem.nu))
@@ -321,9 +377,8 @@ class OcpSolver:
                     f"guess shapes {X0.shape}, {U0.shape} do not match the transcription "
                     f"({N + 1}, {problem.nx}), ({N}, {problem.nu})"
                 )
-        args: dict[str, ArrayLike | ca.DM] = {
-            "x0": tr.pack(X0, U0), "p": tr.parameters(problem), **self._bound_args(tr, problem)
-        }  # fmt: skip
+        call = self._calls[(tr.structure_key, warm)]
+        args = {"x0": tr.pack(X0, U0), "p": tr.parameters(problem), **self._bound_args(tr, problem)}
         if (
             warm
             and isinstance(guess, OcpSolution)
@@ -333,7 +388,7 @@ class OcpSolver:
             args.update(lam_x0=guess.lam_x, lam_g0=guess.lam_g)
         t0 = time.perf_counter()
         try:
-            res = solver(**args)
+            res, stats = call(args)
         except RuntimeError as err:  # evaluation errors (NaN, ...) inside the solver
             elapsed = time.perf_counter() - t0
             nan_x = np.full_like(X0, np.nan)
@@ -353,9 +408,8 @@ class OcpSolver:
                 lam_g=np.zeros(len(tr.equality)),
             )
         elapsed = time.perf_counter() - t0
-        stats = solver.stats()
         status, raw = _classify(self.settings.name, stats)
-        X, U = tr.unpack(_vector(res["x"]))
+        X, U = tr.unpack(res["x"])
         return OcpSolution(
             status=status,
             return_status=raw,
@@ -363,18 +417,18 @@ class OcpSolver:
             times=tr.times(problem.duration),
             X=X,
             U=U,
-            cost=float(res["f"]),
+            cost=float(res["f"][0]),
             iterations=int(stats.get("iter_count", 0)),
             solve_time=elapsed,
             build_time=build_time,
             structure_key=problem.structure_key,
-            lam_x=_vector(res["lam_x"]),
-            lam_g=_vector(res["lam_g"]),
+            lam_x=res["lam_x"],
+            lam_g=res["lam_g"],
         )
 
-    def _bound_args(self, tr: Transcript, problem: OcpProblem) -> dict[str, ca.DM]:
-        """``lbx``, ``ubx``, ``lbg``, ``ubg`` as CasADi matrices, cached per bound values
-        (re-plans change only the initial state, the duration and the parameters)."""
+    def _bound_args(self, tr: Transcript, problem: OcpProblem) -> dict[str, FloatArray]:
+        """``lbx``, ``ubx``, ``lbg``, ``ubg``, cached per bound values (re-plans change only
+        the initial state, the duration and the parameters)."""
         key = (tr.structure_key, b"".join(
             np.ascontiguousarray(getattr(problem, name)).tobytes()
             for name in ("x_lb", "x_ub", "u_lb", "u_ub", "path_lb", "path_ub")
@@ -383,5 +437,5 @@ class OcpSolver:
             if len(self._bounds) >= 16:
                 self._bounds.clear()
             numbers = tr.numbers(problem)
-            self._bounds[key] = {k: ca.DM(numbers[k]) for k in ("lbx", "ubx", "lbg", "ubg")}
+            self._bounds[key] = {k: numbers[k] for k in ("lbx", "ubx", "lbg", "ubg")}
         return self._bounds[key]

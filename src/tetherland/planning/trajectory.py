@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
+import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -44,8 +45,13 @@ from tetherland.models.planar import (
     parametric_rk4_step,
     planar_flat_inputs,
 )
-from tetherland.planning import codec
-from tetherland.planning.shooting import DENSE_STEP, HeldInputMotion, HeldInputSimulator
+from tetherland.planning import codec, kernels
+from tetherland.planning.shooting import (
+    DENSE_STEP,
+    HeldInputMotion,
+    HeldInputSimulator,
+    NumpyRhs,
+)
 from tetherland.planning.spline import rest_to_rest
 
 FORMAT_VERSION = codec.FORMAT_VERSION
@@ -159,16 +165,50 @@ class TrajectorySamples:
         )  # fmt: skip
 
 
+@functools.cache
+def _planar_step() -> ca.Function:
+    """The CasADi RK4 step of (6.20) (built once per process)."""
+    return parametric_rk4_step()
+
+
 class PlanarSimulator(HeldInputSimulator):
     """Integrates (6.20) with f'' held on each interval, in fixed RK4 substeps.
 
-    ``run``/``restart`` take the model constants ``PlanarParams.coefficients``. The
-    CasADi chains are compiled once per length and reused (keep one simulator for
-    repeated plans, as :class:`~tetherland.planning.Planner` does).
+    ``run``/``restart``/``advance`` take the model constants ``PlanarParams.coefficients``
+    and run the compiled kernels :func:`~tetherland.planning.kernels.held_input` and
+    :func:`~tetherland.planning.kernels.rk4_rows`; the CasADi chains of the base class on
+    the same RK4 step, and the model's numpy right-hand side, are their references.
     """
 
     def __init__(self) -> None:
-        super().__init__(parametric_rk4_step())
+        super().__init__(_planar_step())
+
+    def run(
+        self, c: FloatArray, times: FloatArray, x0: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        return self._held(c, times, np.asarray(x0)[None, :], U, sub, through=True)
+
+    def restart(
+        self, c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int
+    ) -> FloatArray:
+        return self._held(c, times, X, U, sub, through=False)
+
+    @staticmethod
+    def _held(
+        c: FloatArray, times: FloatArray, X: FloatArray, U: FloatArray, sub: int, through: bool
+    ) -> FloatArray:
+        def arr(a: ArrayLike) -> FloatArray:
+            return np.ascontiguousarray(a, dtype=float)
+
+        return kernels.held_input(arr(X), arr(U), arr(np.diff(times)), sub, arr(c), through)
+
+    def advance(
+        self, c: FloatArray, rhs: NumpyRhs, x: FloatArray, u: FloatArray, h: FloatArray
+    ) -> FloatArray:
+        return kernels.rk4_rows(
+            np.ascontiguousarray(x.T, dtype=float), np.ascontiguousarray(u.T, dtype=float),
+            np.ascontiguousarray(h, dtype=float), np.ascontiguousarray(c, dtype=float),
+        ).T  # fmt: skip
 
 
 class Trajectory(ABC):
@@ -212,7 +252,6 @@ class Trajectory(ABC):
             x[outside, 2:4] = 0.0
             x[outside, 8:12] = 0.0
             u[outside] = 0.0
-        d = self.model.derivatives(x.T)
         return TrajectorySamples(
             t=t,
             phi=phi,
@@ -222,8 +261,25 @@ class Trajectory(ABC):
             thrust_rates=x[:, 8:12],
             thrust_accels=u,
             f_R=x[:, 4:8].sum(axis=1),
-            tension=np.asarray(d["tension"]),
+            tension=np.asarray(self.model.tension(x.T)),
         )
+
+    def states_at(self, times: ArrayLike) -> FloatArray:
+        """Rotor-form extended states (n, 12) at ``times`` [s], held outside [0, T] (rates
+        zero): the states of :meth:`sample` without the output's higher derivatives (what
+        the checks need)."""
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        x = self._states(np.clip(t, 0.0, self.duration))
+        outside = (t < 0.0) | (t > self.duration)
+        if np.any(outside):
+            x[outside, 2:4] = 0.0
+            x[outside, 8:12] = 0.0
+        return x
+
+    def _states(self, t: FloatArray) -> FloatArray:
+        """States (n, 12) for times in [0, T] (a kind may do this cheaper than
+        :meth:`_evaluate`)."""
+        return self._evaluate(t)[2]
 
     def output(self, t: float) -> OutputDerivatives:
         """y^bd(t) = [phi, 0, theta_A, psi*] with derivatives (4th order for phi, delta)."""
@@ -344,6 +400,9 @@ class ShootingTrajectory(Trajectory):
         phi = np.stack((x[0], x[2], d["phi_ddot"], d["phi_dddot"], d["phi_ddddot"]), axis=1)
         theta = np.stack((x[1], x[3], d["theta_ddot"], d["theta_dddot"], d["theta_ddddot"]), axis=1)
         return phi, theta, x.T.copy(), u.T.copy()
+
+    def _states(self, t: FloatArray) -> FloatArray:
+        return self._motion.states(t)[0].T.copy()
 
     def _rows(self) -> FloatArray:
         return self.times

@@ -62,13 +62,7 @@ class MultipleShooting:
         fn = problem.functions()
         p, T = problem.p, problem.T
         x_init = ca.SX.sym("x_init", nx)
-        h = T / (N * self.steps)
-        x_s, u_s = ca.SX.sym("xs", nx), ca.SX.sym("us", nu)
-        xf = x_s
-        for _ in range(self.steps):
-            xf = integrators.step(self.integrator, lambda z, v: fn["ode"](z, v, p), xf, u_s, h)
-        F = ca.Function("F", [x_s, u_s, p, T], [xf])
-
+        stage, terminal = self._stage_functions(problem, fn)
         X = [ca.SX.sym(f"x_{k}", nx) for k in range(N + 1)]
         U = [ca.SX.sym(f"u_{k}", nu) for k in range(N)]
         w, g, equality, layout = [], [], [], []
@@ -77,7 +71,8 @@ class MultipleShooting:
         n_path = problem.path.numel()
         for k in range(N):
             w += [X[k], U[k]]
-            g.append(X[k + 1] - F(X[k], U[k], p, T))
+            x_end, stage_cost, path = stage(X[k], U[k], k * dt, p, T)
+            g.append(X[k + 1] - x_end)
             equality += [True] * nx
             layout.append(("gap", nx))
             if k == 0:
@@ -85,18 +80,20 @@ class MultipleShooting:
                 equality += [True] * nx
                 layout.append(("init", nx))
             elif n_path:
-                g.append(fn["path"](X[k], U[k], k * dt, p, T, dt))
+                g.append(path)
                 equality += [False] * n_path
                 layout.append(("path", n_path))
-            cost += fn["stage_cost"](X[k], U[k], k * dt, p, T, dt) * dt
+            cost += stage_cost
         w.append(X[N])
+        terminal_cost, terminal_g = terminal(X[N], p)
         n_term = problem.terminal.numel()
         if n_term:
-            g.append(fn["terminal"](X[N], p))
+            g.append(terminal_g)
             equality += [True] * n_term
             layout.append(("terminal", n_term))
-        cost += fn["terminal_cost"](X[N], p)
+        cost += terminal_cost
         nlp = {"x": ca.vertcat(*w), "f": cost, "g": ca.vertcat(*g), "p": ca.vertcat(p, T, x_init)}
+        x_s, u_s = ca.SX.sym("xs", nx), ca.SX.sym("us", nu)
         return Transcript(
             method=self,
             structure_key=problem.structure_key,
@@ -105,8 +102,37 @@ class MultipleShooting:
             layout=tuple(layout),
             nx=nx,
             nu=nu,
-            interval_map=F,
+            interval_map=ca.Function("F", [x_s, u_s, p, T], [stage(x_s, u_s, 0, p, T)[0]]),
+            stage=stage,
+            terminal=terminal,
         )
+
+    def _stage_functions(
+        self, problem: OcpProblem, fn: dict[str, ca.Function]
+    ) -> tuple[ca.Function, ca.Function]:
+        """``stage(x, u, t, p, T) -> (F(x, u), L(x, u, t) T/N, g(x, u, t))`` of one interval
+        (its expressions share their common subexpressions: the integrator's first stage
+        is the model at the node, as in the cost and the path constraints) and
+        ``terminal(x, p) -> (E(x), h(x))``."""
+        N, nx, nu = self.nodes, problem.nx, problem.nu
+        p, T = problem.p, problem.T
+        x, u, t = ca.SX.sym("x", nx), ca.SX.sym("u", nu), ca.SX.sym("t")
+        h = T / (N * self.steps)
+        x_end = x
+        for _ in range(self.steps):
+            x_end = integrators.step(self.integrator, lambda z, v: fn["ode"](z, v, p), x_end, u, h)
+        dt = T / N
+        outputs = ca.cse(
+            [x_end, fn["stage_cost"](x, u, t, p, T, dt) * dt, fn["path"](x, u, t, p, T, dt)]
+        )
+        stage = ca.Function(
+            "stage", [x, u, t, p, T], outputs, ["x", "u", "t", "p", "T"], ["x_end", "cost", "path"]
+        )
+        terminal = ca.Function(
+            "terminal", [x, p], ca.cse([fn["terminal_cost"](x, p), fn["terminal"](x, p)]),
+            ["x", "p"], ["cost", "h"],
+        )  # fmt: skip
+        return stage, terminal
 
 
 @dataclass(frozen=True)
@@ -127,6 +153,11 @@ class Transcript:
     nx, nu : int
     interval_map : casadi.Function
         F(x, u, p, T): the state at the end of one interval.
+    stage : casadi.Function
+        ``(x, u, t, p, T) -> (x_end, cost, path)``: one interval's end state F(x, u), its
+        stage cost L T/N and its path constraints g (the NLP is made of these).
+    terminal : casadi.Function
+        ``(x, p) -> (cost, h)``: the terminal cost E and constraints h.
     """
 
     method: MultipleShooting
@@ -137,6 +168,8 @@ class Transcript:
     nx: int
     nu: int
     interval_map: ca.Function = field(repr=False)
+    stage: ca.Function = field(repr=False)
+    terminal: ca.Function = field(repr=False)
     _path_index: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property

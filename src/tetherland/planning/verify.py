@@ -152,12 +152,13 @@ def verify(
     """Sample ``trajectory`` every :data:`CHECK_STEP` (and at its nodes) and check it."""
     tol = tol or Tolerances()
     times = check_times(trajectory.duration, getattr(trajectory, "times", None))
-    s = trajectory.sample(times)
-    end = trajectory.sample([trajectory.duration])
-    x_end = np.array([end.phi[0, 0], end.theta_A[0, 0], end.phi[0, 1], end.theta_A[0, 1]])
-    thrusts = spec.model.rotor_thrusts(s.states().T, s.tension).T  # with the offset's b f_L
+    x = trajectory.states_at(times)
+    x_end = trajectory.states_at([trajectory.duration])[0]
+    model = spec.model
+    tension = np.asarray(model.tension(x.T))
+    thrusts = model.rotor_thrusts(x.T, tension).T  # with the offset's b f_L
     return _check(
-        spec, tol, s.t, s.phi[:, 0], s.tension, s.t, thrusts, _final_error(spec, x_end),
+        spec, tol, times, x[:, 0], tension, times, thrusts, _final_error(spec, x_end),
         CheckScope.RESIMULATION,
     )  # fmt: skip
 
@@ -204,7 +205,7 @@ def verify_nodes(
         if not gap <= tol.gap
         else None
     )
-    tension = np.asarray(spec.model.derivatives(X.T)["tension"])
+    tension = np.asarray(spec.model.tension(X.T))
     share = spec.model.rotor_thrusts(X.T, tension).T - X[:, 4:8]  # the offset's G [0, b f_L]
     f0, df0 = X[:-1, 4:8] + share[:-1], X[:-1, 8:12]
     arcs = np.stack((f0, f0 + 0.5 * h[:, None] * df0, X[1:, 4:8] + share[1:]), axis=1)

@@ -2,6 +2,8 @@
 
 * :mod:`.mixer`: allocation (6.19) with priority saturation and speed commands;
 * :mod:`.free_flight`: geometric position + SO(3) attitude control (Lee et al. 2010);
+* :mod:`.tracker`: the contact-free tracker (the free-flight law with flatness
+  feed-forward, a hover-only integral and motor-lag compensation);
 * :mod:`.hierarchical`: the tethered law Gamma_HC^b (docs/theory.md section 7);
 * :mod:`.dfl`: the tethered law Gamma_DFL^b, with its model (:mod:`.dfl_model`, CasADi),
   the kernel generated from it (:mod:`.dfl_terms`) and the generator (:mod:`.dfl_codegen`);

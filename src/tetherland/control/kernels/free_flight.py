@@ -141,24 +141,20 @@ def free_flight_reference(
 
 
 @njit(cache=True)
-def free_flight_into(
+def desired_force(
     p_W: FloatArray,
     v_W: FloatArray,
-    q_WB: FloatArray,
-    omega_B: FloatArray,
     ref: FloatArray,
-    yaw: float,
     dt: float,
     integral: FloatArray,
     par: FloatArray,
-    mix: FloatArray,
-    out: FloatArray,
-) -> None:
-    """Compiled :func:`free_flight_reference` (``integral`` in place, result in ``out``)."""
+    e_x: FloatArray,
+    F: FloatArray,
+) -> bool:
+    """Compiled F_d of :func:`free_flight_reference` into ``F`` [N] (the position error
+    into ``e_x`` [m], ``integral`` updated in place); True when a limit acted."""
     m, g, k_x, k_v, k_i = par[PAR_MASS], par[PAR_G], par[PAR_K_X], par[PAR_K_V], par[PAR_K_I]
     k = ref.shape[0]
-    e_x = out[OUT_E_X]
-    F = np.empty(3)
     for i in range(3):
         e = p_W[i] - ref[0, i]
         e_x[i] = e
@@ -179,22 +175,51 @@ def free_flight_into(
         bound = par[PAR_INTEGRAL_BOUND]
         for i in range(3):
             integral[i] = min(max(integral[i] + e_x[i] * dt, -bound), bound)
-    out[OUT_LIMITED] = 1.0 if limited else 0.0
-    # R_d from (z_B,d, psi): y = z x x_C / ||.||, x = y x z (rotation_from_z_and_yaw)
+    return limited
+
+
+@njit(cache=True)
+def desired_rotation(F: FloatArray, yaw: float, R_d: FloatArray) -> bool:
+    """Compiled :func:`~tetherland.rotations.rotation_from_z_and_yaw` of z_B,d = F/||F||
+    and psi [rad] into ``R_d``; False when the heading is undefined."""
+    # y = z x x_C / ||.||, x = y x z
     n = math.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2])
     zx, zy, zz = F[0] / n, F[1] / n, F[2] / n
     cx, cy = math.cos(yaw), math.sin(yaw)
     yx, yy, yz = -zz * cy, zz * cx, zx * cy - zy * cx
     n = math.sqrt(yx * yx + yy * yy + yz * yz)
     if n < YAW_SINGULAR_NORM:
-        out[OUT_SINGULAR] = 1.0
-        return
-    out[OUT_SINGULAR] = 0.0
+        return False
     yx, yy, yz = yx / n, yy / n, yz / n
-    R_d = np.empty((3, 3))
     R_d[0, 0], R_d[1, 0], R_d[2, 0] = yy * zz - yz * zy, yz * zx - yx * zz, yx * zy - yy * zx
     R_d[0, 1], R_d[1, 1], R_d[2, 1] = yx, yy, yz
     R_d[0, 2], R_d[1, 2], R_d[2, 2] = zx, zy, zz
+    return True
+
+
+@njit(cache=True)
+def free_flight_into(
+    p_W: FloatArray,
+    v_W: FloatArray,
+    q_WB: FloatArray,
+    omega_B: FloatArray,
+    ref: FloatArray,
+    yaw: float,
+    dt: float,
+    integral: FloatArray,
+    par: FloatArray,
+    mix: FloatArray,
+    out: FloatArray,
+) -> None:
+    """Compiled :func:`free_flight_reference` (``integral`` in place, result in ``out``)."""
+    F = np.empty(3)
+    limited = desired_force(p_W, v_W, ref, dt, integral, par, out[OUT_E_X], F)
+    out[OUT_LIMITED] = 1.0 if limited else 0.0
+    R_d = np.empty((3, 3))
+    if not desired_rotation(F, yaw, R_d):
+        out[OUT_SINGULAR] = 1.0
+        return
+    out[OUT_SINGULAR] = 0.0
     R = so3.quat_rotmat3(q_WB)
     thrust = F[0] * R[0, 2] + F[1] * R[1, 2] + F[2] * R[2, 2]
     t0, t1, t2 = so3.attitude_torque(R, omega_B, R_d, omega_B, omega_B, False, par[PAR_ATTITUDE])
