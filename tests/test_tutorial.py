@@ -50,8 +50,8 @@ def blocks(text: str) -> list[Block]:
 
 
 def reduced(script: str, runs: int) -> str:
-    """The script with every ``--runs N`` replaced by ``--runs runs``."""
-    return re.sub(r"--runs\s+\d+", f"--runs {runs}", script)
+    """The script with every ``--runs N`` and ``--verify N`` given ``runs`` instead."""
+    return re.sub(r"--(runs|verify)\s+\d+", rf"--\g<1> {runs}", script)
 
 
 def tetherland_commands(script: str) -> list[str]:
@@ -125,8 +125,15 @@ def test_the_tutorial_runs_as_written(tmp_path: Path):
     assert f"{ratio:.2f}" == "2.33" and "2.33" in said
     assert "friction_motors_off" in said
 
-    # Step 3: my_design.toml is my_robot.toml with the first design applied.
-    best = json.loads((tmp_path / "design.json").read_text())["designs"][0]["overrides"]
+    # Step 3: the two best designs flown RUNS times each, ranked by the interval's lower
+    # bound (then by margins); my_design.toml is my_robot.toml with the first applied.
+    designs = json.loads((tmp_path / "design.json").read_text())["designs"]
+    flown = [d["verified"] for d in designs if d.get("verified")]
+    assert len(flown) == min(2, len(designs)) and all(v["runs"] == RUNS for v in flown)
+    assert designs[0].get("verified") and designs[0]["verified"]["ci_low"] == max(
+        v["ci_low"] for v in flown
+    )
+    best = designs[0]["overrides"]
     design = load_scenario(str(tmp_path / "my_design.toml"))
     length = float(next(o for o in best if o.startswith("tether.length=")).split("=")[1])
     assert math.isclose(design.tether.length, length)
