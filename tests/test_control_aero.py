@@ -63,6 +63,39 @@ def test_compensation_uses_the_factor_one_motor_lag_ahead():
     np.testing.assert_allclose(cmd0.rotor_speeds, w / np.sqrt(k_now), rtol=1e-12)
 
 
+def test_compensation_passes_the_command_through_beyond_the_rotors_reach():
+    """Beyond FAR_RATIO rotor radii from the believed slope the command is the inner
+    controller's own (every factor 1, nothing evaluated); the cut-off costs less than the
+    Cheeseman-Bennett factor there, 1 / (1 - (R / 4z)^2) - 1 < 2e-4 for z >= 20 R - reach."""
+    from tetherland.estimation.ground_effect import FAR_RATIO, PATCH_HALF_THICKNESS
+    from tetherland.models.aero import rotor_disks
+
+    sc = load_scenario("slope50")
+    geo = LandingGeometry.from_scenario(sc)
+    z_S = geo.surface.z_S
+    R = rotation_from_z_and_yaw(z_S, 0.0)
+    centres, radius = rotor_disks(sc.vehicle)
+    reach = float(np.max(np.linalg.norm(centres, axis=1))) + radius
+    # the believed patch is a slab: its distance is taken conservatively from its far face
+    reach += 2.0 * PATCH_HALF_THICKNESS
+    w = np.full(4, 500.0)
+    inner = Recorder(w)
+    ctrl = GroundEffectCompensation(inner, sc)
+    belief = BelievedGroundEffect(sc)
+    far = geo.p_L + (FAR_RATIO * radius + reach + 0.05) * z_S
+    assert belief.beyond_reach(far)
+    cmd = ctrl.update(0.0, estimate_at(far, R), Reference(t=0.0))
+    np.testing.assert_array_equal(cmd.rotor_speeds, w)
+    # just inside the reach the model is evaluated: factors above 1 by less than the bound
+    near = geo.p_L + (FAR_RATIO * radius + reach - 0.05) * z_S
+    assert not belief.beyond_reach(near)
+    k_near = belief.factors_at(near, rotmat_to_quat(R)).copy()
+    z_min = FAR_RATIO * radius - 0.05  # the nearest rotor is at least this far [m]
+    bound = 1.0 / (1.0 - (radius / (4.0 * z_min)) ** 2) - 1.0
+    assert bound < 2e-4
+    assert np.all(k_near > 1.0) and np.all(k_near - 1.0 <= bound)
+
+
 def test_drag_acceleration_is_the_drag_in_the_rotor_plane_scaled_with_rotor_speed():
     d = np.array([0.45, 0.3])
     m = 1.2

@@ -54,6 +54,8 @@ class GroundEffectCompensation:
         b = estimate.body
         tau = self.lead
         p_W = np.asarray(b.p_W, dtype=float) + tau * np.asarray(b.v_W, dtype=float)
+        if self.ground_effect.beyond_reach(p_W):
+            return cmd  # every believed factor is 1: the command as it is
         q_WB = quat_multiply(b.q_WB, rotvec_to_quat(tau * np.asarray(b.omega_B, dtype=float)))
         k = self.ground_effect.factors_at(p_W, q_WB / np.linalg.norm(q_WB))
         return replace(cmd, rotor_speeds=w / np.sqrt(k))

@@ -90,7 +90,7 @@ class BelievedGroundEffect:
         rotors' reach) the factors are taken as 1 (they differ from it by less than
         2e-4) and the model is not evaluated.
         """
-        if self._distance(p_W) > self._far:
+        if self.beyond_reach(p_W):
             self._factors[:] = 1.0
             return float(np.sum(thrusts))
         q = self._qpos
@@ -99,6 +99,12 @@ class BelievedGroundEffect:
         aero_into(q, self._zero3, thrusts, *self._args, self._factors, self._acting,
                   self._wrench)  # fmt: skip
         return float(self._acting.sum())
+
+    def beyond_reach(self, p_W: FloatArray) -> bool:
+        """True when the pose's centre of mass ``p_W`` [m] is farther than
+        :data:`FAR_RATIO` rotor radii (plus the rotors' reach) from the believed surface,
+        where every believed factor is taken as exactly 1."""
+        return self._distance(p_W) > self._far
 
     def _distance(self, p_W: FloatArray) -> float:
         """A lower bound of the distance from ``p_W`` to the believed surface patch: to its
