@@ -16,7 +16,12 @@ from tetherland.design.map import (
     steepest_slope,
 )
 from tetherland.design.margins import plan_rotor_margin, plan_thrust_range, rotor_margin
-from tetherland.design.robust import BeliefBounds, robust_pass_clearance, robust_rotor_margin
+from tetherland.design.robust import (
+    BeliefBounds,
+    gust_deviation,
+    robust_pass_clearance,
+    robust_rotor_margin,
+)
 from tetherland.design.search import (
     Design,
     DesignLimit,
@@ -48,6 +53,7 @@ __all__ = [
     "feasibility_map",
     "hooking_pass",
     "hooking_pass_for",
+    "gust_deviation",
     "is_robust",
     "landed_slope_limit",
     "pass_clearance",
