@@ -123,9 +123,9 @@ def gust_deviation(scenario: Scenario, bounds: BeliefBounds, dt: float = 1e-3) -
         dx/dt = (x_2, x_3, -rho (k_i x_1 + k_x x_2 + k_v x_3) + f(t) / m)
 
     with rho = (m_b / m)(true-to-commanded thrust), to first order in the errors within
-    :meth:`BeliefBounds.thrust_scale` (both ends are flown). The largest |e| over the gust and its decay is
-    returned (the linear loop discretised exactly with a zero-order hold of f over ``dt``
-    [s]); the attitude loop is taken as instantaneous.
+    :meth:`BeliefBounds.thrust_scale` (both ends are flown). The largest |e| over the
+    gust and its decay is returned (the linear loop discretised exactly with a zero-order
+    hold of f over ``dt`` [s]); the attitude loop is taken as instantaneous.
     """
     force = bounds.wind_gust_force
     if force <= 0.0:
@@ -135,7 +135,7 @@ def gust_deviation(scenario: Scenario, bounds: BeliefBounds, dt: float = 1e-3) -
     k_x, k_v, k_i = wn * wn, 2.0 * zeta * wn, gains.position_integral
     mass, duration = scenario.vehicle.mass, bounds.wind_gust_duration
     horizon = duration + 12.0 / (zeta * wn)  # the gust and the decay of its error
-    steps = int(math.ceil(horizon / dt))
+    steps = math.ceil(horizon / dt)
     t_mid = (np.arange(steps) + 0.5) * dt
     wave = 0.5 * force * (1.0 - np.cos(2.0 * np.pi * t_mid / duration))
     f = np.where(t_mid < duration, wave, 0.0)
