@@ -122,7 +122,7 @@ def design(
     sc = resolve_scenario(scenario, overrides)
     target = OutputDir(out, overwrite=overwrite) if out is not None else None
     planner = Planner()
-    result = search_designs(sc, slope_deg, planner=planner)
+    result = search_designs(sc, slope_deg, planner=planner, fixes=True)
     if verify and result.feasible:
         executor = make_executor("local", workers or os.cpu_count() or 1)
         try:

@@ -16,7 +16,12 @@ from tetherland.design.map import (
     steepest_slope,
 )
 from tetherland.design.margins import plan_rotor_margin, plan_thrust_range, rotor_margin
-from tetherland.design.robust import BeliefBounds, robust_pass_clearance, robust_rotor_margin
+from tetherland.design.robust import (
+    BeliefBounds,
+    gust_deviation,
+    robust_pass_clearance,
+    robust_rotor_margin,
+)
 from tetherland.design.search import (
     Design,
     DesignLimit,
@@ -46,6 +51,7 @@ __all__ = [
     "Verification",
     "design_base",
     "feasibility_map",
+    "gust_deviation",
     "hooking_pass",
     "hooking_pass_for",
     "is_robust",

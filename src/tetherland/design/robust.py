@@ -11,6 +11,10 @@ surface is the true one. This module bounds what is left of the design's margins
   their bounds (:func:`~tetherland.campaign.perturb.apply_perturbation`, exactly as a
   campaign builds its belief), with the true surface tilted, moved and the pass shifted
   along the surface at the corners of the other bounds (:func:`true_surfaces`).
+  The vehicle does not fly the pass exactly: the campaign's wind gusts push it off, so
+  the clearance is also shifted horizontally towards the surface by
+  :func:`gust_deviation`, the largest deviation of the free-flight position loop under
+  the largest gust (with the believed mass and thrust coefficient at their corners).
 * :func:`robust_rotor_margin`: the rotor margin when the commanded thrusts scale with the
   believed mass and thrust coefficient (:meth:`BeliefBounds.thrust_scale`).
 
@@ -24,6 +28,9 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import expm
 
 from tetherland.analysis.clearance import level_vehicle_distance
 from tetherland.campaign.perturb import Perturbation, apply_perturbation
@@ -49,6 +56,10 @@ class BeliefBounds:
         Error of the believed surface position along its normal [m].
     pipe_radius_error : float
         Error of the believed pipe radius [m] (a pipe only).
+    wind_gust_force : float
+        Largest peak horizontal gust force on the vehicle [N] (0: no gusts).
+    wind_gust_duration : float
+        Duration of one raised-cosine gust [s].
     """
 
     mass_rel: float = 0.0
@@ -58,6 +69,8 @@ class BeliefBounds:
     anchor_error: float = 0.0
     surface_offset_error: float = 0.0
     pipe_radius_error: float = 0.0
+    wind_gust_force: float = 0.0
+    wind_gust_duration: float = 0.5
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> BeliefBounds:
@@ -68,6 +81,8 @@ class BeliefBounds:
             slope_error_deg=c.slope_error_deg, azimuth_error_deg=c.azimuth_error_deg,
             anchor_error=c.anchor_error, surface_offset_error=c.surface_offset_error,
             pipe_radius_error=c.pipe_radius_error,
+            wind_gust_force=c.wind_gust_force if c.wind_gust_rate > 0 else 0.0,
+            wind_gust_duration=c.wind_gust_duration,
         )  # fmt: skip
 
     def thrust_scale(self) -> tuple[float, float]:
@@ -91,6 +106,51 @@ def robust_rotor_margin(f_low: float, f_high: float, f_min: float, f_max: float,
     """
     s_lo, s_hi = bounds.thrust_scale()
     return float(min(s_lo * f_low - f_min, f_max - s_hi * f_high))
+
+
+def gust_deviation(scenario: Scenario, bounds: BeliefBounds, dt: float = 1e-3) -> float:
+    """Largest deviation [m] of the free-flight position loop from its reference under the
+    largest wind gust of ``bounds``.
+
+    The loop of :class:`tetherland.control.position.PositionController` (the scenario's
+    ``controller.free_flight`` gains: k_x = w_n^2, k_v = 2 zeta w_n, k_i) commands the
+    force m_b (-k_x e - k_v de/dt - k_i int e) with the believed mass m_b; the rotors
+    produce it scaled by the thrust-coefficient error, and the true mass m accelerates
+    under it and under the gust force f(t), the raised cosine of peak ``wind_gust_force``
+    over ``wind_gust_duration`` (as a campaign draws it,
+    :class:`tetherland.campaign.perturb.Gust`). Along the gust, with x = (int e, e, de/dt),
+
+        dx/dt = (x_2, x_3, -rho (k_i x_1 + k_x x_2 + k_v x_3) + f(t) / m)
+
+    with rho = (m_b / m)(true-to-commanded thrust), to first order in the errors within
+    :meth:`BeliefBounds.thrust_scale` (both ends are flown). The largest |e| over the
+    gust and its decay is returned (the linear loop discretised exactly with a zero-order
+    hold of f over ``dt`` [s]); the attitude loop is taken as instantaneous.
+    """
+    force = bounds.wind_gust_force
+    if force <= 0.0:
+        return 0.0
+    gains = scenario.controller.free_flight
+    wn, zeta = gains.position_frequency, gains.position_damping
+    k_x, k_v, k_i = wn * wn, 2.0 * zeta * wn, gains.position_integral
+    mass, duration = scenario.vehicle.mass, bounds.wind_gust_duration
+    horizon = duration + 12.0 / (zeta * wn)  # the gust and the decay of its error
+    steps = math.ceil(horizon / dt)
+    t_mid = (np.arange(steps) + 0.5) * dt
+    wave = 0.5 * force * (1.0 - np.cos(2.0 * np.pi * t_mid / duration))
+    f = np.where(t_mid < duration, wave, 0.0)
+    worst = 0.0
+    for rho in sorted(set(bounds.thrust_scale())):
+        A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-rho * k_i, -rho * k_x, -rho * k_v]])
+        M = np.zeros((4, 4))
+        M[:3, :3], M[2, 3] = A * dt, dt / mass
+        E = expm(M)
+        Phi, gamma = E[:3, :3], E[:3, 3]
+        x = np.zeros(3)
+        for fk in f:
+            x = Phi @ x + gamma * fk
+            worst = max(worst, abs(float(x[1])))
+    return worst
 
 
 def _slope_azimuth(surface: Surface) -> tuple[float, float]:
@@ -157,9 +217,11 @@ def robust_pass_clearance(
     (``pass_of``) is shifted by -/+ ``anchor_error`` along x_S and y_S (the believed anchor's
     lateral error) and its points' distance from every corner of :func:`true_surfaces`
     is taken with the vehicle's collision shape
-    (:func:`~tetherland.analysis.clearance.level_vehicle_distance`).
+    (:func:`~tetherland.analysis.clearance.level_vehicle_distance`), with the vehicle also
+    pushed horizontally towards the surface by the gust deviation (:func:`gust_deviation`).
     """
     clearance = math.inf
+    gust = gust_deviation(scenario, bounds)
     for belief in belief_corners(scenario, bounds):
         geo, hooking = pass_of(belief)
         count = PIPE_SAMPLES if geo.surface.kind == "pipe" else 2
@@ -168,8 +230,25 @@ def robust_pass_clearance(
         signs = ((-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)) if e > 0 else ((0.0, 0.0),)
         shifts = [e * (sx * geo.surface.x_S + sy * geo.surface.y_S) for sx, sy in signs]
         for truth in true_surfaces(geo.surface, bounds):
+            pushes = [gust * h for h in _towards(truth)] if gust > 0 else [np.zeros(3)]
             for shift in shifts:
-                for p in points:
-                    d = level_vehicle_distance(scenario, truth, p + shift, hooking.yaw)
-                    clearance = min(clearance, d)
+                for push in pushes:
+                    for p in points:
+                        q = p + shift + push
+                        clearance = min(
+                            clearance, level_vehicle_distance(scenario, truth, q, hooking.yaw)
+                        )
     return float(clearance)
+
+
+def _towards(surface: Surface) -> list[np.ndarray]:
+    """Horizontal unit directions in which a gust pushes the vehicle closest to ``surface``:
+    against a plane's normal (the distance from a plane is linear in the push, so that
+    direction is the worst), else every 45 deg."""
+    z = surface.z_S
+    h = np.array([-z[0], -z[1], 0.0])
+    if surface.kind == "plane":
+        n = float(np.linalg.norm(h))
+        return [h / n] if n > 1e-9 else [np.zeros(3)]
+    angles = np.radians(np.arange(0.0, 360.0, 45.0))
+    return [np.array([math.cos(a), math.sin(a), 0.0]) for a in angles]

@@ -46,6 +46,7 @@ from tetherland.analysis import (
     tethered_slope_limit,
 )
 from tetherland.config import Scenario, with_overrides
+from tetherland.design.fixes import Fix, fast_space, find_fixes, fixes_message
 from tetherland.design.margins import plan_thrust_range, rotor_margin
 from tetherland.design.robust import BeliefBounds, robust_pass_clearance, robust_rotor_margin
 from tetherland.design.space import DesignPoint, DesignSpace
@@ -164,6 +165,10 @@ class DesignResult:
         Candidates whose landing and takeoff were planned.
     wall_time_s : float
         Wall time of the search [s].
+    fixes : tuple of Fix
+        When infeasible and asked for (``search_designs(..., fixes=True)``): vehicle values
+        with which a design exists (:mod:`tetherland.design.fixes`), also named in
+        ``reason``.
     """
 
     scenario: str
@@ -176,6 +181,7 @@ class DesignResult:
     candidates: int
     planned: int
     wall_time_s: float
+    fixes: tuple[Fix, ...] = ()
 
     @property
     def feasible(self) -> bool:
@@ -209,6 +215,7 @@ class DesignResult:
             "candidates": self.candidates,
             "planned": self.planned,
             "wall_time_s": self.wall_time_s,
+            "fixes": [f.to_dict() for f in self.fixes],
         }
 
 
@@ -263,6 +270,7 @@ def search_designs(
     slope_deg: float | None = None,
     space: DesignSpace | None = None,
     planner: Planner | None = None,
+    fixes: bool = False,
 ) -> DesignResult:
     """Designs of ``scenario``'s vehicle that can land on and take off from ``slope_deg``.
 
@@ -276,12 +284,39 @@ def search_designs(
         The grid searched (default :class:`DesignSpace`).
     planner : Planner, optional
         Reused for its compiled solvers.
+    fixes : bool
+        When no design exists, also search the vehicle values with which one does
+        (:func:`~tetherland.design.fixes.find_fixes`: ``vehicle.f_max``, ``vehicle.mass``,
+        ``vehicle.f_min``, else the slope), and name them in ``reason`` (slower: a search
+        per value tried).
 
     Raises
     ------
     ConfigError
         On bad input (see :func:`design_base`).
     """
+    t0 = time.perf_counter()
+    result = _search(scenario, slope_deg, space, planner)
+    if not fixes or result.feasible:
+        return result
+    space = space or DesignSpace()
+    planner = planner or Planner()
+    base = design_base(scenario, slope_deg)
+    quick = fast_space(space)
+    found = find_fixes(base, lambda sc: _search(sc, None, quick, planner).feasible)
+    return replace(
+        result, fixes=found, reason=f"{result.reason}; {fixes_message(found)}",
+        wall_time_s=time.perf_counter() - t0,
+    )  # fmt: skip
+
+
+def _search(
+    scenario: Scenario,
+    slope_deg: float | None,
+    space: DesignSpace | None,
+    planner: Planner | None,
+) -> DesignResult:
+    """:func:`search_designs` without the fixes."""
     t0 = time.perf_counter()
     space = space or DesignSpace()
     planner = planner or Planner()
