@@ -11,6 +11,7 @@ from tetherland.config.base import Section, Vec3
 from tetherland.config.control import ControllerConfig, FreeFlightGains, TetheredGains
 from tetherland.config.estimation import EstimatorConfig
 from tetherland.config.faults import FaultDetectionConfig, FaultKind, FaultsConfig
+from tetherland.config.mechanism import MechanismConfig
 from tetherland.config.loader import (
     ScenarioInfo,
     apply_overrides,
@@ -58,6 +59,7 @@ __all__ = [
     "ControllerConfig",
     "EstimatorConfig",
     "FaultDetectionConfig",
+    "MechanismConfig",
     "FaultKind",
     "FaultsConfig",
     "FlightConfig",

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
-from tetherland.models.hook import hook_offset
+from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
@@ -78,14 +78,28 @@ class HookingPass:
 def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) -> HookingPass:
     """The hooking pass of ``scenario`` (its tether, vehicle and mission settings)."""
     t, cfg = scenario.tether, scenario.mission
+    geo = geometry or LandingGeometry.from_scenario(scenario)
     return hooking_pass_for(
-        geometry or LandingGeometry.from_scenario(scenario),
+        geo,
         approach_A=t.approach_direction,
         hook_drop=t.hook_drop,
         r_att_B=scenario.vehicle.cable_attachment,
         approach_distance=cfg.hooking.approach_distance,
         hook_overshoot=cfg.hooking.overshoot,
+        offset_W=scenario_hook_offset(scenario, geo),
     )
+
+
+def scenario_hook_offset(scenario: Scenario, geometry: LandingGeometry) -> FloatArray:
+    """Hook point minus attachment point of ``scenario``'s mechanism, level flight [m]:
+    ``tether.hook_drop`` along n for the capture disk, the hanging hook beside the bar
+    (:func:`tetherland.models.hook.bar_hook_offset`) for the bar."""
+    t, m = scenario.tether, scenario.mechanism
+    if m.kind == "bar":
+        line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+        return bar_hook_offset(geometry.R_WA[:, 0], line, m.hook_shank, m.pass_offset)
+    n_W = geometry.R_WA @ np.asarray(t.approach_direction, dtype=float)
+    return hook_offset(n_W / np.linalg.norm(n_W), t.hook_drop)
 
 
 def hooking_pass_for(
@@ -96,6 +110,7 @@ def hooking_pass_for(
     r_att_B: ArrayLike,
     approach_distance: float,
     hook_overshoot: float,
+    offset_W: FloatArray | None = None,
 ) -> HookingPass:
     """The hooking pass for explicit tether and mission values.
 
@@ -109,13 +124,17 @@ def hooking_pass_for(
         Cable attachment in F_B [m].
     approach_distance, hook_overshoot : float
         Hook-point distance before and beyond the anchor where the pass starts and ends [m].
+    offset_W : (3,) array, optional
+        Hook point minus attachment point, F_W, replacing ``hook_drop`` n (the bar
+        mechanism, :func:`scenario_hook_offset`) [m].
     """
     R_WA = geometry.R_WA
     n_W = R_WA @ np.asarray(approach_A, dtype=float)
     n_W = n_W / np.linalg.norm(n_W)
     yaw = math.atan2(R_WA[1, 0], R_WA[0, 0])
     r_att_W = rotation_from_z_and_yaw(_Z_W, yaw) @ np.asarray(r_att_B, dtype=float)
-    shift = hook_offset(n_W, hook_drop) + r_att_W
+    offset = hook_offset(n_W, hook_drop) if offset_W is None else np.asarray(offset_W)
+    shift = offset + r_att_W
     return HookingPass(
         p_start_W=geometry.p_A - approach_distance * n_W - shift,
         p_end_W=geometry.p_A + hook_overshoot * n_W - shift,

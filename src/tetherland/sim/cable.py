@@ -490,21 +490,185 @@ _R_PARK = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 """World rotation of the first link's body frame at qpos0: local x along -z_W."""
 
 
-def joint_quaternions(nodes: FloatArray) -> list[FloatArray]:
+def joint_quaternions(nodes: FloatArray, frame0_W: FloatArray = _R_PARK) -> list[FloatArray]:
     """Ball-joint quaternions (w, x, y, z) that put the chain's joints at ``nodes``.
 
     Each link's x axis runs from its node to the next; the frames are carried from the
-    parked chain (hanging along -z_W) by the smallest rotations, so no link twists.
+    parked chain (the first link's frame at qpos0, ``frame0_W`` in F_W: by default
+    hanging along -z_W) by the smallest rotations, so no link twists.
     """
     dirs = np.diff(nodes, axis=0)
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     quats = []
-    W_prev, u_prev = _R_PARK, -_Z  # the first joint's parent frame: the body's fixed frame
+    W_prev = np.asarray(frame0_W, dtype=float)
+    u_prev = W_prev[:, 0]  # the first joint's parent frame: the body's fixed frame
     for u in dirs:
         W = _min_rotation(u_prev, u) @ W_prev
         quats.append(rotmat_to_quat(W_prev.T @ W))  # children: parent frame = previous link
         W_prev, u_prev = W, u
     return quats
+
+
+class HangingLine:
+    """The bar mechanism's cable: a line of capsule links hanging from the vehicle with the
+    hook body at its end (docs/mechanism.md); it engages the anchoring cable only through
+    contact and friction.
+
+    The tension written to the ``cable_force`` slot is the magnitude of the line's pull on
+    the vehicle (force sensor ``line_force`` at the first joint). The links' ball-joint
+    armature follows the tension as the chain's does (:class:`ChainCable`): a few grams of
+    line pulled by tens of newtons would swing faster than the step resolves. The line and
+    hook get the vehicle's ``body_invweight0``, so that their contacts and joints are as
+    stiff as the vehicle's (the taut line's true inverse inertia is the vehicle's).
+
+    :attr:`caught` is the plant's truth for the log and the judge: the anchoring cable
+    pushes on the hook with more than ``mechanism.catch_threshold`` times the hook's
+    weight (set), and no longer with more than the hook's weight (cleared). ``engaged`` is
+    the same; :meth:`set_engaged` only lays the line out (the contact decides).
+    """
+
+    kind = CableModel.CHAIN
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, scenario: Scenario,
+                 side_W: FloatArray) -> None:  # fmt: skip
+        from tetherland.sim.mjcf import line_spec
+
+        self._model, self._data = model, data
+        self.spec = line_spec(scenario)
+        mech = scenario.mechanism
+        self.dt = scenario.sim.timestep
+        self._side = np.asarray(side_W, dtype=float)
+        self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+        self._ground_z = 0.0
+        self._p_A = np.zeros(3)
+        n = self.spec.segments
+        joint, body = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_BODY
+        joints = [mujoco.mj_name2id(model, joint, f"line_joint{i}") for i in range(n)]
+        joints.append(mujoco.mj_name2id(model, joint, "hook_joint"))
+        self._qadr = [int(model.jnt_qposadr[j]) for j in joints]
+        self._vadr = [int(model.jnt_dofadr[j]) for j in joints]
+        vehicle = mujoco.mj_name2id(model, body, "vehicle")
+        self._vehicle_body = vehicle
+        for i in range(n):
+            model.body_invweight0[mujoco.mj_name2id(model, body, f"line_link{i}")] = (
+                model.body_invweight0[vehicle]
+            )
+        model.body_invweight0[mujoco.mj_name2id(model, body, "hook")] = (
+            model.body_invweight0[vehicle]
+        )
+        sensor = mujoco.mjtObj.mjOBJ_SENSOR
+        adr = model.sensor_adr
+        self._force = int(adr[mujoco.mj_name2id(model, sensor, "line_force")])
+        self._contact = int(adr[mujoco.mj_name2id(model, sensor, "hook_bar")])
+        self._slot = SENSOR_SLICES["cable_force"].start
+        self._sensordata = data.sensordata
+        self._hook_weight = mech.hook_mass * 9.81
+        self._catch = mech.catch_threshold * self._hook_weight
+        self._shank = mech.hook_shank
+        self._floor = mech.hook_reach + mech.hook_radius + 0.002
+        v0 = self._vadr[0]
+        self._armature = model.dof_armature[v0 : v0 + 3 * n]
+        self._link_inertia = self.spec.link_mass * self.spec.link_length**2 / 3.0
+        self._t_held = 0.0
+        self._t_set = 0.0
+        self.caught = False
+        self.changed = False
+        """True after a step in which :attr:`caught` changed."""
+        self._set_armature(0.0)
+
+    @property
+    def engaged(self) -> bool:
+        return self.caught
+
+    @property
+    def hook_bar_force(self) -> float:
+        """Normal force of the anchoring cable on the hook, last step [N]."""
+        d = self._sensordata
+        return float(d[self._contact + 1]) if d[self._contact] > 0.0 else 0.0
+
+    def _read(self) -> float:
+        d, i = self._sensordata, self._force
+        f = math.sqrt(d[i] * d[i] + d[i + 1] * d[i + 1] + d[i + 2] * d[i + 2])
+        d[self._slot] = f
+        return f
+
+    def advance(self) -> None:
+        mujoco.mj_step(self._model, self._data)
+        f = self._read()
+        held = self._t_held * ARMATURE_DECAY
+        self._t_held = held if held > 2.0 * f else 2.0 * f
+        if not (self._t_set * 0.8 <= self._t_held <= self._t_set):
+            self._set_armature(self._t_held)
+        push = self.hook_bar_force
+        was = self.caught
+        if was:
+            self.caught = push > self._hook_weight
+        else:
+            self.caught = push > self._catch
+        self.changed = was != self.caught
+
+    def _set_armature(self, tension: float) -> None:
+        spec, d = self.spec, self._data
+        a_old = self._armature[0]
+        a = chain_armature(tension, spec.link_length, spec.link_mass, self.dt)
+        if a > a_old:
+            scale = (self._link_inertia + a_old) / (self._link_inertia + a)
+            for adr in self._vadr[:-1]:
+                d.qvel[adr : adr + 3] *= scale
+        self._armature[:] = a
+        self._t_set = tension
+
+    def forward(self) -> None:
+        mujoco.mj_forward(self._model, self._data)
+        self._read()
+
+    def set_engaged(self, engaged: bool) -> None:
+        """Lay the line out at rest (``engaged``: straight towards the anchor, else hanging,
+        along the ground below ``set_floor``'s height); the contact decides the rest."""
+        self._t_held = 0.0
+        self._set_armature(0.0)
+        self.caught = bool(engaged)
+        self.changed = False
+        self.lay_out(toward_W=self._p_A if engaged else None)
+
+    def set_anchor(self, p_A: FloatArray, floor_z: float) -> None:
+        """The anchor (for a line laid out engaged) and the ground height under the start
+        pad (a hanging line is laid along it) [m]."""
+        self._p_A = np.asarray(p_A, dtype=float)
+        self._ground_z = float(floor_z)
+
+    def follow_vehicle(self) -> None:
+        self.lay_out(toward_W=self._p_A if self.caught else None)
+
+    def lay_out(self, toward_W: FloatArray | None = None) -> None:
+        """Put the line and hook at rest: straight to ``toward_W``, else straight down from
+        the attachment to just above the ground, then along ``side_W`` on it."""
+        d = self._data
+        q = d.qpos
+        R_WB = quat_to_rotmat(q[3:7])
+        p0 = q[0:3] + R_WB @ self._r_att
+        n = self.spec.segments
+        l_s = self.spec.link_length
+        steps = [l_s] * n + [self._shank]
+        nodes = [p0]
+        side = self._side - (self._side @ _Z) * _Z
+        side /= np.linalg.norm(side)
+        for step in steps:
+            p = nodes[-1]
+            if toward_W is not None:
+                e = np.asarray(toward_W) - p
+                e = e / max(float(np.linalg.norm(e)), 1e-9)
+            elif p[2] - step >= self._ground_z + self._floor:
+                e = -_Z
+            else:
+                e = side
+            nodes.append(p + step * e)
+        frame0 = R_WB @ _R_PARK
+        quats = joint_quaternions(np.array(nodes), frame0)
+        for a, qj in zip(self._qadr, quats, strict=True):
+            d.qpos[a : a + 4] = qj
+        for a in self._vadr:
+            d.qvel[a : a + 3] = 0.0
 
 
 def make_cable(
@@ -514,7 +678,10 @@ def make_cable(
     p_A: FloatArray,
     side_W: FloatArray,
 ) -> Cable:
-    """The :class:`Cable` implementation of ``scenario.tether.cable_model``."""
+    """The :class:`Cable` implementation of ``scenario.tether.cable_model`` (the
+    :class:`HangingLine` for the bar mechanism)."""
+    if scenario.mechanism.kind == "bar":
+        return HangingLine(model, data, scenario, side_W)
     t = scenario.tether
     kind = t.cable_model
     if kind == CableModel.IDEAL:
