@@ -509,6 +509,17 @@ def joint_quaternions(nodes: FloatArray, frame0_W: FloatArray = _R_PARK) -> list
     return quats
 
 
+LINE_TENSION_FLOOR = 2.0
+"""Least tension the hanging line's armature is designed for [N]: a slack line of a few
+grams in contact with the bar and the surface needs it to stay resolvable (it adds
+under 1e-6 kg m^2 per joint, nothing against the hook's pendulum, m L^2 ~ 2e-2)."""
+
+
+CATCH_FILTER_TIME = 0.05
+"""Time constant of the low-pass on the bar's push on the hook that decides
+:attr:`HangingLine.caught` (a hook bouncing on the bar is not caught) [s]."""
+
+
 class HangingLine:
     """The bar mechanism's cable: a line of capsule links hanging from the vehicle with the
     hook body at its end (docs/mechanism.md); it engages the anchoring cable only through
@@ -522,8 +533,9 @@ class HangingLine:
     stiff as the vehicle's (the taut line's true inverse inertia is the vehicle's).
 
     :attr:`caught` is the plant's truth for the log and the judge: the anchoring cable
-    pushes on the hook with more than ``mechanism.catch_threshold`` times the hook's
-    weight (set), and no longer with more than the hook's weight (cleared). ``engaged`` is
+    pushes on the hook (low-passed over :data:`CATCH_FILTER_TIME`) with more than
+    ``mechanism.catch_threshold`` times the hook's weight (set), and no longer with more
+    than the hook's weight (cleared). ``engaged`` is
     the same; :meth:`set_engaged` only lays the line out (the contact decides).
     """
 
@@ -553,9 +565,6 @@ class HangingLine:
             model.body_invweight0[mujoco.mj_name2id(model, body, f"line_link{i}")] = (
                 model.body_invweight0[vehicle]
             )
-        model.body_invweight0[mujoco.mj_name2id(model, body, "hook")] = (
-            model.body_invweight0[vehicle]
-        )
         sensor = mujoco.mjtObj.mjOBJ_SENSOR
         adr = model.sensor_adr
         self._force = int(adr[mujoco.mj_name2id(model, sensor, "line_force")])
@@ -574,6 +583,8 @@ class HangingLine:
         self.caught = False
         self.changed = False
         """True after a step in which :attr:`caught` changed."""
+        self._push = 0.0
+        self._alpha = min(1.0, self.dt / CATCH_FILTER_TIME)
         self._set_armature(0.0)
 
     @property
@@ -599,7 +610,7 @@ class HangingLine:
         self._t_held = held if held > 2.0 * f else 2.0 * f
         if not (self._t_set * 0.8 <= self._t_held <= self._t_set):
             self._set_armature(self._t_held)
-        push = self.hook_bar_force
+        push = self._push = self._push + (self.hook_bar_force - self._push) * self._alpha
         was = self.caught
         if was:
             self.caught = push > self._hook_weight
@@ -610,6 +621,7 @@ class HangingLine:
     def _set_armature(self, tension: float) -> None:
         spec, d = self.spec, self._data
         a_old = self._armature[0]
+        tension = max(tension, LINE_TENSION_FLOOR)
         a = chain_armature(tension, spec.link_length, spec.link_mass, self.dt)
         if a > a_old:
             scale = (self._link_inertia + a_old) / (self._link_inertia + a)
@@ -629,6 +641,7 @@ class HangingLine:
         self._set_armature(0.0)
         self.caught = bool(engaged)
         self.changed = False
+        self._push = self._catch if engaged else 0.0
         self.lay_out(toward_W=self._p_A if engaged else None)
 
     def set_anchor(self, p_A: FloatArray, floor_z: float) -> None:

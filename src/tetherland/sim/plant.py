@@ -230,9 +230,17 @@ class Plant:
     def hook_point_W(self) -> FloatArray:
         """The hook's true position at :attr:`time` [m]: the crown of the bar mechanism's
         hook body, else the capture-disk model's hook point."""
+        out = np.empty(3)
+        self.hook_point_into(out)
+        return out
+
+    def hook_point_into(self, out: FloatArray) -> None:
+        """Write :attr:`hook_point_W` into ``out[:3]`` [m]."""
         if self._line is not None:
-            return self.data.site_xpos[self._crown_site].copy()
-        return self.hook.hook_point(self._p_att_view)
+            out[:3] = self.data.site_xpos[self._crown_site]
+        else:
+            out[:3] = self._p_att_view
+            out[:3] += self.hook.offset_W
 
     def set_state(self, state: RigidBodyState) -> None:
         """Overwrite position, attitude and velocities (time and rotors unchanged).
