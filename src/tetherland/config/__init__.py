@@ -11,7 +11,6 @@ from tetherland.config.base import Section, Vec3
 from tetherland.config.control import ControllerConfig, FreeFlightGains, TetheredGains
 from tetherland.config.estimation import EstimatorConfig
 from tetherland.config.faults import FaultDetectionConfig, FaultKind, FaultsConfig
-from tetherland.config.mechanism import MechanismConfig
 from tetherland.config.loader import (
     ScenarioInfo,
     apply_overrides,
@@ -23,6 +22,7 @@ from tetherland.config.loader import (
     scenario_to_toml,
     with_overrides,
 )
+from tetherland.config.mechanism import MechanismConfig
 from tetherland.config.mission import (
     ContactConfig,
     FlightConfig,
@@ -59,13 +59,13 @@ __all__ = [
     "ControllerConfig",
     "EstimatorConfig",
     "FaultDetectionConfig",
-    "MechanismConfig",
     "FaultKind",
     "FaultsConfig",
     "FlightConfig",
     "FreeFlightGains",
     "HookingConfig",
     "ImuConfig",
+    "MechanismConfig",
     "MissionConfig",
     "MocapConfig",
     "PerchingConfig",

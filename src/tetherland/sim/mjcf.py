@@ -656,7 +656,8 @@ def add_hanging_line(scene: SceneXml) -> None:
     for j, (a, b) in enumerate(pieces):
         _sub(hook, "geom", name=f"hook{j}", type="capsule", fromto=_fmt((*a, *b)),
              size=f"{m.hook_radius:.12g}",
-             mass=f"{m.hook_mass * math.dist(a, b) / total:.12g}", **{**col, "rgba": ".7 .7 .75 1"})  # fmt: skip
+             mass=f"{m.hook_mass * math.dist(a, b) / total:.12g}",
+             **{**col, "rgba": ".7 .7 .75 1"})  # fmt: skip
     _sub(hook, "site", name="hook_eye", pos="0 0 0", size="0.004", group="4")
     _sub(hook, "site", name="hook_crown", pos=_fmt((s, 0.0, 0.0)), size="0.004", group="4")
     # the environment touches the line (bit 2 of its conaffinity)
