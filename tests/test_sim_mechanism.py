@@ -197,3 +197,69 @@ def test_hook_passing_beside_the_bar_is_not_caught(bar_plant: Plant, gap: float 
     assert not plant.hook.events and not plant.hook.engaged
     np.testing.assert_allclose(plant.hook_point_W, hook0, atol=0.01)
     assert plant.tension == pytest.approx(_line_mass(plant) * GRAVITY, rel=0.05)
+
+
+def test_hook_is_caught_and_released_through_contact(bar_plant: Plant) -> None:
+    """slope50: the hook lowered beside the bar, the vehicle flown over the bar to the
+    landing side and pulling until the line's tension passes 3 N: the line slides on the
+    bar, the hook comes up to it and the bar ends in its crook (caught: the plant's contact
+    truth, and the tension held); flown back over the bar (the reverse motion) the hook is
+    released and hangs free. No contact anywhere goes more than 2 mm deep."""
+    plant = bar_plant
+    s = plant.scenario
+    geo = plant.layout.geometry
+    p_A, x_A = geo.p_A, geo.R_WA[:, 0]
+    shift = scenario_hook_offset(s, geo) + np.asarray(s.vehicle.cable_attachment)
+
+    def com(depth: float) -> np.ndarray:  # the resting hook `depth` below p_A on the pass
+        return p_A - depth * Z - shift
+
+    start, low = com(-0.3), com(0.10)
+    over = low + 0.45 * x_A  # the vehicle on the landing side, above the bar
+    plant.reset(RigidBodyState.at_rest(start, plant.start_state().q_WB),
+                rotor_speeds=[_hover_speed(plant)] * 4)  # fmt: skip
+    deepest = [0.0]
+
+    def each(p: Plant) -> None:
+        d = p.data
+        for i in range(d.ncon):
+            deepest[0] = min(deepest[0], float(d.contact[i].dist))
+
+    _drive(plant, [start, low], 0.2, 0.5, each)
+    assert not plant.hook.engaged and not plant.hook.events  # lowered beside the bar
+    _drive(plant, [low, over], 0.2, 0.5, each)
+    # the take-up: towards the landing side and down until the line pulls 3 N
+    e = (x_A - 0.8 * Z) / np.linalg.norm(x_A - 0.8 * Z)
+    d, pos = plant.data, over.copy()
+    for _ in range(round(1.0 / 0.1 / plant.dt)):
+        pos = pos + 0.1 * plant.dt * e
+        d.qpos[0:3], d.qvel[0:3], d.qvel[3:6] = pos, 0.1 * e, 0.0
+        plant.step(1)
+        each(plant)
+        if plant.tension > 3.0:
+            break
+    # 3 N with the hook at the bar: it holds the line (a line sliding over the bar pulls
+    # about the hook's weight times exp(mu pi), 0.5 N)
+    assert plant.tension > 3.0
+    assert float(np.linalg.norm(plant.hook_point_W - p_A)) < 0.03
+    _drive(plant, [pos, pos], 0.1, 1.0, each)
+    assert plant.hook.engaged  # held still, the hook stays on the bar
+    assert float(np.linalg.norm(plant.hook_point_W - p_A)) < 0.03
+    kinds = [ev.kind.name for ev in plant.hook.events]
+    assert kinds[0] == "ENGAGED"
+    # the reverse motion: slack, back over the bar to the bottom of the pass and up to
+    # its start (the unhooking pass of the mission)
+    slack = p_A + 0.7 * (pos - p_A) / np.linalg.norm(pos - p_A)
+    _drive(plant, [pos, slack, low, start], 0.2, 2.0, each)
+    kinds = [ev.kind.name for ev in plant.hook.events]
+    assert not plant.hook.engaged and kinds[-1] == "RELEASED"
+    bar = plant.model.sensor_adr[mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SENSOR,
+                                                   "hook_bar")]  # fmt: skip
+    assert plant.data.sensordata[bar] == 0.0  # no longer touching the bar
+    m = plant.model
+    anchoring = {mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)
+                 for n in ("anchor_bar", "post0", "post1")}  # fmt: skip
+    touching = [c for c in plant.data.contact[: plant.data.ncon]
+                if c.geom1 in anchoring or c.geom2 in anchoring]  # fmt: skip
+    assert not touching  # the line hangs free of the mechanism
+    assert deepest[0] > -0.002

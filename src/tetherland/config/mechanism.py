@@ -57,10 +57,15 @@ class MechanismConfig(Section):
     pass_offset: float = Field(0.05, ge=0.01, le=0.5)
     """Horizontal distance of the hook's vertical hooking pass from the bar's axis, on the
     side away from the landing point (the line then drapes over the bar) [m]."""
-    catch_threshold: float = Field(2.0, ge=1.0, le=100)
-    """The plant records the hook as caught (log column ``hook``, hook events) while the
+    swing_periods: float = Field(2.0, ge=0, le=10)
+    """Shortest free-flight leg of the mission, in swing periods of the hanging hook
+    (2 pi sqrt(L/g)): a smooth rest-to-rest leg that long leaves the hook almost still
+    (the bar mechanism) [-]."""
+    catch_threshold: float = Field(5.0, ge=1.0, le=1000)
+    """The plant records the hook as caught (log column ``hook``, hook events) once the
     bar pushes on it with more than this many times its weight (the line pulls it into
-    the bar); the robot never reads it [-]."""
+    the bar), and as released once it has not touched the bar for 0.2 s; the robot never
+    reads it [-]."""
 
     @model_validator(mode="after")
     def _hook_clears_bar(self) -> MechanismConfig:

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
-from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset
+from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset, swing_period
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
@@ -198,3 +198,16 @@ def check_pass(
 def pass_clearance(scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass) -> float:
     """Smallest distance of the level vehicle from the surface along the hooking pass [m]."""
     return check_pass(scenario, geometry, hooking).clearance_m
+
+
+def shortest_leg(scenario: Scenario) -> float:
+    """Shortest free-flight leg of the mission [s]: 0.5 s, or with a hook hanging on a line
+    (the bar mechanism) ``mechanism.swing_periods`` of its swing period
+    (:func:`tetherland.models.hook.swing_period`): a rest-to-rest leg (9th-order
+    smoothstep) that long leaves the hanging hook almost still, so that it passes beside
+    the bar where the plan puts it."""
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar":
+        return 0.5
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    return max(0.5, m.swing_periods * swing_period(line, m.hook_shank))

@@ -56,7 +56,7 @@ from tetherland.mission.contact import (
     guarded_descent,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
-from tetherland.mission.hooking import unhooking_path
+from tetherland.mission.hooking import shortest_leg, unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
@@ -126,6 +126,7 @@ class MissionSupervisor:
         wp = plan.waypoints
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
+        self._min_leg = shortest_leg(scenario)
         self.yaw = wp.yaw
         # state
         self.phase = Phase.TAKEOFF
@@ -215,7 +216,8 @@ class MissionSupervisor:
         )  # fmt: skip
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
-        return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel)
+        return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
+                    self._min_leg)  # fmt: skip
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""

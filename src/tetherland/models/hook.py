@@ -13,8 +13,11 @@ and the robot's hooking pass, clearance check and design search
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from tetherland import GRAVITY
 from tetherland.geometry import FloatArray
 
 
@@ -49,3 +52,9 @@ def bar_hook_offset(x_A_W: FloatArray, line_length: float, hook_shank: float,
     x = np.array([x_A_W[0], x_A_W[1], 0.0])
     x /= np.linalg.norm(x)
     return np.array([0.0, 0.0, -(line_length + hook_shank)]) + pass_offset * x
+
+
+def swing_period(line_length: float, hook_shank: float) -> float:
+    """Swing period 2 pi sqrt(L/g) of a hook hanging on a line, L the line plus half the
+    shank (the hook's mass dominates the line's) [s]."""
+    return 2.0 * math.pi * math.sqrt((line_length + 0.5 * hook_shank) / GRAVITY)

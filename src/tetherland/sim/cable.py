@@ -520,6 +520,11 @@ CATCH_FILTER_TIME = 0.05
 :attr:`HangingLine.caught` (a hook bouncing on the bar is not caught) [s]."""
 
 
+RELEASE_TIME = 0.2
+"""A caught hook counts as released once it has not touched the bar for this long (a
+hook resting in its crook on a slack line still touches it) [s]."""
+
+
 class HangingLine:
     """The bar mechanism's cable: a line of capsule links hanging from the vehicle with the
     hook body at its end (docs/mechanism.md); it engages the anchoring cable only through
@@ -532,10 +537,12 @@ class HangingLine:
     hook get the vehicle's ``body_invweight0``, so that their contacts and joints are as
     stiff as the vehicle's (the taut line's true inverse inertia is the vehicle's).
 
-    :attr:`caught` is the plant's truth for the log and the judge: the anchoring cable
-    pushes on the hook (low-passed over :data:`CATCH_FILTER_TIME`) with more than
-    ``mechanism.catch_threshold`` times the hook's weight (set), and no longer with more
-    than the hook's weight (cleared). ``engaged`` is
+    :attr:`caught` is the plant's truth for the log and the judge: set when the anchoring
+    cable pushes on the line and the hook (net force, low-passed over
+    :data:`CATCH_FILTER_TIME`) with more than ``mechanism.catch_threshold`` times the
+    hook's weight (it holds the line's pull: a line merely sliding over the bar carries
+    about the hook's weight), cleared when neither has touched the bar for
+    :data:`RELEASE_TIME`. ``engaged`` is
     the same; :meth:`set_engaged` only lays the line out (the contact decides).
     """
 
@@ -585,6 +592,8 @@ class HangingLine:
         """True after a step in which :attr:`caught` changed."""
         self._push = 0.0
         self._alpha = min(1.0, self.dt / CATCH_FILTER_TIME)
+        self._apart = 0
+        self._release_steps = max(1, round(RELEASE_TIME / self.dt))
         self._set_armature(0.0)
 
     @property
@@ -593,9 +602,10 @@ class HangingLine:
 
     @property
     def hook_bar_force(self) -> float:
-        """Normal force of the anchoring cable on the hook, last step [N]."""
-        d = self._sensordata
-        return float(d[self._contact + 1]) if d[self._contact] > 0.0 else 0.0
+        """Net contact force of the anchoring cable on the line and the hook, last step
+        [N]."""
+        d, c = self._sensordata, self._contact
+        return math.sqrt(d[c + 1] ** 2 + d[c + 2] ** 2 + d[c + 3] ** 2) if d[c] > 0.0 else 0.0
 
     def _read(self) -> float:
         d, i = self._sensordata, self._force
@@ -610,12 +620,18 @@ class HangingLine:
         self._t_held = held if held > 2.0 * f else 2.0 * f
         if not (self._t_set * 0.8 <= self._t_held <= self._t_set):
             self._set_armature(self._t_held)
-        push = self._push = self._push + (self.hook_bar_force - self._push) * self._alpha
+        d, c = self._sensordata, self._contact
+        touching = d[c] > 0.0
+        raw = (math.sqrt(d[c + 1] ** 2 + d[c + 2] ** 2 + d[c + 3] ** 2) if touching
+               else 0.0)  # fmt: skip
+        push = self._push = self._push + (raw - self._push) * self._alpha
         was = self.caught
         if was:
-            self.caught = push > self._hook_weight
+            self._apart = 0 if touching else self._apart + 1
+            self.caught = self._apart < self._release_steps
         else:
             self.caught = push > self._catch
+            self._apart = 0
         self.changed = was != self.caught
 
     def _set_armature(self, tension: float) -> None:
@@ -655,7 +671,8 @@ class HangingLine:
 
     def lay_out(self, toward_W: FloatArray | None = None) -> None:
         """Put the line and hook at rest: straight to ``toward_W``, else straight down from
-        the attachment to just above the ground, then along ``side_W`` on it."""
+        the attachment to just above the ground, then folded back and forth along
+        ``side_W`` on it, the hook at the end."""
         d = self._data
         q = d.qpos
         R_WB = quat_to_rotmat(q[3:7])
@@ -666,15 +683,19 @@ class HangingLine:
         nodes = [p0]
         side = self._side - (self._side @ _Z) * _Z
         side /= np.linalg.norm(side)
-        for step in steps:
+        fold = 1.0
+        for j, step in enumerate(steps):
             p = nodes[-1]
             if toward_W is not None:
                 e = np.asarray(toward_W) - p
                 e = e / max(float(np.linalg.norm(e)), 1e-9)
             elif p[2] - step >= self._ground_z + self._floor:
                 e = -_Z
-            else:
-                e = side
+            elif j == len(steps) - 1:
+                e = side  # the hook lies on the ground, beside the folds
+            else:  # folded back and forth on the ground under the attachment (the links
+                # do not touch each other): lifted, the hook rises from below the vehicle
+                e, fold = fold * side, -fold
             nodes.append(p + step * e)
         frame0 = R_WB @ _R_PARK
         quats = joint_quaternions(np.array(nodes), frame0)

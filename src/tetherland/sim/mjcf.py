@@ -539,15 +539,18 @@ def add_anchoring_cable(scene: SceneXml) -> None:
     """The bar mechanism's anchoring cable: the capsule ``anchor_bar`` of length
     ``mechanism.bar_length`` along y_A with its axis through p_A, and the posts ``post0``
     and ``post1`` from its ends down to the surface along -z_S (collision geoms of the
-    world, ``mechanism.bar_friction``)."""
+    world, ``mechanism.bar_friction``; contact time constant two physics steps)."""
     m = scene.scenario.mechanism
     geo = scene.layout.geometry
     p_A, y_A, z_S = geo.p_A, geo.R_WA[:, 1], geo.surface.R_WS[:, 2]
     half = 0.5 * m.bar_length * y_A
+    sim = scene.scenario.sim
     env = {
         "priority": "1",
         "condim": "3",
-        "solref": scene.contact_solref,
+        # as stiff as the step allows (MuJoCo's floor: two steps): a 1.5 mm line hitting a
+        # post at 0.5 m/s sinks about v tau into it
+        "solref": _fmt((2.0 * sim.timestep, sim.contact_damping_ratio)),
         "friction": f"{m.bar_friction:.12g} 0.005 0.0001",
         "conaffinity": str(ENV_CONAFFINITY),
         "rgba": ".9 .2 .1 1",
@@ -856,13 +859,13 @@ def add_sensors(scene: SceneXml) -> None:
 
 def add_mechanism_sensors(scene: SceneXml) -> None:
     """After :data:`SENSOR_LAYOUT`, for the bar mechanism: ``line_force`` (force sensor at
-    ``line_root``: the line's pull on the vehicle, 3) and ``hook_bar`` (contact of the hook
-    with the anchoring cable: found, net force in the contact frame, 4)."""
+    ``line_root``: the line's pull on the vehicle, 3) and ``hook_bar`` (contacts of the line
+    and the hook with the anchoring cable: number found, net force in F_W, 4)."""
     if scene.scenario.mechanism.kind != "bar":
         return
     sensor = scene.section("sensor")
     _sub(sensor, "force", name="line_force", site="line_root")
-    _sub(sensor, "contact", name="hook_bar", body1="hook", geom2="anchor_bar",
+    _sub(sensor, "contact", name="hook_bar", subtree1="line_link0", geom2="anchor_bar",
          data="found force", reduce="netforce")  # fmt: skip
 
 
