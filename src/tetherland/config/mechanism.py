@@ -61,6 +61,9 @@ class MechanismConfig(Section):
     """Shortest free-flight leg of the mission, in swing periods of the hanging hook
     (2 pi sqrt(L/g)): a smooth rest-to-rest leg that long leaves the hook almost still
     (the bar mechanism) [-]."""
+    lift_margin: float = Field(0.3, ge=0, le=5)
+    """The mission's takeoff point is at least this far above the hanging hook's depth
+    below the vehicle (the hook leaves the ground during the climb) [m]."""
     catch_threshold: float = Field(5.0, ge=1.0, le=1000)
     """The plant records the hook as caught (log column ``hook``, hook events) once the
     bar pushes on it with more than this many times its weight (the line pulls it into

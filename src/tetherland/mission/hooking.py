@@ -148,6 +148,7 @@ def unhooking_path(
     entry_W: ArrayLike,
     hook_start_W: ArrayLike,
     reach: tuple[ArrayLike, float] | None = None,
+    back_off: bool = True,
 ) -> list[FloatArray]:
     """Centre-of-mass corners of the unhooking pass from ``p_from_W`` (the release point),
     F_W [m].
@@ -164,13 +165,18 @@ def unhooking_path(
     attachment offset, R the cable length less a margin). Along a vertical pass, backing
     off straight up from a release point beside the anchor would pull the cable taut; the
     segment from the corner to the entry stays in the ball when both ends are in it.
+
+    ``back_off = False`` (the bar mechanism): no back-off corner, straight to the entry.
+    Climbing on the landing side while the hook still sits on the bar would lift it by
+    the line draped over the bar and catch it again; flown straight back over the bar,
+    the line slides back and the hook drops out of its crook.
     """
     p0 = np.asarray(p_from_W, dtype=float)
     entry = np.asarray(entry_W, dtype=float)
     start = np.asarray(hook_start_W, dtype=float)
     axis = entry - start
     n_W = axis / np.linalg.norm(axis)
-    excess = float(n_W @ (p0 - entry))
+    excess = float(n_W @ (p0 - entry)) if back_off else 0.0
     if excess > 0.0 and reach is not None:
         c, R = np.asarray(reach[0], dtype=float), float(reach[1])
         # largest s in [0, excess] with |p0 - s n - c| <= R: s^2 - 2 b s + (|w|^2 - R^2) <= 0
@@ -211,3 +217,18 @@ def shortest_leg(scenario: Scenario) -> float:
         return 0.5
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
     return max(0.5, m.swing_periods * swing_period(line, m.hook_shank))
+
+
+def takeoff_height(scenario: Scenario) -> float:
+    """Height of the takeoff point above the start pad [m]: ``mission.flight.takeoff_height``,
+    and with a hook hanging on a line (the bar mechanism) at least the hook's depth below
+    the pad's centre of mass plus ``mechanism.lift_margin``: the hook leaves the ground
+    during the climb, not while the vehicle hovers with it dragging (which sets it
+    swinging)."""
+    h = scenario.mission.flight.takeoff_height
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar":
+        return h
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
+    return max(h, hang + m.lift_margin)

@@ -56,7 +56,7 @@ from tetherland.mission.contact import (
     guarded_descent,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
-from tetherland.mission.hooking import shortest_leg, unhooking_path
+from tetherland.mission.hooking import shortest_leg, takeoff_height, unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
@@ -127,6 +127,7 @@ class MissionSupervisor:
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._min_leg = shortest_leg(scenario)
+        self._takeoff_height = takeoff_height(scenario)
         self.yaw = wp.yaw
         # state
         self.phase = Phase.TAKEOFF
@@ -151,7 +152,7 @@ class MissionSupervisor:
         self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
         self._path = self._new_path(0.0, wp.start).to(
-            wp.start + cfg.flight.takeoff_height * Z_W, pause=cfg.settle_time
+            wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time
         )
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
@@ -268,7 +269,7 @@ class MissionSupervisor:
             self._path = (
                 self._path.to(np.array([*start[:2], max(start[2], wp.z_safe)]))
                 .to(np.array([*wp.start[:2], wp.z_safe]))
-                .to(wp.start + self.cfg.flight.takeoff_height * Z_W)
+                .to(wp.start + self._takeoff_height * Z_W)
                 .to(wp.start - self.cfg.flight.pad_press_depth * Z_W, speed=self.cfg.hooking.speed,
                     pause=self.cfg.settle_time)
             )  # fmt: skip
@@ -551,7 +552,8 @@ class MissionSupervisor:
                 self._release_pull.freeze(t, est, slack)
             # the reverse pass, no deeper than mission.hooking.unhook_depth
             *corners, last = unhooking_path(
-                slack, wp.unhook_entry, wp.hook_start, self._unhook_reach
+                slack, wp.unhook_entry, wp.hook_start, self._unhook_reach,
+                back_off=self.scenario.mechanism.kind != "bar",
             )
             self._path = self._new_path(t, slack, cfg.hooking.speed)
             for p in corners:
@@ -565,7 +567,7 @@ class MissionSupervisor:
         if t >= self._path.t_end:
             up = np.array([*wp.hook_start[:2], wp.z_safe])
             home_high = np.array([*wp.start[:2], wp.z_safe])
-            home = wp.start + cfg.flight.takeoff_height * Z_W
+            home = wp.start + self._takeoff_height * Z_W
             self._path = (
                 self._new_path(t, wp.hook_start)
                 .to(up)
