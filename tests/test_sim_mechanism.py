@@ -175,7 +175,7 @@ def test_hook_passing_beside_the_bar_is_not_caught(bar_plant: Plant, gap: float 
     s = plant.scenario
     m, geo = s.mechanism, plant.layout.geometry
     x_A = geo.R_WA[:, 0]
-    offset = 0.0 if gap is None else m.hook_reach + m.hook_radius + m.bar_radius + gap
+    offset = 0.0 if gap is None else m.outer_reach + m.hook_radius + m.bar_radius + gap
     shift = scenario_hook_offset(s, geo) - m.pass_offset * x_A + np.asarray(
         s.vehicle.cable_attachment)
     top = geo.p_A + 0.3 * Z - offset * x_A - shift

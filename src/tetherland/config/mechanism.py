@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 from pydantic import Field, model_validator
@@ -36,6 +37,9 @@ class MechanismConfig(Section):
     """Horizontal reach of each of the three arms from the shank's axis [m]."""
     hook_tip_length: float = Field(0.02, ge=0.005, le=0.2)
     """Length of each tip, pointing up from the end of its arm [m]."""
+    hook_tip_angle_deg: float = Field(0.0, ge=0, le=80)
+    """Angle of each tip from the shank's axis, leaning outward: 0 points it straight back
+    up along the shank (a closed crook), larger opens the crook [deg]."""
     hook_radius: float = Field(0.002, ge=0.0005, le=0.02)
     """Radius of the hook's capsules (shank, arms, tips) [m]."""
     line_segments: int = Field(20, ge=4, le=60)
@@ -75,11 +79,12 @@ class MechanismConfig(Section):
         if self.kind != "bar":
             return self
         # a tip passing up beside the bar at the pass offset must miss it
-        gap = self.pass_offset - self.hook_reach - self.hook_radius - self.bar_radius
+        gap = self.pass_offset - self.outer_reach - self.hook_radius - self.bar_radius
         if gap <= 0.0:
             raise ValueError(
-                f"mechanism.pass_offset = {self.pass_offset:g} m must be > hook_reach + "
-                f"hook_radius + bar_radius = "
+                f"mechanism.pass_offset = {self.pass_offset:g} m must be > the hook's outer "
+                f"reach (hook_reach + hook_tip_length sin(hook_tip_angle_deg)) + hook_radius "
+                f"+ bar_radius = "
                 f"{self.pass_offset - gap:g} m (the hook must pass beside the bar)"
             )
         if self.standoff <= self.bar_radius + 2.0 * self.hook_radius:
@@ -89,6 +94,7 @@ class MechanismConfig(Section):
         return self
 
     @property
-    def hook_depth(self) -> float:
-        """Depth of the hook's crown below its eye [m]."""
-        return self.hook_shank
+    def outer_reach(self) -> float:
+        """Farthest reach of the hook's tips from the shank's axis [m]."""
+        return self.hook_reach + self.hook_tip_length * math.sin(
+            math.radians(self.hook_tip_angle_deg))

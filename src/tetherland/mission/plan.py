@@ -339,7 +339,6 @@ def free_flight_legs(
     of the hooking pass). The paths are those of
     :mod:`tetherland.mission.supervisor`.
     """
-    cfg = scenario.mission
     top = wp.start + takeoff_height(scenario) * Z_W
     over_hook = np.array([*wp.hook_start[:2], wp.z_safe])
     release = geo.p_A + wp.release_distance * d_T_W - wp.attachment_W

@@ -568,8 +568,8 @@ class HangingLine:
         self._vadr = [int(model.jnt_dofadr[j]) for j in joints]
         vehicle = mujoco.mj_name2id(model, body, "vehicle")
         self._vehicle_body = vehicle
-        for i in range(n):
-            model.body_invweight0[mujoco.mj_name2id(model, body, f"line_link{i}")] = (
+        for name in (f"line_link{i}" for i in range(n)):
+            model.body_invweight0[mujoco.mj_name2id(model, body, name)] = (
                 model.body_invweight0[vehicle]
             )
         sensor = mujoco.mjtObj.mjOBJ_SENSOR

@@ -647,14 +647,20 @@ def add_hanging_line(scene: SceneXml) -> None:
         parent = body
         attrs = {"pos": _fmt((l_s, 0.0, 0.0))}
     hook = _sub(parent, "body", name="hook", **attrs)
-    _sub(hook, "joint", name="hook_joint", type="ball", damping=f"{spec.joint_damping:.12g}")
+    # armature: the hook's own inertia about its eye again (m s^2), so that its swing about
+    # the eye stays resolvable against the stiff contacts of the mechanism
+    _sub(hook, "joint", name="hook_joint", type="ball", damping=f"{spec.joint_damping:.12g}",
+         armature=f"{m.hook_mass * m.hook_shank**2:.12g}")  # fmt: skip
     s, r, tip = m.hook_shank, m.hook_reach, m.hook_tip_length
+    lean = math.radians(m.hook_tip_angle_deg)
     pieces = [((0.0, 0.0, 0.0), (s, 0.0, 0.0))]
     for k in range(3):
         a = 2.0 * math.pi * k / 3.0
-        end = (s, r * math.cos(a), r * math.sin(a))
+        c, si = math.cos(a), math.sin(a)
+        end = (s, r * c, r * si)
+        out = r + tip * math.sin(lean)
         pieces.append(((s, 0.0, 0.0), end))
-        pieces.append((end, (s - tip, end[1], end[2])))
+        pieces.append((end, (s - tip * math.cos(lean), out * c, out * si)))
     total = sum(math.dist(a, b) for a, b in pieces)
     for j, (a, b) in enumerate(pieces):
         _sub(hook, "geom", name=f"hook{j}", type="capsule", fromto=_fmt((*a, *b)),
