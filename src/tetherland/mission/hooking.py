@@ -232,3 +232,13 @@ def takeoff_height(scenario: Scenario) -> float:
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
     hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
     return max(h, hang + m.lift_margin)
+
+
+def unhook_depth(scenario: Scenario) -> float:
+    """Depth of the hook point beyond the anchor where the unhooking pass begins [m]:
+    ``mission.hooking.unhook_depth``, or ``mechanism.unhook_depth`` for the bar (flown back
+    over the bar with that much slack, the line slides back and the hook drops out of
+    its crook; with a few centimetres it stays seated and is lifted into the bar again)."""
+    if scenario.mechanism.kind == "bar":
+        return scenario.mechanism.unhook_depth
+    return scenario.mission.hooking.unhook_depth

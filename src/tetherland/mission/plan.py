@@ -24,6 +24,7 @@ from tetherland.mission.hooking import (
     hooking_pass,
     hooking_pass_for,
     takeoff_height,
+    unhook_depth,
     unhooking_path,
 )
 from tetherland.mission.paths import segment_duration
@@ -301,7 +302,7 @@ def plan_mission(
         start=_frozen(p_start),
         hook_start=_frozen(hook_start),
         hook_end=_frozen(hook_end),
-        unhook_entry=_frozen(hooking.entry(cfg.hooking.unhook_depth, cfg.hooking.overshoot)),
+        unhook_entry=_frozen(hooking.entry(unhook_depth(scenario), cfg.hooking.overshoot)),
         slack_out=_frozen(p_A + r_slack * d0 - attachment_W),
         stretch=_frozen(p_A + (length + pull) * d0 - attachment_W),
         release_distance=r_release,
