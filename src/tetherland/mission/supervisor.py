@@ -127,6 +127,8 @@ class MissionSupervisor:
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._min_leg = shortest_leg(scenario)
+        self._climb_slack: np.ndarray | None = None
+        """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
         self._takeoff_height = takeoff_height(scenario)
         self.yaw = wp.yaw
         # state
@@ -550,6 +552,8 @@ class MissionSupervisor:
             slack = self._path.end
             if self._release_pull is not None:  # the pass turns d: freeze the pull
                 self._release_pull.freeze(t, est, slack)
+            if self.scenario.mechanism.kind == "bar":
+                return self._climb_away(t, est, slack)
             # the reverse pass, no deeper than mission.hooking.unhook_depth
             *corners, last = unhooking_path(
                 slack, wp.unhook_entry, wp.hook_start, self._unhook_reach,
@@ -562,8 +566,37 @@ class MissionSupervisor:
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t, est)
 
+    def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
+        """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
+        free clears the bar, then fly over it to the hooking start. If the hook still sits
+        on the bar, the climb draws the line taut: the measured tension shows it
+        (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
+        wp, cfg = self.wp, self.cfg
+        climb = np.array([*slack[:2], wp.hook_start[2]])
+        self._path = (
+            self._new_path(t, slack, cfg.hooking.speed)
+            .to(climb)
+            .to(wp.hook_start, pause=cfg.settle_time)
+        )
+        self._climb_slack = slack.copy()
+        self._enter(Phase.UNHOOK, t, "cable slack: climbing clear of the bar")
+        return self._free(t, est)
+
     def _unhook(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
+        slack = self._climb_slack
+        if slack is not None and (est.tension or 0.0) > cfg.stretch.tension_threshold:
+            # the hook still sits on the bar: back to slack and the reverse pass under it
+            self._climb_slack = None
+            *corners, last = unhooking_path(slack, wp.unhook_entry, wp.hook_start,
+                                            back_off=False)  # fmt: skip
+            self._path = self._new_path(t, est.body.p_W, cfg.hooking.speed).to(slack)
+            for p in corners:
+                self._path.to(p)
+            self._path.to(last, pause=cfg.settle_time)
+            self._event(t, "hook", f"tension {est.tension:.2f} N while climbing: the hook is "
+                        "still on the bar, reverse pass under it")  # fmt: skip
+            return self._free(t, est)
         if t >= self._path.t_end:
             up = np.array([*wp.hook_start[:2], wp.z_safe])
             home_high = np.array([*wp.start[:2], wp.z_safe])
