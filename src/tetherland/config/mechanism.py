@@ -68,7 +68,7 @@ class MechanismConfig(Section):
     lift_margin: float = Field(0.3, ge=0, le=5)
     """The mission's takeoff point is at least this far above the hanging hook's depth
     below the vehicle (the hook leaves the ground during the climb) [m]."""
-    unhook_depth: float = Field(0.10, gt=0, le=5)
+    release_depth: float = Field(0.10, gt=0, le=5)
     """Depth of the hanging hook below the bar where the unhooking pass begins (replaces
     ``mission.hooking.unhook_depth`` for the bar): flown back over the bar with that much
     slack the line slides back and the hook drops out of its crook [m]."""

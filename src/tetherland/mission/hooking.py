@@ -236,9 +236,9 @@ def takeoff_height(scenario: Scenario) -> float:
 
 def unhook_depth(scenario: Scenario) -> float:
     """Depth of the hook point beyond the anchor where the unhooking pass begins [m]:
-    ``mission.hooking.unhook_depth``, or ``mechanism.unhook_depth`` for the bar (flown back
+    ``mission.hooking.unhook_depth``, or ``mechanism.release_depth`` for the bar (flown back
     over the bar with that much slack, the line slides back and the hook drops out of
     its crook; with a few centimetres it stays seated and is lifted into the bar again)."""
     if scenario.mechanism.kind == "bar":
-        return scenario.mechanism.unhook_depth
+        return scenario.mechanism.release_depth
     return scenario.mission.hooking.unhook_depth
