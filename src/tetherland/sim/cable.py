@@ -541,8 +541,9 @@ class HangingLine:
     cable pushes on the line and the hook (net force, low-passed over
     :data:`CATCH_FILTER_TIME`) with more than ``mechanism.catch_threshold`` times the
     hook's weight (it holds the line's pull: a line merely sliding over the bar carries
-    about the hook's weight), cleared when neither has touched the bar for
-    :data:`RELEASE_TIME`. ``engaged`` is
+    about the hook's weight) with the hook's crown within the hook's size of the bar's
+    axis; cleared when neither has touched the bar for :data:`RELEASE_TIME` or the crown
+    is farther. The contact alone decides what the bodies do; this only classifies. ``engaged`` is
     the same; :meth:`set_engaged` only lays the line out (the contact decides).
     """
 
@@ -594,6 +595,13 @@ class HangingLine:
         self._alpha = min(1.0, self.dt / CATCH_FILTER_TIME)
         self._apart = 0
         self._release_steps = max(1, round(RELEASE_TIME / self.dt))
+        site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "hook_crown")
+        self._crown_xpos = data.site_xpos[site]
+        self._bar_mid: tuple[float, ...] = (0.0, 0.0, 0.0)
+        self._bar_dir: tuple[float, ...] = (0.0, 1.0, 0.0)
+        self._bar_half = 0.5 * mech.bar_length
+        near = mech.outer_reach + mech.hook_tip_length + mech.hook_radius + mech.bar_radius
+        self._near2 = near * near
         self._set_armature(0.0)
 
     @property
@@ -626,13 +634,25 @@ class HangingLine:
                else 0.0)  # fmt: skip
         push = self._push = self._push + (raw - self._push) * self._alpha
         was = self.caught
+        near = self._near_bar()
         if was:
             self._apart = 0 if touching else self._apart + 1
-            self.caught = self._apart < self._release_steps
+            self.caught = near and self._apart < self._release_steps
         else:
-            self.caught = push > self._catch
+            self.caught = near and push > self._catch
             self._apart = 0
         self.changed = was != self.caught
+
+    def _near_bar(self) -> bool:
+        """The hook's crown within the hook's own size of the bar's axis (a line draped
+        over the bar with the hook snagged elsewhere is not a caught hook)."""
+        c = self._crown_xpos
+        a, u, half = self._bar_mid, self._bar_dir, self._bar_half
+        dx, dy, dz = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+        s = dx * u[0] + dy * u[1] + dz * u[2]
+        s = -half if s < -half else (half if s > half else s)
+        ex, ey, ez = dx - s * u[0], dy - s * u[1], dz - s * u[2]
+        return ex * ex + ey * ey + ez * ez <= self._near2
 
     def _set_armature(self, tension: float) -> None:
         spec, d = self.spec, self._data
@@ -660,11 +680,14 @@ class HangingLine:
         self._push = self._catch if engaged else 0.0
         self.lay_out(toward_W=self._p_A if engaged else None)
 
-    def set_anchor(self, p_A: FloatArray, floor_z: float) -> None:
-        """The anchor (for a line laid out engaged) and the ground height under the start
-        pad (a hanging line is laid along it) [m]."""
+    def set_anchor(self, p_A: FloatArray, floor_z: float, bar_axis_W: FloatArray) -> None:
+        """The anchor (the bar's middle; for a line laid out engaged), the ground height
+        under the start pad (a hanging line is laid along it) and the bar's axis [m, -]."""
         self._p_A = np.asarray(p_A, dtype=float)
         self._ground_z = float(floor_z)
+        self._bar_mid = tuple(float(x) for x in self._p_A)
+        u = np.asarray(bar_axis_W, dtype=float)
+        self._bar_dir = tuple(float(x) for x in u / np.linalg.norm(u))
 
     def follow_vehicle(self) -> None:
         self.lay_out(toward_W=self._p_A if self.caught else None)

@@ -139,7 +139,7 @@ class Plant:
         self._line = self.cable if isinstance(self.cable, HangingLine) else None
         """The bar mechanism's hanging line (None: the capture disk decides engagement)."""
         if self._line is not None:
-            self._line.set_anchor(geo.p_A, self.layout.ground_z)
+            self._line.set_anchor(geo.p_A, self.layout.ground_z, geo.R_WA[:, 1])
             self._crown_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "hook_crown")
         self.hook = Hook(
             geo.p_A,
