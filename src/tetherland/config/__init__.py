@@ -22,6 +22,7 @@ from tetherland.config.loader import (
     scenario_to_toml,
     with_overrides,
 )
+from tetherland.config.mechanism import MechanismConfig
 from tetherland.config.mission import (
     ContactConfig,
     FlightConfig,
@@ -64,6 +65,7 @@ __all__ = [
     "FreeFlightGains",
     "HookingConfig",
     "ImuConfig",
+    "MechanismConfig",
     "MissionConfig",
     "MocapConfig",
     "PerchingConfig",

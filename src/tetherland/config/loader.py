@@ -13,6 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
+from tetherland.config.mechanism import MechanismConfig
 from tetherland.config.renames import renamed_keys
 from tetherland.config.scenario import Scenario
 from tetherland.config.schema import allowed_range as _allowed_range
@@ -200,6 +201,20 @@ def _json_value(value: Any) -> Any:
     return item() if callable(item) else str(value)
 
 
+def bar_anchor_height(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with ``anchor.h_A`` = ``mechanism.standoff`` when the mechanism is the bar
+    and ``anchor.h_A`` is 0 or absent: the bar's anchor is its axis, so "on the surface"
+    means the mechanism fixed on the surface with its axis at the standoff."""
+    mech, anchor = data.get("mechanism"), data.get("anchor", {})
+    if not isinstance(mech, dict) or mech.get("kind") != "bar" or not isinstance(anchor, dict):
+        return data
+    h_A = anchor.get("h_A", 0.0)
+    if isinstance(h_A, bool) or not isinstance(h_A, (int, float)) or h_A != 0.0:
+        return data
+    standoff = mech.get("standoff", MechanismConfig.model_fields["standoff"].default)
+    return {**data, "anchor": {**anchor, "h_A": standoff}}
+
+
 def scenario_from_dict(data: dict[str, Any], default_name: str = "custom") -> Scenario:
     """Validate a nested dict (TOML layout) into a :class:`Scenario`.
 
@@ -212,7 +227,7 @@ def scenario_from_dict(data: dict[str, Any], default_name: str = "custom") -> Sc
     ConfigErrors
         One line per bad field (every field error at once).
     """
-    data = dict(data)
+    data = bar_anchor_height(dict(data))
     data.setdefault("name", default_name)
     try:
         # strict validation of the JSON form: no bool <-> number or "yes" -> bool coercion,

@@ -19,6 +19,7 @@ from tetherland.config.checks import (
 from tetherland.config.control import ControllerConfig
 from tetherland.config.estimation import EstimatorConfig
 from tetherland.config.faults import FaultsConfig
+from tetherland.config.mechanism import MechanismConfig
 from tetherland.config.mission import MissionConfig
 from tetherland.config.perching import PerchingConfig
 from tetherland.config.perturbation import PerturbationConfig
@@ -59,6 +60,27 @@ class Scenario(Section):
     """Injected faults (the plant's truth; the robot's belief never has them)."""
     aero: AeroConfig = AeroConfig()
     """Rotors near surfaces and rotor drag (the plant's truth)."""
+    mechanism: MechanismConfig = MechanismConfig()
+    """The hook and the anchoring mechanism (docs/mechanism.md)."""
+
+    @model_validator(mode="after")
+    def _bar_mechanism(self) -> Scenario:
+        m = self.mechanism
+        if m.kind != "bar":
+            return self
+        if abs(self.anchor.h_A - m.standoff) > 1e-9:
+            raise ValueError(
+                f"anchor.h_A = {self.anchor.h_A:g} m must equal mechanism.standoff = "
+                f"{m.standoff:g} m for mechanism.kind = \"bar\" (the anchor is the bar's axis; "
+                "h_A = 0 is replaced by the standoff)"
+            )
+        n = self.tether.approach_direction
+        if abs(n[0]) + abs(n[1]) > 1e-9 or n[2] >= 0.0:
+            raise ValueError(
+                f"tether.approach_direction = {list(n)} must be straight down (0, 0, -1) for "
+                'mechanism.kind = "bar": the hanging hook is lowered beside the bar'
+            )
+        return self
 
     @field_validator("name")
     @classmethod

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
-from tetherland.models.hook import hook_offset
+from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset, swing_period
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
@@ -78,14 +78,28 @@ class HookingPass:
 def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) -> HookingPass:
     """The hooking pass of ``scenario`` (its tether, vehicle and mission settings)."""
     t, cfg = scenario.tether, scenario.mission
+    geo = geometry or LandingGeometry.from_scenario(scenario)
     return hooking_pass_for(
-        geometry or LandingGeometry.from_scenario(scenario),
+        geo,
         approach_A=t.approach_direction,
         hook_drop=t.hook_drop,
         r_att_B=scenario.vehicle.cable_attachment,
         approach_distance=cfg.hooking.approach_distance,
         hook_overshoot=cfg.hooking.overshoot,
+        offset_W=scenario_hook_offset(scenario, geo),
     )
+
+
+def scenario_hook_offset(scenario: Scenario, geometry: LandingGeometry) -> FloatArray:
+    """Hook point minus attachment point of ``scenario``'s mechanism, level flight [m]:
+    ``tether.hook_drop`` along n for the capture disk, the hanging hook beside the bar
+    (:func:`tetherland.models.hook.bar_hook_offset`) for the bar."""
+    t, m = scenario.tether, scenario.mechanism
+    if m.kind == "bar":
+        line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+        return bar_hook_offset(geometry.R_WA[:, 0], line, m.hook_shank, m.pass_offset)
+    n_W = geometry.R_WA @ np.asarray(t.approach_direction, dtype=float)
+    return hook_offset(n_W / np.linalg.norm(n_W), t.hook_drop)
 
 
 def hooking_pass_for(
@@ -96,6 +110,7 @@ def hooking_pass_for(
     r_att_B: ArrayLike,
     approach_distance: float,
     hook_overshoot: float,
+    offset_W: FloatArray | None = None,
 ) -> HookingPass:
     """The hooking pass for explicit tether and mission values.
 
@@ -109,13 +124,17 @@ def hooking_pass_for(
         Cable attachment in F_B [m].
     approach_distance, hook_overshoot : float
         Hook-point distance before and beyond the anchor where the pass starts and ends [m].
+    offset_W : (3,) array, optional
+        Hook point minus attachment point, F_W, replacing ``hook_drop`` n (the bar
+        mechanism, :func:`scenario_hook_offset`) [m].
     """
     R_WA = geometry.R_WA
     n_W = R_WA @ np.asarray(approach_A, dtype=float)
     n_W = n_W / np.linalg.norm(n_W)
     yaw = math.atan2(R_WA[1, 0], R_WA[0, 0])
     r_att_W = rotation_from_z_and_yaw(_Z_W, yaw) @ np.asarray(r_att_B, dtype=float)
-    shift = hook_offset(n_W, hook_drop) + r_att_W
+    offset = hook_offset(n_W, hook_drop) if offset_W is None else np.asarray(offset_W)
+    shift = offset + r_att_W
     return HookingPass(
         p_start_W=geometry.p_A - approach_distance * n_W - shift,
         p_end_W=geometry.p_A + hook_overshoot * n_W - shift,
@@ -129,6 +148,7 @@ def unhooking_path(
     entry_W: ArrayLike,
     hook_start_W: ArrayLike,
     reach: tuple[ArrayLike, float] | None = None,
+    back_off: bool = True,
 ) -> list[FloatArray]:
     """Centre-of-mass corners of the unhooking pass from ``p_from_W`` (the release point),
     F_W [m].
@@ -145,13 +165,18 @@ def unhooking_path(
     attachment offset, R the cable length less a margin). Along a vertical pass, backing
     off straight up from a release point beside the anchor would pull the cable taut; the
     segment from the corner to the entry stays in the ball when both ends are in it.
+
+    ``back_off = False`` (the bar mechanism): no back-off corner, straight to the entry.
+    Climbing on the landing side while the hook still sits on the bar would lift it by
+    the line draped over the bar and catch it again; flown straight back over the bar,
+    the line slides back and the hook drops out of its crook.
     """
     p0 = np.asarray(p_from_W, dtype=float)
     entry = np.asarray(entry_W, dtype=float)
     start = np.asarray(hook_start_W, dtype=float)
     axis = entry - start
     n_W = axis / np.linalg.norm(axis)
-    excess = float(n_W @ (p0 - entry))
+    excess = float(n_W @ (p0 - entry)) if back_off else 0.0
     if excess > 0.0 and reach is not None:
         c, R = np.asarray(reach[0], dtype=float), float(reach[1])
         # largest s in [0, excess] with |p0 - s n - c| <= R: s^2 - 2 b s + (|w|^2 - R^2) <= 0
@@ -179,3 +204,41 @@ def check_pass(
 def pass_clearance(scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass) -> float:
     """Smallest distance of the level vehicle from the surface along the hooking pass [m]."""
     return check_pass(scenario, geometry, hooking).clearance_m
+
+
+def shortest_leg(scenario: Scenario) -> float:
+    """Shortest free-flight leg of the mission [s]: 0.5 s, or with a hook hanging on a line
+    (the bar mechanism) ``mechanism.swing_periods`` of its swing period
+    (:func:`tetherland.models.hook.swing_period`): a rest-to-rest leg (9th-order
+    smoothstep) that long leaves the hanging hook almost still, so that it passes beside
+    the bar where the plan puts it."""
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar":
+        return 0.5
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    return max(0.5, m.swing_periods * swing_period(line, m.hook_shank))
+
+
+def takeoff_height(scenario: Scenario) -> float:
+    """Height of the takeoff point above the start pad [m]: ``mission.flight.takeoff_height``,
+    and with a hook hanging on a line (the bar mechanism) at least the hook's depth below
+    the pad's centre of mass plus ``mechanism.lift_margin``: the hook leaves the ground
+    during the climb, not while the vehicle hovers with it dragging (which sets it
+    swinging)."""
+    h = scenario.mission.flight.takeoff_height
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar":
+        return h
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
+    return max(h, hang + m.lift_margin)
+
+
+def unhook_depth(scenario: Scenario) -> float:
+    """Depth of the hook point beyond the anchor where the unhooking pass begins [m]:
+    ``mission.hooking.unhook_depth``, or ``mechanism.release_depth`` for the bar (flown back
+    over the bar with that much slack, the line slides back and the hook drops out of
+    its crook; with a few centimetres it stays seated and is lifted into the bar again)."""
+    if scenario.mechanism.kind == "bar":
+        return scenario.mechanism.release_depth
+    return scenario.mission.hooking.unhook_depth

@@ -58,10 +58,14 @@ class Path:
         Start position [m].
     speed, accel : float
         Peak speed [m/s] and acceleration [m/s^2] used to size the segments.
+    min_duration : float
+        Shortest move [s] (a hanging hook's legs last a few of its swing periods).
     """
 
-    def __init__(self, t0: float, start: ArrayLike, speed: float, accel: float):
+    def __init__(self, t0: float, start: ArrayLike, speed: float, accel: float,
+                 min_duration: float = 0.5):  # fmt: skip
         self.t0 = float(t0)
+        self.min_duration = float(min_duration)
         self.start = np.asarray(start, dtype=float).copy()
         self.speed = speed
         self.accel = accel
@@ -84,7 +88,7 @@ class Path:
         """Append a move to ``p`` (optionally slower), then an optional pause; returns self."""
         p = np.asarray(p, dtype=float)
         d = float(np.linalg.norm(p - self.end))
-        T = segment_duration(d, speed or self.speed, self.accel)
+        T = segment_duration(d, speed or self.speed, self.accel, self.min_duration)
         self._append(Segment(self.t_end, T, self.end.copy(), p.copy()))
         if pause > 0.0:
             self._append(Segment(self.t_end, pause, p.copy(), p.copy()))

@@ -19,7 +19,14 @@ from tetherland.analysis.clearance import HookingClearance, level_vehicle_distan
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.geometry import FloatArray, LandingGeometry, link_direction
-from tetherland.mission.hooking import check_pass, hooking_pass, hooking_pass_for, unhooking_path
+from tetherland.mission.hooking import (
+    check_pass,
+    hooking_pass,
+    hooking_pass_for,
+    takeoff_height,
+    unhook_depth,
+    unhooking_path,
+)
 from tetherland.mission.paths import segment_duration
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
@@ -289,13 +296,13 @@ def plan_mission(
                 + design_hint(scenario)
             )
     assert r_slack is not None and r_release is not None
-    z_safe = max(float(hook_start[2]), float(p_start[2]) + cfg.flight.takeoff_height)
+    z_safe = max(float(hook_start[2]), float(p_start[2]) + takeoff_height(scenario))
     z_safe += cfg.flight.safe_height_margin
     waypoints = Waypoints(
         start=_frozen(p_start),
         hook_start=_frozen(hook_start),
         hook_end=_frozen(hook_end),
-        unhook_entry=_frozen(hooking.entry(cfg.hooking.unhook_depth, cfg.hooking.overshoot)),
+        unhook_entry=_frozen(hooking.entry(unhook_depth(scenario), cfg.hooking.overshoot)),
         slack_out=_frozen(p_A + r_slack * d0 - attachment_W),
         stretch=_frozen(p_A + (length + pull) * d0 - attachment_W),
         release_distance=r_release,
@@ -333,15 +340,15 @@ def free_flight_legs(
     of the hooking pass). The paths are those of
     :mod:`tetherland.mission.supervisor`.
     """
-    cfg = scenario.mission
-    top = wp.start + cfg.flight.takeoff_height * Z_W
+    top = wp.start + takeoff_height(scenario) * Z_W
     over_hook = np.array([*wp.hook_start[:2], wp.z_safe])
     release = geo.p_A + wp.release_distance * d_T_W - wp.attachment_W
     return {
         "approach": [top, np.array([*top[:2], wp.z_safe]), over_hook, wp.hook_start],
         "stretch": [wp.hook_end, wp.slack_out, wp.stretch],
         "release": unhooking_path(
-            release, wp.unhook_entry, wp.hook_start, unhook_reach(scenario, geo, wp)
+            release, wp.unhook_entry, wp.hook_start, unhook_reach(scenario, geo, wp),
+            back_off=scenario.mechanism.kind != "bar",
         ),
         "return": [wp.hook_start, over_hook, np.array([*wp.start[:2], wp.z_safe]), top],
     }
@@ -405,7 +412,7 @@ def mission_time_bound(
     cfg = scenario.mission
     legs = free_flight_legs(scenario, geo, wp, d_T_W)
     fly, hook = cfg.flight, cfg.hooking
-    top = wp.start + fly.takeoff_height * Z_W
+    top = wp.start + takeoff_height(scenario) * Z_W
     pad = wp.start - fly.pad_press_depth * Z_W
     take_up = cfg.stretch.take_up_speed_factor * fly.cruise_speed
     flown = [

@@ -56,7 +56,7 @@ from tetherland.mission.contact import (
     guarded_descent,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
-from tetherland.mission.hooking import unhooking_path
+from tetherland.mission.hooking import shortest_leg, takeoff_height, unhooking_path
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
@@ -126,6 +126,10 @@ class MissionSupervisor:
         wp = plan.waypoints
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
+        self._min_leg = shortest_leg(scenario)
+        self._climb_slack: np.ndarray | None = None
+        """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
+        self._takeoff_height = takeoff_height(scenario)
         self.yaw = wp.yaw
         # state
         self.phase = Phase.TAKEOFF
@@ -150,7 +154,7 @@ class MissionSupervisor:
         self._search_start: float | None = None
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
         self._path = self._new_path(0.0, wp.start).to(
-            wp.start + cfg.flight.takeoff_height * Z_W, pause=cfg.settle_time
+            wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time
         )
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
@@ -215,7 +219,8 @@ class MissionSupervisor:
         )  # fmt: skip
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
-        return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel)
+        return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
+                    self._min_leg)  # fmt: skip
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""
@@ -266,7 +271,7 @@ class MissionSupervisor:
             self._path = (
                 self._path.to(np.array([*start[:2], max(start[2], wp.z_safe)]))
                 .to(np.array([*wp.start[:2], wp.z_safe]))
-                .to(wp.start + self.cfg.flight.takeoff_height * Z_W)
+                .to(wp.start + self._takeoff_height * Z_W)
                 .to(wp.start - self.cfg.flight.pad_press_depth * Z_W, speed=self.cfg.hooking.speed,
                     pause=self.cfg.settle_time)
             )  # fmt: skip
@@ -547,9 +552,12 @@ class MissionSupervisor:
             slack = self._path.end
             if self._release_pull is not None:  # the pass turns d: freeze the pull
                 self._release_pull.freeze(t, est, slack)
+            if self.scenario.mechanism.kind == "bar":
+                return self._climb_away(t, est, slack)
             # the reverse pass, no deeper than mission.hooking.unhook_depth
             *corners, last = unhooking_path(
-                slack, wp.unhook_entry, wp.hook_start, self._unhook_reach
+                slack, wp.unhook_entry, wp.hook_start, self._unhook_reach,
+                back_off=self.scenario.mechanism.kind != "bar",
             )
             self._path = self._new_path(t, slack, cfg.hooking.speed)
             for p in corners:
@@ -558,12 +566,41 @@ class MissionSupervisor:
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t, est)
 
+    def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
+        """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
+        free clears the bar, then fly over it to the hooking start. If the hook still sits
+        on the bar, the climb draws the line taut: the measured tension shows it
+        (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
+        wp, cfg = self.wp, self.cfg
+        climb = np.array([*slack[:2], wp.hook_start[2]])
+        self._path = (
+            self._new_path(t, slack, cfg.hooking.speed)
+            .to(climb)
+            .to(wp.hook_start, pause=cfg.settle_time)
+        )
+        self._climb_slack = slack.copy()
+        self._enter(Phase.UNHOOK, t, "cable slack: climbing clear of the bar")
+        return self._free(t, est)
+
     def _unhook(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
+        slack = self._climb_slack
+        if slack is not None and (est.tension or 0.0) > cfg.stretch.tension_threshold:
+            # the hook still sits on the bar: back to slack and the reverse pass under it
+            self._climb_slack = None
+            *corners, last = unhooking_path(slack, wp.unhook_entry, wp.hook_start,
+                                            back_off=False)  # fmt: skip
+            self._path = self._new_path(t, est.body.p_W, cfg.hooking.speed).to(slack)
+            for p in corners:
+                self._path.to(p)
+            self._path.to(last, pause=cfg.settle_time)
+            self._event(t, "hook", f"tension {est.tension:.2f} N while climbing: the hook is "
+                        "still on the bar, reverse pass under it")  # fmt: skip
+            return self._free(t, est)
         if t >= self._path.t_end:
             up = np.array([*wp.hook_start[:2], wp.z_safe])
             home_high = np.array([*wp.start[:2], wp.z_safe])
-            home = wp.start + cfg.flight.takeoff_height * Z_W
+            home = wp.start + self._takeoff_height * Z_W
             self._path = (
                 self._new_path(t, wp.hook_start)
                 .to(up)

@@ -490,21 +490,242 @@ _R_PARK = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 """World rotation of the first link's body frame at qpos0: local x along -z_W."""
 
 
-def joint_quaternions(nodes: FloatArray) -> list[FloatArray]:
+def joint_quaternions(nodes: FloatArray, frame0_W: FloatArray = _R_PARK) -> list[FloatArray]:
     """Ball-joint quaternions (w, x, y, z) that put the chain's joints at ``nodes``.
 
     Each link's x axis runs from its node to the next; the frames are carried from the
-    parked chain (hanging along -z_W) by the smallest rotations, so no link twists.
+    parked chain (the first link's frame at qpos0, ``frame0_W`` in F_W: by default
+    hanging along -z_W) by the smallest rotations, so no link twists.
     """
     dirs = np.diff(nodes, axis=0)
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     quats = []
-    W_prev, u_prev = _R_PARK, -_Z  # the first joint's parent frame: the body's fixed frame
+    W_prev = np.asarray(frame0_W, dtype=float)
+    u_prev = W_prev[:, 0]  # the first joint's parent frame: the body's fixed frame
     for u in dirs:
         W = _min_rotation(u_prev, u) @ W_prev
         quats.append(rotmat_to_quat(W_prev.T @ W))  # children: parent frame = previous link
         W_prev, u_prev = W, u
     return quats
+
+
+LINE_TENSION_FLOOR = 2.0
+"""Least tension the hanging line's armature is designed for [N]: a slack line of a few
+grams in contact with the bar and the surface needs it to stay resolvable (it adds
+under 1e-6 kg m^2 per joint, nothing against the hook's pendulum, m L^2 ~ 2e-2)."""
+
+
+CATCH_FILTER_TIME = 0.05
+"""Time constant of the low-pass on the bar's push on the hook that decides
+:attr:`HangingLine.caught` (a hook bouncing on the bar is not caught) [s]."""
+
+
+RELEASE_TIME = 0.2
+"""A caught hook counts as released once it has not touched the bar for this long (a
+hook resting in its crook on a slack line still touches it) [s]."""
+
+
+class HangingLine:
+    """The bar mechanism's cable: a line of capsule links hanging from the vehicle with the
+    hook body at its end (docs/mechanism.md); it engages the anchoring cable only through
+    contact and friction.
+
+    The tension written to the ``cable_force`` slot is the magnitude of the line's pull on
+    the vehicle (force sensor ``line_force`` at the first joint). The links' ball-joint
+    armature follows the tension as the chain's does (:class:`ChainCable`): a few grams of
+    line pulled by tens of newtons would swing faster than the step resolves. The line and
+    hook get the vehicle's ``body_invweight0``, so that their contacts and joints are as
+    stiff as the vehicle's (the taut line's true inverse inertia is the vehicle's).
+
+    :attr:`caught` is the plant's truth for the log and the judge: set when the anchoring
+    cable pushes on the line and the hook (net force, low-passed over
+    :data:`CATCH_FILTER_TIME`) with more than ``mechanism.catch_threshold`` times the
+    hook's weight (it holds the line's pull: a line merely sliding over the bar carries
+    about the hook's weight) with the hook's crown within the hook's size of the bar's
+    axis; cleared when neither has touched the bar for :data:`RELEASE_TIME` or the crown
+    is farther. The contact alone decides what the bodies do; this only classifies. ``engaged`` is
+    the same; :meth:`set_engaged` only lays the line out (the contact decides).
+    """
+
+    kind = CableModel.CHAIN
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, scenario: Scenario,
+                 side_W: FloatArray) -> None:  # fmt: skip
+        from tetherland.sim.mjcf import line_spec
+
+        self._model, self._data = model, data
+        self.spec = line_spec(scenario)
+        mech = scenario.mechanism
+        self.dt = scenario.sim.timestep
+        self._side = np.asarray(side_W, dtype=float)
+        self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+        self._ground_z = 0.0
+        self._p_A = np.zeros(3)
+        n = self.spec.segments
+        joint, body = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_BODY
+        joints = [mujoco.mj_name2id(model, joint, f"line_joint{i}") for i in range(n)]
+        joints.append(mujoco.mj_name2id(model, joint, "hook_joint"))
+        self._qadr = [int(model.jnt_qposadr[j]) for j in joints]
+        self._vadr = [int(model.jnt_dofadr[j]) for j in joints]
+        vehicle = mujoco.mj_name2id(model, body, "vehicle")
+        self._vehicle_body = vehicle
+        for name in (f"line_link{i}" for i in range(n)):
+            model.body_invweight0[mujoco.mj_name2id(model, body, name)] = (
+                model.body_invweight0[vehicle]
+            )
+        sensor = mujoco.mjtObj.mjOBJ_SENSOR
+        adr = model.sensor_adr
+        self._force = int(adr[mujoco.mj_name2id(model, sensor, "line_force")])
+        self._contact = int(adr[mujoco.mj_name2id(model, sensor, "hook_bar")])
+        self._slot = SENSOR_SLICES["cable_force"].start
+        self._sensordata = data.sensordata
+        self._hook_weight = mech.hook_mass * 9.81
+        self._catch = mech.catch_threshold * self._hook_weight
+        self._shank = mech.hook_shank
+        self._floor = mech.hook_reach + mech.hook_radius + 0.002
+        v0 = self._vadr[0]
+        self._armature = model.dof_armature[v0 : v0 + 3 * n]
+        self._link_inertia = self.spec.link_mass * self.spec.link_length**2 / 3.0
+        self._t_held = 0.0
+        self._t_set = 0.0
+        self.caught = False
+        self.changed = False
+        """True after a step in which :attr:`caught` changed."""
+        self._push = 0.0
+        self._alpha = min(1.0, self.dt / CATCH_FILTER_TIME)
+        self._apart = 0
+        self._release_steps = max(1, round(RELEASE_TIME / self.dt))
+        site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "hook_crown")
+        self._crown_xpos = data.site_xpos[site]
+        self._bar_mid: tuple[float, ...] = (0.0, 0.0, 0.0)
+        self._bar_dir: tuple[float, ...] = (0.0, 1.0, 0.0)
+        self._bar_half = 0.5 * mech.bar_length
+        near = mech.outer_reach + mech.hook_tip_length + mech.hook_radius + mech.bar_radius
+        self._near2 = near * near
+        self._set_armature(0.0)
+
+    @property
+    def engaged(self) -> bool:
+        return self.caught
+
+    @property
+    def hook_bar_force(self) -> float:
+        """Net contact force of the anchoring cable on the line and the hook, last step
+        [N]."""
+        d, c = self._sensordata, self._contact
+        return math.sqrt(d[c + 1] ** 2 + d[c + 2] ** 2 + d[c + 3] ** 2) if d[c] > 0.0 else 0.0
+
+    def _read(self) -> float:
+        d, i = self._sensordata, self._force
+        f = math.sqrt(d[i] * d[i] + d[i + 1] * d[i + 1] + d[i + 2] * d[i + 2])
+        d[self._slot] = f
+        return f
+
+    def advance(self) -> None:
+        mujoco.mj_step(self._model, self._data)
+        f = self._read()
+        held = self._t_held * ARMATURE_DECAY
+        self._t_held = held if held > 2.0 * f else 2.0 * f
+        if not (self._t_set * 0.8 <= self._t_held <= self._t_set):
+            self._set_armature(self._t_held)
+        d, c = self._sensordata, self._contact
+        touching = d[c] > 0.0
+        raw = (math.sqrt(d[c + 1] ** 2 + d[c + 2] ** 2 + d[c + 3] ** 2) if touching
+               else 0.0)  # fmt: skip
+        push = self._push = self._push + (raw - self._push) * self._alpha
+        was = self.caught
+        near = self._near_bar()
+        if was:
+            self._apart = 0 if touching else self._apart + 1
+            self.caught = near and self._apart < self._release_steps
+        else:
+            self.caught = near and push > self._catch
+            self._apart = 0
+        self.changed = was != self.caught
+
+    def _near_bar(self) -> bool:
+        """The hook's crown within the hook's own size of the bar's axis (a line draped
+        over the bar with the hook snagged elsewhere is not a caught hook)."""
+        c = self._crown_xpos
+        a, u, half = self._bar_mid, self._bar_dir, self._bar_half
+        dx, dy, dz = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+        s = dx * u[0] + dy * u[1] + dz * u[2]
+        s = -half if s < -half else (half if s > half else s)
+        ex, ey, ez = dx - s * u[0], dy - s * u[1], dz - s * u[2]
+        return ex * ex + ey * ey + ez * ez <= self._near2
+
+    def _set_armature(self, tension: float) -> None:
+        spec, d = self.spec, self._data
+        a_old = self._armature[0]
+        tension = max(tension, LINE_TENSION_FLOOR)
+        a = chain_armature(tension, spec.link_length, spec.link_mass, self.dt)
+        if a > a_old:
+            scale = (self._link_inertia + a_old) / (self._link_inertia + a)
+            for adr in self._vadr[:-1]:
+                d.qvel[adr : adr + 3] *= scale
+        self._armature[:] = a
+        self._t_set = tension
+
+    def forward(self) -> None:
+        mujoco.mj_forward(self._model, self._data)
+        self._read()
+
+    def set_engaged(self, engaged: bool) -> None:
+        """Lay the line out at rest (``engaged``: straight towards the anchor, else hanging,
+        along the ground below ``set_floor``'s height); the contact decides the rest."""
+        self._t_held = 0.0
+        self._set_armature(0.0)
+        self.caught = bool(engaged)
+        self.changed = False
+        self._push = self._catch if engaged else 0.0
+        self.lay_out(toward_W=self._p_A if engaged else None)
+
+    def set_anchor(self, p_A: FloatArray, floor_z: float, bar_axis_W: FloatArray) -> None:
+        """The anchor (the bar's middle; for a line laid out engaged), the ground height
+        under the start pad (a hanging line is laid along it) and the bar's axis [m, -]."""
+        self._p_A = np.asarray(p_A, dtype=float)
+        self._ground_z = float(floor_z)
+        self._bar_mid = tuple(float(x) for x in self._p_A)
+        u = np.asarray(bar_axis_W, dtype=float)
+        self._bar_dir = tuple(float(x) for x in u / np.linalg.norm(u))
+
+    def follow_vehicle(self) -> None:
+        self.lay_out(toward_W=self._p_A if self.caught else None)
+
+    def lay_out(self, toward_W: FloatArray | None = None) -> None:
+        """Put the line and hook at rest: straight to ``toward_W``, else straight down from
+        the attachment to just above the ground, then folded back and forth along
+        ``side_W`` on it, the hook at the end."""
+        d = self._data
+        q = d.qpos
+        R_WB = quat_to_rotmat(q[3:7])
+        p0 = q[0:3] + R_WB @ self._r_att
+        n = self.spec.segments
+        l_s = self.spec.link_length
+        steps = [l_s] * n + [self._shank]
+        nodes = [p0]
+        side = self._side - (self._side @ _Z) * _Z
+        side /= np.linalg.norm(side)
+        fold = 1.0
+        for j, step in enumerate(steps):
+            p = nodes[-1]
+            if toward_W is not None:
+                e = np.asarray(toward_W) - p
+                e = e / max(float(np.linalg.norm(e)), 1e-9)
+            elif p[2] - step >= self._ground_z + self._floor:
+                e = -_Z
+            elif j == len(steps) - 1:
+                e = side  # the hook lies on the ground, beside the folds
+            else:  # folded back and forth on the ground under the attachment (the links
+                # do not touch each other): lifted, the hook rises from below the vehicle
+                e, fold = fold * side, -fold
+            nodes.append(p + step * e)
+        frame0 = R_WB @ _R_PARK
+        quats = joint_quaternions(np.array(nodes), frame0)
+        for a, qj in zip(self._qadr, quats, strict=True):
+            d.qpos[a : a + 4] = qj
+        for a in self._vadr:
+            d.qvel[a : a + 3] = 0.0
 
 
 def make_cable(
@@ -514,7 +735,10 @@ def make_cable(
     p_A: FloatArray,
     side_W: FloatArray,
 ) -> Cable:
-    """The :class:`Cable` implementation of ``scenario.tether.cable_model``."""
+    """The :class:`Cable` implementation of ``scenario.tether.cable_model`` (the
+    :class:`HangingLine` for the bar mechanism)."""
+    if scenario.mechanism.kind == "bar":
+        return HangingLine(model, data, scenario, side_W)
     t = scenario.tether
     kind = t.cable_model
     if kind == CableModel.IDEAL:

@@ -141,6 +141,15 @@ class Hook:
         """True while the cable is attached to the anchor."""
         return self._engaged
 
+    def record(self, t: float, engaged: bool, point_W: ArrayLike) -> None:
+        """A mechanism in contact (the bar) caught (``engaged``) or let go of the hook at
+        ``t`` with the hook at ``point_W``: record the event and set the state [s, m]."""
+        p = np.asarray(point_W, dtype=float)
+        dist = float(np.linalg.norm(p - np.asarray(self._p_A)))
+        kind = HookEventKind.ENGAGED if engaged else HookEventKind.RELEASED
+        self.events.append(HookEvent(t, kind, dist, p.copy()))
+        self._engaged = bool(engaged)
+
     def sever(self, t: float, p_att_W: ArrayLike) -> None:
         """Fault: the cable breaks at ``t`` with the attachment point at ``p_att_W``; it
         is detached and never engages again."""

@@ -133,6 +133,8 @@ TRUTH: tuple[Column, ...] = (
        "each lander over the physics steps since the previous control tick"),
     _c("lander_ground_forces", 4, "N", "largest normal force of the ground (start pad) on "
        "each lander over the physics steps since the previous control tick"),
+    _c("hook_p_W", 3, "m", "true hook position: the hook body's crown (bar mechanism), "
+       "else the capture-disk model's hook point"),
 )
 MEASUREMENTS: tuple[Column, ...] = _robot_side((
     _c("imu_specific_force_B", 3, "m/s^2", "last IMU specific force"),

@@ -501,6 +501,9 @@ def add_anchor(scene: SceneXml) -> None:
     geom = scene.layout.geometry
     p_A = geom.p_A
     _sub(world, "site", name="anchor", pos=_fmt(p_A), size="0.02", rgba=".9 .2 .1 1")
+    if scene.scenario.mechanism.kind == "bar":
+        add_anchoring_cable(scene)
+        return
     _sub(
         world,
         "geom",
@@ -523,6 +526,154 @@ def add_anchor(scene: SceneXml) -> None:
         rgba=".9 .6 .1 .25",
         group="2",
     )
+
+
+LINE_CONTYPE, LINE_CONAFFINITY = 2, 0
+"""Contact bits of the hanging line and the hook: they touch the environment (whose
+conaffinity gets bit 2, :func:`add_hanging_line`), never the vehicle or each other."""
+ENV_CONAFFINITY = 3
+"""Conaffinity of the ground, the surface and the anchoring mechanism with the bar."""
+
+
+def add_anchoring_cable(scene: SceneXml) -> None:
+    """The bar mechanism's anchoring cable: the capsule ``anchor_bar`` of length
+    ``mechanism.bar_length`` along y_A with its axis through p_A, and the posts ``post0``
+    and ``post1`` from its ends down to the surface along -z_S (collision geoms of the
+    world, ``mechanism.bar_friction``; contact time constant two physics steps)."""
+    m = scene.scenario.mechanism
+    geo = scene.layout.geometry
+    p_A, y_A, z_S = geo.p_A, geo.R_WA[:, 1], geo.surface.R_WS[:, 2]
+    half = 0.5 * m.bar_length * y_A
+    sim = scene.scenario.sim
+    env = {
+        "priority": "1",
+        "condim": "3",
+        # as stiff as the step allows (MuJoCo's floor: two steps): a 1.5 mm line hitting a
+        # post at 0.5 m/s sinks about v tau into it
+        "solref": _fmt((2.0 * sim.timestep, sim.contact_damping_ratio)),
+        "friction": f"{m.bar_friction:.12g} 0.005 0.0001",
+        "conaffinity": str(ENV_CONAFFINITY),
+        "rgba": ".9 .2 .1 1",
+        "group": "1",
+    }
+    _sub(scene.world, "geom", name="anchor_bar", type="capsule", size=f"{m.bar_radius:.12g}",
+         fromto=_fmt(np.concatenate((p_A - half, p_A + half))), **env)  # fmt: skip
+    post_r = 1.5 * m.bar_radius
+    for i, sign in enumerate((-1.0, 1.0)):
+        top = p_A + sign * half
+        foot = top - m.standoff * z_S
+        _sub(scene.world, "geom", name=f"post{i}", type="capsule", size=f"{post_r:.12g}",
+             fromto=_fmt(np.concatenate((top, foot))), **env)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class LineSpec:
+    """The bar mechanism's hanging line (docs/mechanism.md).
+
+    Attributes
+    ----------
+    segments : int
+        Number of links N.
+    link_length : float
+        Line length over N [m].
+    link_mass : float
+        line density times the link length [kg].
+    radius : float
+        Capsule radius of the links [m].
+    joint_damping : float
+        Viscous damping of each ball joint [N m s/rad].
+    """
+
+    segments: int
+    link_length: float
+    link_mass: float
+    radius: float
+    joint_damping: float
+
+    @property
+    def line_length(self) -> float:
+        """Length of the line [m]."""
+        return self.segments * self.link_length
+
+
+def line_spec(scenario: Scenario) -> LineSpec:
+    """The hanging line of ``scenario.mechanism`` (the bar), its length from
+    :func:`tetherland.models.hook.bar_line_length`."""
+    from tetherland.models.hook import bar_line_length
+
+    m = scenario.mechanism
+    length = bar_line_length(scenario.tether.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    n = m.line_segments
+    l_s = length / n
+    m_s = m.line_density * l_s
+    return LineSpec(n, l_s, m_s, m.line_radius, m_s * l_s * l_s / 3.0 / CHAIN_DAMPING_TIME)
+
+
+def add_hanging_line(scene: SceneXml) -> None:
+    """The bar mechanism's hanging line and hook, on the vehicle's body.
+
+    Bodies ``line_link0`` (ball-jointed to the vehicle at the attachment point) to
+    ``line_link{N-1}``, each a capsule along its local x, then the body ``hook``
+    (ball-jointed at its eye): the shank along its local x, three arms at 120 deg at the
+    crown and a tip pointing back up from each arm's end, capsules of
+    ``mechanism.hook_radius``, mass ``mechanism.hook_mass`` spread over them by length.
+    At qpos0 the line hangs straight down from the level vehicle. Site ``line_root`` at
+    the first joint carries the force sensor ``line_force`` (the line's pull on the
+    vehicle); site ``hook_eye`` and ``hook_crown`` mark the hook. The line and the hook
+    touch the environment only (:data:`LINE_CONTYPE`).
+    """
+    scenario = scene.scenario
+    m = scenario.mechanism
+    spec = line_spec(scenario)
+    assert scene.vehicle is not None
+    l_s, m_s = spec.link_length, spec.link_mass
+    i_t = m_s * l_s * l_s / 12.0
+    col = {"contype": str(LINE_CONTYPE), "conaffinity": str(LINE_CONAFFINITY), "condim": "3",
+           "group": "1", "rgba": ".95 .85 .2 1"}  # fmt: skip
+    parent = scene.vehicle
+    attrs = {"pos": _fmt(scenario.vehicle.cable_attachment),
+             "quat": _fmt((math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0))}  # fmt: skip
+    for i in range(spec.segments):
+        body = _sub(parent, "body", name=f"line_link{i}", **attrs)
+        _sub(body, "joint", name=f"line_joint{i}", type="ball",
+             damping=f"{spec.joint_damping:.12g}")  # fmt: skip
+        _sub(body, "inertial", pos=_fmt((0.5 * l_s, 0.0, 0.0)), mass=f"{m_s:.12g}",
+             diaginertia=_fmt((i_t, i_t, i_t)))  # fmt: skip
+        _sub(body, "geom", name=f"line_link{i}", type="capsule",
+             fromto=_fmt((0.0, 0.0, 0.0, l_s, 0.0, 0.0)), size=f"{spec.radius:.12g}",
+             mass="0", **col)  # fmt: skip
+        if i == 0:
+            _sub(body, "site", name="line_root", pos="0 0 0", size="0.004", group="4")
+        parent = body
+        attrs = {"pos": _fmt((l_s, 0.0, 0.0))}
+    hook = _sub(parent, "body", name="hook", **attrs)
+    # armature: the hook's own inertia about its eye again (m s^2), so that its swing about
+    # the eye stays resolvable against the stiff contacts of the mechanism
+    _sub(hook, "joint", name="hook_joint", type="ball", damping=f"{spec.joint_damping:.12g}",
+         armature=f"{m.hook_mass * m.hook_shank**2:.12g}")  # fmt: skip
+    s, r, tip = m.hook_shank, m.hook_reach, m.hook_tip_length
+    lean = math.radians(m.hook_tip_angle_deg)
+    pieces = [((0.0, 0.0, 0.0), (s, 0.0, 0.0))]
+    for k in range(3):
+        a = 2.0 * math.pi * k / 3.0
+        c, si = math.cos(a), math.sin(a)
+        end = (s, r * c, r * si)
+        out = r + tip * math.sin(lean)
+        pieces.append(((s, 0.0, 0.0), end))
+        pieces.append((end, (s - tip * math.cos(lean), out * c, out * si)))
+    total = sum(math.dist(a, b) for a, b in pieces)
+    for j, (a, b) in enumerate(pieces):
+        _sub(hook, "geom", name=f"hook{j}", type="capsule", fromto=_fmt((*a, *b)),
+             size=f"{m.hook_radius:.12g}",
+             mass=f"{m.hook_mass * math.dist(a, b) / total:.12g}",
+             **{**col, "rgba": ".7 .7 .75 1"})  # fmt: skip
+    _sub(hook, "site", name="hook_eye", pos="0 0 0", size="0.004", group="4")
+    _sub(hook, "site", name="hook_crown", pos=_fmt((s, 0.0, 0.0)), size="0.004", group="4")
+    # the environment touches the line (bit 2 of its conaffinity)
+    for name in ("ground", "surface"):
+        g = scene.world.find(f"geom[@name='{name}']")
+        if g is not None:
+            g.set("conaffinity", str(ENV_CONAFFINITY))
 
 
 def add_vehicle(scene: SceneXml) -> None:
@@ -634,6 +785,14 @@ def add_cable(scene: SceneXml) -> None:
     (limited to [0, l] for the ideal cable, hidden under the chain's links)."""
     scenario = scene.scenario
     sim, tether = scenario.sim, scenario.tether
+    if scenario.mechanism.kind == "bar":
+        add_hanging_line(scene)
+        # the tendon only measures the anchor-attachment distance
+        cable = _sub(scene.section("tendon"), "spatial", name="cable", width="0.004",
+                     rgba=".95 .85 .2 1", group=str(CABLE_GROUP_HIDDEN))  # fmt: skip
+        _sub(cable, "site", site="anchor")
+        _sub(cable, "site", site="attachment")
+        return
     cable_model = tether.cable_model
     if cable_model == CableModel.CHAIN:
         add_chain(
@@ -674,7 +833,8 @@ def add_actuators(scene: SceneXml) -> None:
             gear=_fmt((0, 0, 1, 0, 0, sigma * c_tau)),
             ctrlrange=_fmt((0.0, v.f_max)),
         )
-    if scene.scenario.tether.cable_model == CableModel.ELASTIC:
+    bar = scene.scenario.mechanism.kind == "bar"
+    if scene.scenario.tether.cable_model == CableModel.ELASTIC and not bar:
         # ctrl = cable tension f_L >= 0 [N], set by the plant each step; gear -1 shortens.
         _sub(act, "general", name="cable", tendon="cable", gear="-1", ctrllimited="false")
 
@@ -685,7 +845,9 @@ def add_sensors(scene: SceneXml) -> None:
     _sub(sensor, "accelerometer", name="accelerometer", site="imu")
     _sub(sensor, "gyro", name="gyro", site="imu")
     cable_model = scene.scenario.tether.cable_model
-    if cable_model == CableModel.IDEAL:
+    if scene.scenario.mechanism.kind == "bar":  # written by the plant: |line_force|
+        _sub(sensor, "user", name="cable_force", dim="1", needstage="acc", datatype="real")
+    elif cable_model == CableModel.IDEAL:
         _sub(sensor, "tendonlimitfrc", name="cable_force", tendon="cable")
     elif cable_model == CableModel.ELASTIC:
         _sub(sensor, "actuatorfrc", name="cable_force", actuator="cable")
@@ -701,6 +863,22 @@ def add_sensors(scene: SceneXml) -> None:
                  geom2=partner, num="1", data="force", reduce="none")  # fmt: skip
 
 
+def add_mechanism_sensors(scene: SceneXml) -> None:
+    """After :data:`SENSOR_LAYOUT`, for the bar mechanism: ``line_force`` (force sensor at
+    ``line_root``: the line's pull on the vehicle, 3) and ``hook_bar`` (contacts of the line
+    and the hook with the anchoring cable: number found, net force in F_W, 4)."""
+    if scene.scenario.mechanism.kind != "bar":
+        return
+    sensor = scene.section("sensor")
+    _sub(sensor, "force", name="line_force", site="line_root")
+    _sub(sensor, "contact", name="hook_bar", subtree1="line_link0", geom2="anchor_bar",
+         data="found force", reduce="netforce")  # fmt: skip
+
+
+MECHANISM_SENSORS: tuple[tuple[str, int], ...] = (("line_force", 3), ("hook_bar", 4))
+"""The bar mechanism's sensors after :data:`SENSOR_LAYOUT`: (name, dimension)."""
+
+
 SCENE_BUILDERS: tuple[Callable[[SceneXml], None], ...] = (
     add_options_and_assets,
     add_ground_and_surface,
@@ -709,6 +887,7 @@ SCENE_BUILDERS: tuple[Callable[[SceneXml], None], ...] = (
     add_cable,
     add_actuators,
     add_sensors,
+    add_mechanism_sensors,
 )
 """The scene, builder by builder, in document order. A new part of the scene (say a
 mechanism at the anchor or on the vehicle) is one more builder here: it finds the world

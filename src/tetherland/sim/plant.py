@@ -41,7 +41,7 @@ from tetherland.interfaces import StateEstimate
 from tetherland.models.aero import aero_into
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.aero import aero_model
-from tetherland.sim.cable import Cable, make_cable
+from tetherland.sim.cable import Cable, HangingLine, make_cable
 from tetherland.sim.hook import Hook, HookState
 from tetherland.sim.mjcf import CONTACT_PARTNERS, SENSOR_SLICES, SceneLayout, build_mjcf
 from tetherland.state import LinkState, RigidBodyState, link_state_of
@@ -51,6 +51,8 @@ _BAD_STATE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQVEL),
     int(mujoco.mjtWarning.mjWARN_BADQACC),
 )
+LINE_SETTLE_TIME = 0.5
+"""Time the bar mechanism's line and hook settle at reset, the vehicle held [s]."""
 ROTOR_STATE_WIDTH = 15
 """Width of :meth:`Plant.rotor_state_into`'s row: speeds, thrusts, factors, aero force."""
 
@@ -134,6 +136,11 @@ class Plant:
         self._contact_peak = np.zeros(self._contact_normals.shape)
         geo = self.layout.geometry
         self.cable: Cable = make_cable(m, self.data, scenario, geo.p_A, geo.R_WA[:, 0])
+        self._line = self.cable if isinstance(self.cable, HangingLine) else None
+        """The bar mechanism's hanging line (None: the capture disk decides engagement)."""
+        if self._line is not None:
+            self._line.set_anchor(geo.p_A, self.layout.ground_z, geo.R_WA[:, 1])
+            self._crown_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "hook_crown")
         self.hook = Hook(
             geo.p_A,
             self.layout.approach_W,
@@ -203,7 +210,37 @@ class Plant:
         self._set_cable(cable_engaged)
         self.hook.reset(cable_engaged)
         self.forward()
+        if self._line is not None:
+            self._settle_line()
         self._track_hook_point()
+
+    def _settle_line(self) -> None:
+        """Let the laid-out line and hook come to rest with the vehicle held still
+        (:data:`LINE_SETTLE_TIME`), so that the run does not start with the hook falling or
+        bouncing (a tension transient the robot would read)."""
+        d = self.data
+        q0, v0 = d.qpos[0:7].copy(), d.qvel[0:6].copy()
+        for _ in range(round(LINE_SETTLE_TIME / self.dt)):
+            self.cable.advance()
+            d.qpos[0:7], d.qvel[0:6] = q0, v0
+        d.time = 0.0
+        self.forward()
+
+    @property
+    def hook_point_W(self) -> FloatArray:
+        """The hook's true position at :attr:`time` [m]: the crown of the bar mechanism's
+        hook body, else the capture-disk model's hook point."""
+        out = np.empty(3)
+        self.hook_point_into(out)
+        return out
+
+    def hook_point_into(self, out: FloatArray) -> None:
+        """Write :attr:`hook_point_W` into ``out[:3]`` [m]."""
+        if self._line is not None:
+            out[:3] = self.data.site_xpos[self._crown_site]
+        else:
+            out[:3] = self._p_att_view
+            out[:3] += self.hook.offset_W
 
     def set_state(self, state: RigidBodyState) -> None:
         """Overwrite position, attitude and velocities (time and rotors unchanged).
@@ -422,7 +459,7 @@ class Plant:
         """Start tracking the hook point from the attachment site's current position."""
         x, y, z = self._p_att_view.tolist()
         self._prev_att = (x, y, z)
-        self._hook_side = self.hook.side(x, y, z) >= 0.0
+        self._hook_side = self._line is None and self.hook.side(x, y, z) >= 0.0
 
     def _set_cable(self, engaged: bool) -> None:
         # Disengaged, the cable exerts no force and is not drawn (sim/cable.py).
@@ -490,6 +527,10 @@ class Plant:
             centres, samples, shapes, params = self._aero_args
         contact_normals, contact_peak = self._contact_normals, self._contact_peak
         maximum = np.maximum
+        line = self._line
+        if line is not None:  # no capture plane: the contact decides (HangingLine)
+            n_dot_p0 = math.inf
+            nx = ny = nz = 0.0
         for _ in range(n):
             if self._spinning_up:
                 w0, w1, w2, w3 = w
@@ -525,6 +566,8 @@ class Plant:
             x, y, z = p_att.tolist()
             if x != x or warn[bad_qacc]:  # NaN state or MuJoCo's bad-acceleration flag
                 self._diverged(k * self.dt)
+            if line is not None and line.changed:
+                hook.record(k * self.dt, line.caught, self.data.site_xpos[self._crown_site])
             side = nx * x + ny * y + nz * z >= n_dot_p0
             if side != self._hook_side:
                 self._hook_side = side

@@ -327,6 +327,8 @@ class Runner:
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
         rotor_buf, scalars = np.zeros(ROTOR_STATE_WIDTH), np.zeros(9)
         contact_buf = np.zeros(8)
+        hook_buf = np.zeros(3)
+        hook_point_into = plant.hook_point_into
         # the measurement columns, contiguous in the row: last IMU sample, its true biases,
         # last delivered mocap pose
         meas = np.full(19, np.nan)
@@ -365,7 +367,7 @@ class Runner:
         # the row's parts, in schema order: fixed buffers refilled in place every tick and
         # slots for the estimate, reference and command (see _write_row)
         parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, contact_buf,
-                                   meas, *([_NAN3] * 11)]  # fmt: skip
+                                   hook_buf, meas, *([_NAN3] * 11)]  # fmt: skip
         diag_buf = np.empty(len(diag_keys))
         if diag_keys:
             parts.append(diag_buf)
@@ -383,6 +385,7 @@ class Runner:
                     self._t_snap = k * dt
                     if control_tick:
                         rotor_state_into(rotor_buf)
+                        hook_point_into(hook_buf)
                 step()
                 if k % imu_every == 0:
                     sample = imu_sample(k * dt, imu_truth)
@@ -472,7 +475,7 @@ class Runner:
             math.nan if cmd.thrust is None else cmd.thrust,
         )
         b = est.body
-        parts[7:18] = (
+        parts[8:19] = (
             b.p_W,
             b.v_W,
             b.q_WB,

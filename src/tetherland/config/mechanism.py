@@ -1,0 +1,104 @@
+"""The hook and the anchoring mechanism (docs/mechanism.md)."""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from tetherland.config.base import Section
+
+
+class MechanismConfig(Section):
+    """How the vehicle's cable engages the anchor (docs/mechanism.md).
+
+    ``kind = "disk"`` (default): the hook is a point (``tether.hook_drop`` along the
+    approach direction) and the cable engages when it crosses the capture disk at p_A.
+
+    ``kind = "bar"``: the chapter's mechanism as bodies in contact. The vehicle's cable
+    hangs from the attachment point as a chain of ``line_segments`` capsules ending in a
+    three-tip hook (a shank, three arms at 120 deg, each with a tip pointing up); the
+    anchoring mechanism is a horizontal capsule (the anchoring cable) of length
+    ``bar_length`` whose axis passes through p_A, held by two posts from the surface.
+    The hook catches and releases through contact and friction alone; the anchor height
+    ``anchor.h_A`` is the bar's ``standoff`` (an ``anchor.h_A`` of 0, "on the surface",
+    is replaced by it).
+    """
+
+    kind: Literal["disk", "bar"] = "disk"
+    """Mechanism: ``disk`` (a point hook and a capture disk) or ``bar`` (a hook body on a
+    hanging chain, caught by an anchoring cable in contact) [-]."""
+    hook_mass: float = Field(0.02, ge=0.002, le=0.5)
+    """Mass of the hook body [kg]."""
+    hook_shank: float = Field(0.04, ge=0.01, le=0.3)
+    """Length of the hook's shank, from the eye (where the line ties on) to the crown [m]."""
+    hook_reach: float = Field(0.025, ge=0.01, le=0.2)
+    """Horizontal reach of each of the three arms from the shank's axis [m]."""
+    hook_tip_length: float = Field(0.02, ge=0.005, le=0.2)
+    """Length of each tip, pointing up from the end of its arm [m]."""
+    hook_tip_angle_deg: float = Field(0.0, ge=0, le=80)
+    """Angle of each tip from the shank's axis, leaning outward: 0 points it straight back
+    up along the shank (a closed crook), larger opens the crook [deg]."""
+    hook_radius: float = Field(0.002, ge=0.0005, le=0.02)
+    """Radius of the hook's capsules (shank, arms, tips) [m]."""
+    line_segments: int = Field(20, ge=4, le=60)
+    """Number of capsule links of the hanging line [-]."""
+    line_radius: float = Field(0.0015, ge=0.0005, le=0.01)
+    """Radius of the hanging line's capsules (a 1-3 mm line) [m]."""
+    line_density: float = Field(6.0e-4, gt=0, le=1)
+    """Mass per length of the hanging line [kg/m]."""
+    bar_length: float = Field(0.4, ge=0.05, le=5)
+    """Length of the anchoring cable between its posts [m]."""
+    bar_radius: float = Field(0.004, ge=0.001, le=0.05)
+    """Radius of the anchoring cable (a taut cable or a rod) [m]."""
+    bar_friction: float = Field(0.3, ge=0.0, le=2)
+    """Friction coefficient between the anchoring cable (and posts) and the hanging line
+    and hook: whether the line slides to the hook or sticks [-]."""
+    standoff: float = Field(0.15, ge=0.03, le=1)
+    """Height of the anchoring cable's axis above the surface, the anchor height h_A of
+    this mechanism (the height of its posts) [m]."""
+    pass_offset: float = Field(0.05, ge=0.01, le=0.5)
+    """Horizontal distance of the hook's vertical hooking pass from the bar's axis, on the
+    side away from the landing point (the line then drapes over the bar) [m]."""
+    swing_periods: float = Field(2.0, ge=0, le=10)
+    """Shortest free-flight leg of the mission, in swing periods of the hanging hook
+    (2 pi sqrt(L/g)): a smooth rest-to-rest leg that long leaves the hook almost still
+    (the bar mechanism) [-]."""
+    lift_margin: float = Field(0.3, ge=0, le=5)
+    """The mission's takeoff point is at least this far above the hanging hook's depth
+    below the vehicle (the hook leaves the ground during the climb) [m]."""
+    release_depth: float = Field(0.10, gt=0, le=5)
+    """Depth of the hanging hook below the bar where the unhooking pass begins (replaces
+    ``mission.hooking.unhook_depth`` for the bar): flown back over the bar with that much
+    slack the line slides back and the hook drops out of its crook [m]."""
+    catch_threshold: float = Field(5.0, ge=1.0, le=1000)
+    """The plant records the hook as caught (log column ``hook``, hook events) once the
+    bar pushes on it with more than this many times its weight (the line pulls it into
+    the bar), and as released once it has not touched the bar for 0.2 s; the robot never
+    reads it [-]."""
+
+    @model_validator(mode="after")
+    def _hook_clears_bar(self) -> MechanismConfig:
+        if self.kind != "bar":
+            return self
+        # a tip passing up beside the bar at the pass offset must miss it
+        gap = self.pass_offset - self.outer_reach - self.hook_radius - self.bar_radius
+        if gap <= 0.0:
+            raise ValueError(
+                f"mechanism.pass_offset = {self.pass_offset:g} m must be > the hook's outer "
+                f"reach (hook_reach + hook_tip_length sin(hook_tip_angle_deg)) + hook_radius "
+                f"+ bar_radius = "
+                f"{self.pass_offset - gap:g} m (the hook must pass beside the bar)"
+            )
+        if self.standoff <= self.bar_radius + 2.0 * self.hook_radius:
+            raise ValueError(
+                f"mechanism.standoff = {self.standoff:g} m must be > bar_radius + 2 hook_radius"
+            )
+        return self
+
+    @property
+    def outer_reach(self) -> float:
+        """Farthest reach of the hook's tips from the shank's axis [m]."""
+        return self.hook_reach + self.hook_tip_length * math.sin(
+            math.radians(self.hook_tip_angle_deg))
