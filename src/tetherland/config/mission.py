@@ -131,7 +131,20 @@ class TouchdownConfig(Section):
     error sideways, an azimuth error) needs a sideways thrust m g sin(phi) sin(delta): a
     tilt of about 3.7 delta on a wall, where the rotors carry only a quarter of the
     weight, 2.5 delta at 70 deg (condition (2)); hanging free it also lands nearer the
-    true landing point, which lies in the true plumb plane (0: off) [m]."""
+    true landing point, which lies in the true plumb plane (0: off) [m]. The release ends
+    at the first sign of contact (the landers within ``contact.clearance`` of the believed
+    surface and the surface force or an impact sensed): from then on the link azimuth is
+    held where it is, since a vehicle on its landers that still hangs free slides along
+    the surface (slip, condition (5))."""
+    spin_down_time: float = Field(1.0, ge=0, le=10)
+    """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
+    zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or
+    after ``settle_time`` if longer), so the landers take the load while the vehicle is still
+    controlled: the friction that holds it against a gust grows from the contact on, and
+    the vehicle does not hover on barely loaded landers to drop onto them at motors-off. A
+    contact lost during the ramp is regained with at most the thrust shed meanwhile as
+    acceleration (condition (4)), hence the slow ramp (0: the motors go off at once after
+    ``settle_time``) [s]."""
     descent_rate_deg_s: float = Field(2.0, gt=0, le=45)
     """Guarded descent: after the planned landing, the link elevation reference keeps
     descending at this rate until contact is detected (surface closer or farther than
