@@ -275,14 +275,19 @@ STUDY = ["tether.length=1.2", "tether.hook_drop=1.0"]
 """The 1000-run slope study of docs/results.md: base overrides, 100 runs per slope, seed 2026."""
 
 
-def study_run(slope: float, seed: int) -> Job:
-    """The campaign job of the study whose per-run seed is ``seed`` at ``slope``."""
+def study_run(slope: float, seed: int | None = None, *, runs: int = 100,
+              index: int | None = None) -> Job:  # fmt: skip
+    """The campaign job of the study (``runs`` per slope) whose per-run seed is ``seed``, or
+    whose run index is ``index``, at ``slope``."""
     base = load_scenario("slope50", STUDY)
     spec = CampaignSpec(
-        scenario=base.model_dump(mode="json"), runs=100, methods=("tethered",),
+        scenario=base.model_dump(mode="json"), runs=runs, methods=("tethered",),
         sweep=Sweep.parse("surface.slope_deg=20,35,50,60,70"), seed=2026,
     )  # fmt: skip
-    (run,) = [r for r in spec.expand() if r.seed == seed and r.sweep_value == slope]
+    (run,) = [
+        r for r in spec.expand()
+        if r.sweep_value == slope and (r.seed == seed if index is None else r.index == index)
+    ]  # fmt: skip
     return Job(scenario=spec.scenario, run=run)
 
 

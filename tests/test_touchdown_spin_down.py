@@ -13,9 +13,9 @@ import math
 import numpy as np
 import pytest
 
+from test_contact import study_run
 from tetherland import GRAVITY
-from tetherland.campaign.jobs import Job, run_job
-from tetherland.campaign.spec import CampaignSpec, Sweep
+from tetherland.campaign.jobs import run_job
 from tetherland.config import load_scenario
 from tetherland.config.verdict import motors_off_thrust
 from tetherland.control.switching import SwitchingController, scaled
@@ -23,20 +23,6 @@ from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
 from tetherland.mission import Phase
 from tetherland.state import RigidBodyState
 from tetherland.verdict.touchdown import find_touchdowns
-
-SWEEP = ["tether.length=1.2", "tether.hook_drop=1.0"]
-"""Base overrides of the slope sweep of docs/results.md (seed 2026, 20 runs per slope)."""
-
-
-def sweep_run(slope: float, index: int) -> Job:
-    """Run ``index`` at ``slope`` of the current-world slope sweep, as the campaign flies it."""
-    base = load_scenario("slope50", SWEEP)
-    spec = CampaignSpec(
-        scenario=base.model_dump(mode="json"), runs=20, methods=("tethered",),
-        sweep=Sweep.parse("surface.slope_deg=20,35,50,60,70"), seed=2026,
-    )  # fmt: skip
-    (run,) = [r for r in spec.expand() if r.index == index and r.sweep_value == slope]
-    return Job(scenario=spec.scenario, run=run)
 
 
 def test_scaled_command_scales_every_rotor_thrust():
@@ -77,7 +63,7 @@ def test_hovering_on_unloaded_landers_no_longer_drops_at_motors_off():
     while the landers carry the load: the mission succeeds, the true thrust falls
     monotonically enough that the rest begins in contact, and the acceleration at every
     judged contact stays within condition (4)."""
-    job = sweep_run(20.0, 15)
+    job = study_run(20.0, runs=20, index=15)  # the sweep of docs/results.md, 20 per slope
     record, result = run_job(job)
     assert record["status"] == "ok", record.get("error")
     verdict = result.verdict.summary
