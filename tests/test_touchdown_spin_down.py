@@ -1,10 +1,11 @@
 """The end of a tethered landing after issue 22's truth judge: the spin-down before the
 motors go off and the lateral release ended at the first sign of contact.
 
-The closed-loop case is a draw of the slope sweep (docs/results.md) that failed before:
-the vehicle hovered on barely loaded landers (thrust about m g at 20 deg), a gust lifted it
-off, and the motors went off while it was up: the contact regained at the start of the
-rest came with the full weight as acceleration (condition (4))."""
+The closed-loop cases are draws of the slope sweep (docs/results.md) that failed before:
+a vehicle hovering on barely loaded landers (thrust about m g at 20 deg) lifted off by a
+gust just as the motors went off (the contact regained at the start of the rest came with
+the weight as acceleration, condition (4)), and one sliding sideways on them with the link
+azimuth still left to gravity (condition (5))."""
 
 from __future__ import annotations
 
@@ -19,8 +20,10 @@ from tetherland.campaign.jobs import run_job
 from tetherland.config import load_scenario
 from tetherland.config.verdict import motors_off_thrust
 from tetherland.control.switching import SwitchingController, scaled
+from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
 from tetherland.mission import Phase
+from tetherland.rotations import quat_to_rotmat_many
 from tetherland.state import RigidBodyState
 from tetherland.verdict.touchdown import find_touchdowns
 
@@ -95,3 +98,35 @@ def test_hovering_on_unloaded_landers_no_longer_drops_at_motors_off():
     # a ramp from at most 1.3 m g to 0 over `ramp` seconds, smoothed by the motors
     assert np.max(-np.diff(thrust[k])) / dt < 1.3 * m_g / ramp
     assert math.isfinite(landing["slip_m"]) and landing["slip_m"] < tol.rest_slip
+
+
+@pytest.mark.slow
+def test_the_lateral_release_ends_at_the_first_sign_of_contact():
+    """Sweep draw tethered-35-00006 (35 deg, seed 2026): before, the link azimuth hung free
+    through the hold and the vehicle, on barely loaded landers, slid 15.8 mm sideways (along
+    y_S, the azimuth direction; condition (5)), then dropped at motors-off. Now the supervisor
+    holds the azimuth from its first sign of contact: the reference azimuth is constant from
+    that event to the motors-off, and the true lander point moves less than the 1 cm of
+    condition (5) along the surface from the first true touchdown to spin-up."""
+    record, result = run_job(study_run(35.0, runs=20, index=6))
+    assert record["status"] == "ok", record.get("error")
+    verdict = result.verdict.summary
+    assert verdict["success"], verdict["reason"]
+    log, truth = result.log, result.plant_scenario
+    t, phase = log["t"], log["phase"].astype(int)
+    (sign,) = [e["t"] for e in log.events if e.get("kind") == "contact"]
+    held = (
+        (t > sign + 0.01) & (phase >= int(Phase.TETHERED_LANDING)) & (phase <= int(Phase.TOUCHDOWN))
+    )
+    delta_ref = log["ref_output"][held, 1]
+    assert held.sum() > 100 and np.ptp(delta_ref) < 1e-6  # held, not left to gravity
+    # the slide along the surface, from the first true touchdown to the spin-up
+    geo = LandingGeometry.from_scenario(truth)
+    z_B = quat_to_rotmat_many(log["q_WB"])[:, :, 2]
+    p_RL = log["p_W"] - geo.h_R * z_B
+    k_L = int(np.searchsorted(t, verdict["landing"]["t_L"]))
+    k_up = int(np.flatnonzero(phase == int(Phase.SPIN_UP))[0])
+    d = p_RL[k_L:k_up] - p_RL[k_L]
+    along = d - np.outer(d @ geo.surface.z_S, geo.surface.z_S)
+    assert np.linalg.norm(along, axis=1).max() < truth.verdict.rest_slip
+    assert sign <= t[k_L] + truth.mission.contact.dwell  # sensed before the contact rule's dwell
