@@ -131,11 +131,17 @@ class TouchdownConfig(Section):
     error sideways, an azimuth error) needs a sideways thrust m g sin(phi) sin(delta): a
     tilt of about 3.7 delta on a wall, where the rotors carry only a quarter of the
     weight, 2.5 delta at 70 deg (condition (2)); hanging free it also lands nearer the
-    true landing point, which lies in the true plumb plane (0: off) [m]. The release ends
-    at the first sign of contact (the landers within ``contact.clearance`` of the believed
-    surface and the surface force or an impact sensed): from then on the link azimuth is
-    held where it is, since a vehicle on its landers that still hangs free slides along
-    the surface (slip, condition (5))."""
+    true landing point, which lies in the true plumb plane; it ends at the first sign of
+    contact with ``lateral_lock`` (0: off) [m]."""
+    lateral_lock: bool = True
+    """Lateral lock: end the lateral release at the first sign of contact (the landers
+    within ``contact.clearance`` of the believed surface and the surface force or an impact
+    sensed) and hold the link azimuth where it is: on a slope a vehicle on barely loaded
+    landers that still hangs free slides sideways along the surface wherever a gust or a
+    tilted thrust pushes it (slip, condition (5)). Off on walls (``wall90``, ``overhang93``): pressed on a wall the vehicle
+    creeps sideways on its own, the held azimuth's pull winds up against it, and when the
+    touchdown hold lifts the landers it swings away (wall90 campaign run 375278728:
+    15 mm, 0.48 rad/s)."""
     spin_down_time: float = Field(1.0, ge=0, le=10)
     """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
     zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or

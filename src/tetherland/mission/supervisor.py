@@ -484,6 +484,7 @@ class MissionSupervisor:
         ev = decision.evidence
         if (
             self._delta_lock is None
+            and self.cfg.touchdown.lateral_lock
             and self.cfg.touchdown.lateral_clearance > 0.0
             and ev is not None
             and ev.normal_force is not None
