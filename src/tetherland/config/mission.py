@@ -138,10 +138,10 @@ class TouchdownConfig(Section):
     within ``contact.clearance`` of the believed surface and the surface force or an impact
     sensed) and hold the link azimuth where it is: on a slope a vehicle on barely loaded
     landers that still hangs free slides sideways along the surface wherever a gust or a
-    tilted thrust pushes it (slip, condition (5)). Off on walls (``wall90``, ``overhang93``): pressed on a wall the vehicle
-    creeps sideways on its own, the held azimuth's pull winds up against it, and when the
-    touchdown hold lifts the landers it swings away (wall90 campaign run 375278728:
-    15 mm, 0.48 rad/s)."""
+    tilted thrust pushes it (slip, condition (5)). Off on walls (``wall90``,
+    ``overhang93``): pressed on a wall the vehicle creeps sideways on its own, the held
+    azimuth's pull winds up against it, and when the touchdown hold lifts the landers it
+    swings away (wall90 campaign run 375278728: 15 mm, 0.48 rad/s)."""
     spin_down_time: float = Field(1.0, ge=0, le=10)
     """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
     zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or
