@@ -156,7 +156,7 @@ def fault_campaign_job(run_id: str):
     ("run_id", "phase", "reason"),
     [("rotor-00004", ("hooking",), "rotor thrust lost"),
      ("snap-00008", ("tethered_landing",), "cable lost, tension gone"),
-     ("snap-00009", ("motors_off",), "cable lost while landed"),
+     ("snap-00009", ("motors_off", "touchdown"), "cable lost while landed"),
      ("snap-00010", ("spin_up", "motors_off"), "cable lost")],
 )  # fmt: skip
 def test_fault_campaign_crashes_now_end_in_a_safe_stop(run_id, phase, reason):
@@ -166,7 +166,10 @@ def test_fault_campaign_crashes_now_end_in_a_safe_stop(run_id, phase, reason):
     hovered around the 0.1 N absolute limit for 0.86 s) and snaps with the landers on the
     slope (the moving landed vehicle starts its motors and hovers away). The fault time is
     fixed and the landing's timing is not: snap-00010 broke the cable in the spin-up when
-    it crashed and now, with the landing timed differently (lateral release), just before it."""
+    it crashed and now, with the landing timed differently (lateral release), just before it;
+    snap-00009 broke it with the motors off and now, with the motors going off at the end of
+    the 1 s spin-down instead of 0.5 s after contact, in the spin-down's last 0.23 s: it is
+    seen as a landed vehicle that moved once the motors are off, 38 ms later."""
     from tetherland.campaign.jobs import execute
 
     job = fault_campaign_job(run_id)

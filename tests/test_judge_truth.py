@@ -282,10 +282,16 @@ def test_a_short_deployment_flown_through_the_api_fails_condition_5(truth):
     landing = result.summary["landing"]
     start, end = landing["rest_interval_s"]
     # the motors are off for 0.1 s from t_G; the true thrust is below the level for that
-    # less the spin-down (about 2 tau from the landed hover's thrust)
+    # less the motors' spin-down (about 2 tau from the landed hover's thrust), plus the end
+    # of the supervisor's thrust ramp before t_G: the true thrust, lagging the command,
+    # goes below the level no earlier than the commanded thrust does
     t_G, t_T = result.record.times["t_G"], result.record.times["t_T"]
     assert t_T - t_G == pytest.approx(0.1, abs=DT)
-    assert t_G < start < t_G + spin_down_time(truth.vehicle) + DT
+    log = result.log
+    level = motors_off_thrust(truth.vehicle)
+    commanded_low = log["t"][(log["t"] > result.record.times["t_L"]) & (log["cmd_thrust"] < level)]
+    assert commanded_low[0] <= t_G
+    assert commanded_low[0] - DT <= start < t_G + spin_down_time(truth.vehicle) + DT
     # spin-up: the thrust T_c (1 - exp(-t/tau))^2 passes the level within tau for any
     # command above 2.5 times it (the landed hover's is about 30 times)
     assert t_T < end <= t_T + truth.vehicle.motor_time_constant

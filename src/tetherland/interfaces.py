@@ -175,6 +175,11 @@ class Reference:
         fraction of the damping of delta' (the supervisor's lateral release in the last centimetres,
         ``mission.touchdown.lateral_clearance``). The hierarchical controller honours it;
         the DFL controller tracks ``output`` as given.
+    thrust_scale : float
+        Every rotor thrust the controller commands is multiplied by this, 0 to 1 (rotor
+        speeds by its square root, the wanted thrust and torque by it) [-]: the
+        supervisor's spin-down on the surface before the motors go off
+        (``mission.touchdown.spin_down_time``); 1 in flight.
     """
 
     t: float
@@ -187,6 +192,7 @@ class Reference:
     feedforward: Feedforward | None = None
     terminate: bool = False
     lateral_free: bool = False
+    thrust_scale: float = 1.0
 
 
 @dataclass(frozen=True, slots=True)

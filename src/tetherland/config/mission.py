@@ -131,7 +131,26 @@ class TouchdownConfig(Section):
     error sideways, an azimuth error) needs a sideways thrust m g sin(phi) sin(delta): a
     tilt of about 3.7 delta on a wall, where the rotors carry only a quarter of the
     weight, 2.5 delta at 70 deg (condition (2)); hanging free it also lands nearer the
-    true landing point, which lies in the true plumb plane (0: off) [m]."""
+    true landing point, which lies in the true plumb plane; it ends at the first sign of
+    contact with ``lateral_lock`` (0: off) [m]."""
+    lateral_lock: bool = True
+    """Lateral lock: end the lateral release at the first sign of contact (the landers
+    within ``contact.clearance`` of the believed surface and the surface force or an impact
+    sensed) and hold the link azimuth where it is: on a slope a vehicle on barely loaded
+    landers that still hangs free slides sideways along the surface wherever a gust or a
+    tilted thrust pushes it (slip, condition (5)). Off on walls (``wall90``,
+    ``overhang93``): pressed on a wall the vehicle creeps sideways on its own, the held
+    azimuth's pull winds up against it, and when the touchdown hold lifts the landers it
+    swings away (wall90 campaign run 375278728: 15 mm, 0.48 rad/s)."""
+    spin_down_time: float = Field(1.0, ge=0, le=10)
+    """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
+    zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or
+    after ``settle_time`` if longer), so the landers take the load while the vehicle is still
+    controlled: the friction that holds it against a gust grows from the contact on, and
+    the vehicle does not hover on barely loaded landers to drop onto them at motors-off. A
+    contact lost during the ramp is regained with at most the thrust shed meanwhile as
+    acceleration (condition (4)), hence the slow ramp (0: the motors go off at once after
+    ``settle_time``) [s]."""
     descent_rate_deg_s: float = Field(2.0, gt=0, le=45)
     """Guarded descent: after the planned landing, the link elevation reference keeps
     descending at this rate until contact is detected (surface closer or farther than

@@ -2,14 +2,16 @@
 
 The supervisor makes the transfer bumpless by starting the next controller's reference at
 the current output (by flatness, the same output means the same nominal input); this
-controller dispatches on ``Reference.mode``, resets the controller it switches to
-(the DFL thrust extension starts at the last commanded thrust; from tethered flight the
-free-flight position integral starts at the force the tethered law was commanding) and
-records the command jump of every switch.
+controller dispatches on ``Reference.mode`` (and scales the command by
+``Reference.thrust_scale``, the spin-down before the motors go off), resets the controller
+it switches to (the DFL thrust extension starts at the last commanded thrust; from
+tethered flight the free-flight position integral starts at the force the tethered law was
+commanding) and records the command jump of every switch.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,6 +58,18 @@ def make_tethered_controller(scenario: Scenario, kind: str | Controller | None =
     raise ValueError(f"unknown tethered controller {kind!r} (allowed: hierarchical, dfl)")
 
 
+def scaled(command: Command, scale: float) -> Command:
+    """``command`` with every rotor thrust multiplied by ``scale`` (clipped to 0-1): the
+    rotor speeds by its square root (thrust c_f w^2), the wanted thrust and torque by it."""
+    s = min(max(float(scale), 0.0), 1.0)
+    return Command(
+        rotor_speeds=math.sqrt(s) * np.asarray(command.rotor_speeds),
+        thrust=None if command.thrust is None else s * command.thrust,
+        torque_B=None if command.torque_B is None else s * np.asarray(command.torque_B),
+        diagnostics=command.diagnostics,
+    )
+
+
 class SwitchingController:
     """Dispatches to the free-flight or tethered controller by ``Reference.mode``.
 
@@ -99,6 +113,8 @@ class SwitchingController:
             cmd = self.tethered.update(t, estimate, reference)
         else:
             cmd = self.free_flight.update(t, estimate, reference)
+        if reference.thrust_scale < 1.0 and mode != ControlMode.MOTORS_OFF:
+            cmd = scaled(cmd, reference.thrust_scale)
         if mode != self.mode and self.mode is not None and self.last is not None:
             self.switches.append(
                 SwitchRecord(

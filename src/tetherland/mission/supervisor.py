@@ -152,6 +152,7 @@ class MissionSupervisor:
         self._slow = SlowApproach(cfg.touchdown, self._contact_rule.geometry, self.geo.link_length)
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
+        self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
         self._path = self._new_path(0.0, wp.start).to(
             wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time
@@ -453,10 +454,10 @@ class MissionSupervisor:
         planned = self._track.reference(tau, self.phase)
         self._landing_rate = abs(float(planned.output[1, 0]))
         ref = self._slow.scale(planned, t)
-        if self._slow.clearance < self.cfg.touchdown.lateral_clearance:
-            ref = dataclasses.replace(ref, lateral_free=True)
+        ref = self._lateral(ref, self._slow.clearance < self.cfg.touchdown.lateral_clearance)
         if early_contact_armed(self.cfg.contact, tau, track.t0, track.duration):
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
+            self._lock_on_contact(t, est, decision)
             if decision.confirmed:
                 return self._contact(t, est, ref, decision, "before the planned end")
         else:
@@ -468,6 +469,37 @@ class MissionSupervisor:
             self._enter(Phase.TOUCHDOWN, t, "planned landing completed: guarded descent to contact")
         return ref
 
+    def _lateral(self, ref: Reference, release: bool) -> Reference:
+        """``ref`` with the link azimuth left to gravity (``release``, the lateral release
+        of ``mission.touchdown.lateral_clearance``), or held where it was at the first sign
+        of contact once there was one."""
+        if self._delta_lock is not None:
+            assert ref.output is not None
+            out = ref.output.copy()
+            out[0, 1] = self._delta_lock
+            out[1:, 1] = 0.0
+            return dataclasses.replace(ref, output=out, lateral_free=False)
+        return dataclasses.replace(ref, lateral_free=True) if release else ref
+
+    def _lock_on_contact(self, t: float, est: StateEstimate, decision: ContactDecision) -> None:
+        """End the lateral release at the first sign of contact: the landers near the
+        believed surface and the surface force (or an impact) sensed. Hanging free on its
+        landers, a vehicle slides along the surface wherever the sideways forces (a thrust
+        tilted by the belief's surface error, the rotors' ground effect) leave it."""
+        ev = decision.evidence
+        if (
+            self._delta_lock is None
+            and self.cfg.touchdown.lateral_lock
+            and self.cfg.touchdown.lateral_clearance > 0.0
+            and ev is not None
+            and ev.normal_force is not None
+            and ev.near
+            and ev.pressed
+            and est.link is not None
+        ):
+            self._delta_lock = est.link.delta
+            self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
+
     def _search_reference(self, t: float) -> Reference:
         """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
         assert self._track is not None and self._search_start is not None
@@ -478,10 +510,9 @@ class MissionSupervisor:
         assert self._track is not None
         cfg = self.cfg
         if self._hold is None:  # searching for the surface
-            ref = self._search_reference(t)
-            if cfg.touchdown.lateral_clearance > 0.0:
-                ref = dataclasses.replace(ref, lateral_free=True)
+            ref = self._lateral(self._search_reference(t), cfg.touchdown.lateral_clearance > 0.0)
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
+            self._lock_on_contact(t, est, decision)
             if decision.confirmed:
                 return self._contact(t, est, ref, decision, "during the guarded descent")
             td = cfg.touchdown
@@ -491,14 +522,17 @@ class MissionSupervisor:
                 self.abort(t, est, f"fault: no contact within {depth:g} deg beyond phi*")
                 return self._free(t, est)
             return ref
-        if t >= self.times["t_L"] + cfg.settle_time:
+        since = t - self.times["t_L"]  # time on the surface, the spin-down under way [s]
+        spin_down = cfg.touchdown.spin_down_time
+        if since >= max(cfg.settle_time, spin_down):
             self.times["t_G"] = t
             self._enter(Phase.MOTORS_OFF, t, "landed: motors off (t_G)")
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
+        scale = max(1.0 - since / spin_down, 0.0) if spin_down > 0.0 else 1.0
         return Reference(
             t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=self._hold.output,
             thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
-            lateral_free=self._hold.lateral_free,
+            lateral_free=self._hold.lateral_free, thrust_scale=scale,
         )  # fmt: skip
 
     def _motors_off(self, t: float, est: StateEstimate) -> Reference:
