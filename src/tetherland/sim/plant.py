@@ -43,7 +43,13 @@ from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.aero import aero_model
 from tetherland.sim.cable import Cable, make_cable
 from tetherland.sim.hook import Hook, HookState
-from tetherland.sim.mjcf import CONTACT_PARTNERS, SENSOR_SLICES, SceneLayout, build_mjcf
+from tetherland.sim.mjcf import (
+    CONTACT_PARTNERS,
+    FRAME_PARTS,
+    SENSOR_SLICES,
+    SceneLayout,
+    build_mjcf,
+)
 from tetherland.state import LinkState, RigidBodyState, link_state_of
 
 _BAD_STATE_WARNINGS = (
@@ -53,6 +59,10 @@ _BAD_STATE_WARNINGS = (
 )
 ROTOR_STATE_WIDTH = 15
 """Width of :meth:`Plant.rotor_state_into`'s row: speeds, thrusts, factors, aero force."""
+CONTACT_PEAK_WIDTH = 11
+"""Width of :meth:`Plant.contact_peaks_into`'s row: the landers' peaks on the surface (4)
+and the ground (4), the frame's peak force, the part code and the deepest penetration."""
+_N_LANDER_PEAKS = 4 * len(CONTACT_PARTNERS)
 
 
 def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
@@ -126,12 +136,16 @@ class Plant:
         self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
         self.sensordata = self.data.sensordata
-        # the landers' normal forces on the surface and the ground (contact sensors, every
-        # third entry: normal, tangent, tangent) and their peaks since the last read
+        # the landers' normal forces on the surface and the ground, then the strongest
+        # contact's on every other part (contact sensors, contiguous: every third entry is
+        # a normal force, then two tangential ones) and their peaks since the last read
         first = SENSOR_SLICES[f"lander0_{CONTACT_PARTNERS[0]}"].start
-        last = SENSOR_SLICES[f"lander3_{CONTACT_PARTNERS[-1]}"].stop
+        last = SENSOR_SLICES[f"{FRAME_PARTS[-1]}_contact"].stop
         self._contact_normals = self.sensordata[first:last:3]
         self._contact_peak = np.zeros(self._contact_normals.shape)
+        # the deepest contact of the vehicle (distance <= 0) and its least since the last read
+        self._depth_view = self.sensordata[SENSOR_SLICES["vehicle_depth"]]
+        self._depth_min = 0.0
         geo = self.layout.geometry
         self.cable: Cable = make_cable(m, self.data, scenario, geo.p_A, geo.R_WA[:, 0])
         self.hook = Hook(
@@ -194,6 +208,7 @@ class Plant:
         mujoco.mj_resetData(self.model, self.data)
         self._tick = 0
         self._contact_peak[:] = 0.0
+        self._depth_min = 0.0
         self.model.actuator_gear[0:4] = self._gear0
         self._write_state(self.start_state() if state is None else state)
         w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
@@ -446,21 +461,56 @@ class Plant:
         ].copy()
 
     def contact_peaks_into(self, out: FloatArray) -> None:
-        """Write the largest normal force of each lander on the landing surface (4), then
-        on the ground (4), over the physics steps since the last call (or the reset) into
-        ``out[:8]``, and start over [N].
+        """Write the contact peaks over the physics steps since the last call (or the
+        reset) into ``out[:11]`` (:data:`CONTACT_PEAK_WIDTH`), and start over:
 
-        The contact sensors filter by partner geom (:data:`~tetherland.sim.mjcf.
-        CONTACT_PARTNERS`), and the peak is taken at every physics step: a touch that
-        lasts a single step is seen (the judge's touchdowns and bounces).
+        - ``out[0:4]``, ``out[4:8]``: the largest normal force of each lander on the
+          landing surface, then on the ground [N];
+        - ``out[8]``: the largest normal force on any other part of the vehicle
+          (:data:`~tetherland.sim.mjcf.FRAME_PARTS`: a crash) [N];
+        - ``out[9]``: the index in ``FRAME_PARTS`` of the part that force acted on (-1 when
+          no part touched);
+        - ``out[10]``: the deepest penetration of any vehicle geom into anything, >= 0 [m].
+
+        The contact sensors filter by geom (:mod:`tetherland.sim.mjcf`), and the peaks
+        are taken at every physics step: a touch that lasts a single step is seen (the
+        judge's touchdowns, bounces and crashes).
         """
-        out[:8] = self._contact_peak
-        self._contact_peak[:] = 0.0
+        peak = self._contact_peak
+        n = _N_LANDER_PEAKS
+        out[:n] = peak[:n]
+        parts = peak[n:]
+        k = int(parts.argmax())
+        force = float(parts[k])
+        out[n] = force
+        out[n + 1] = k if force > 0.0 else -1
+        out[n + 2] = -self._depth_min
+        peak[:] = 0.0
+        self._depth_min = 0.0
+
+    @property
+    def part_forces(self) -> FloatArray:
+        """Normal force of the strongest contact on each part of
+        :data:`~tetherland.sim.mjcf.FRAME_PARTS` at the start of the last step [N]."""
+        return self._contact_normals[_N_LANDER_PEAKS:].copy()
 
     @property
     def frame_contact_force(self) -> float:
-        """Normal force on the hub and rotor guards (a crash when > 0) [N]."""
-        return float(self.sensordata[SENSOR_SLICES["frame_touch"]][0])
+        """Largest normal force on any part but the landers (hub, mount, arms, legs, rotor
+        guards; a crash when > 0) at the start of the last step [N]."""
+        return float(self._contact_normals[_N_LANDER_PEAKS:].max())
+
+    @property
+    def frame_contact_peak(self) -> float:
+        """Largest normal force on any part but the landers over the physics steps since
+        the last :meth:`contact_peaks_into` (or the reset), without starting over [N]."""
+        return float(self._contact_peak[_N_LANDER_PEAKS:].max())
+
+    @property
+    def penetration(self) -> float:
+        """Depth of the deepest contact of any vehicle geom at the start of the last step,
+        >= 0 (MuJoCo's contact distance) [m]."""
+        return -float(self._depth_view[0])
 
     # -- stepping -------------------------------------------------------------------------
 
@@ -489,6 +539,7 @@ class Plant:
             qpos, qvel, factors, wrench = self._qpos, self._qvel, self._factors, self._wrench
             centres, samples, shapes, params = self._aero_args
         contact_normals, contact_peak = self._contact_normals, self._contact_peak
+        depth, depth_min = self._depth_view, self._depth_min
         maximum = np.maximum
         for _ in range(n):
             if self._spinning_up:
@@ -506,6 +557,8 @@ class Plant:
                           wrench)  # fmt: skip
             advance()
             maximum(contact_peak, contact_normals, out=contact_peak)
+            if depth[0] < depth_min:
+                depth_min = self._depth_min = depth.item()
             k = self._tick
             self._tick = k + 1
             if self._spinning_up:
