@@ -25,9 +25,10 @@ at the centre of mass, cable tension at the attachment (``tendonlimitfrc``,
 ``actuatorfrc`` or a user sensor the plant writes) and length, lander touch forces, the
 contact force of each lander with the landing surface and with the ground (``contact``
 sensors filtered by partner geom: what a lander touches, for the judge;
-:data:`CONTACT_PARTNERS`), the strongest contact force on each other part (crashes,
-``<part>_contact``) and the deepest penetration of any vehicle geom into anything
-(``vehicle_depth``). The plant reads the contact sensors at every physics step.
+:data:`CONTACT_PARTNERS`), the strongest contacts of each other part (crashes,
+``<part>_contact``, :data:`PART_CONTACT_SLOTS`) and the deepest penetration of any
+vehicle geom into anything (``vehicle_depth``). The plant reads the contact sensors at
+every physics step.
 
 Names are fixed (``vehicle``, ``attachment``, ``cable``, ...): the plant, the renderer and
 tests find elements by these names.
@@ -90,6 +91,11 @@ sensors ``<part>_contact`` and of the plant's part codes (the log's ``frame_part
 hub, the cable's mount, the arms, the legs and the rotor guards. A contact force on any of
 them is a crash."""
 
+PART_CONTACT_SLOTS = 4
+"""Contacts each ``<part>_contact`` sensor reports, strongest first (a box or a guard's
+disk flat on a plane touches at up to four points; a capsule or a sphere at one or
+two): the plant sums their normal forces."""
+
 VEHICLE_CONTYPE, VEHICLE_CONAFFINITY = 2, 1
 """Collision bits of every vehicle geom: it collides with geoms whose ``contype`` has bit
 0 set (the world's: ground, surface, anchor; MuJoCo's default 1) and with no other
@@ -105,7 +111,7 @@ SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("lander2_touch", 1),
     ("lander3_touch", 1),
     *((f"lander{i}_{partner}", 3) for partner in CONTACT_PARTNERS for i in range(4)),
-    *((f"{part}_contact", 3) for part in FRAME_PARTS),
+    *((f"{part}_contact", 3 * PART_CONTACT_SLOTS) for part in FRAME_PARTS),
     ("vehicle_depth", 1),
 )
 """Sensors in ``sensordata`` order: (name, dimension)."""
@@ -738,9 +744,9 @@ def add_sensors(scene: SceneXml) -> None:
         for i in range(4):
             _sub(sensor, "contact", name=f"lander{i}_{partner}", geom1=f"lander{i}",
                  geom2=partner, num="1", data="force", reduce="none")  # fmt: skip
-    for part in FRAME_PARTS:  # the strongest contact of the part with anything
-        _sub(sensor, "contact", name=f"{part}_contact", geom1=part, num="1", data="force",
-             reduce="maxforce")  # fmt: skip
+    for part in FRAME_PARTS:  # the part's strongest contacts with anything
+        _sub(sensor, "contact", name=f"{part}_contact", geom1=part,
+             num=str(PART_CONTACT_SLOTS), data="force", reduce="maxforce")  # fmt: skip
     # the deepest contact of any geom of the vehicle's subtree (0 when none)
     _sub(sensor, "contact", name="vehicle_depth", subtree1="vehicle", num="1", data="dist",
          reduce="mindist")  # fmt: skip

@@ -46,6 +46,7 @@ from tetherland.sim.hook import Hook, HookState
 from tetherland.sim.mjcf import (
     CONTACT_PARTNERS,
     FRAME_PARTS,
+    PART_CONTACT_SLOTS,
     SENSOR_SLICES,
     SceneLayout,
     build_mjcf,
@@ -136,13 +137,22 @@ class Plant:
         self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
         self.sensordata = self.data.sensordata
-        # the landers' normal forces on the surface and the ground, then the strongest
-        # contact's on every other part (contact sensors, contiguous: every third entry is
-        # a normal force, then two tangential ones) and their peaks since the last read
+        # the contact sensors of the landers (one contact each with the surface and the
+        # ground) and of every other part (its strongest contacts), contiguous: every
+        # third entry is a normal force, then two tangential ones. ``_contact_sum`` maps
+        # them to the landers' normal forces and each part's total, ``_contact_now`` holds
+        # those of the last step and ``_contact_peak`` their peaks since the last read.
         first = SENSOR_SLICES[f"lander0_{CONTACT_PARTNERS[0]}"].start
         last = SENSOR_SLICES[f"{FRAME_PARTS[-1]}_contact"].stop
         self._contact_normals = self.sensordata[first:last:3]
-        self._contact_peak = np.zeros(self._contact_normals.shape)
+        n_parts = len(FRAME_PARTS)
+        self._contact_sum = np.zeros((_N_LANDER_PEAKS + n_parts, len(self._contact_normals)))
+        self._contact_sum[:_N_LANDER_PEAKS, :_N_LANDER_PEAKS] = np.eye(_N_LANDER_PEAKS)
+        for j in range(n_parts):
+            slots = _N_LANDER_PEAKS + j * PART_CONTACT_SLOTS
+            self._contact_sum[_N_LANDER_PEAKS + j, slots : slots + PART_CONTACT_SLOTS] = 1.0
+        self._contact_now = np.zeros(_N_LANDER_PEAKS + n_parts)
+        self._contact_peak = np.zeros(_N_LANDER_PEAKS + n_parts)
         # the deepest contact of the vehicle (distance <= 0) and its least since the last read
         self._depth_view = self.sensordata[SENSOR_SLICES["vehicle_depth"]]
         self._depth_min = 0.0
@@ -467,7 +477,8 @@ class Plant:
         - ``out[0:4]``, ``out[4:8]``: the largest normal force of each lander on the
           landing surface, then on the ground [N];
         - ``out[8]``: the largest normal force on any other part of the vehicle
-          (:data:`~tetherland.sim.mjcf.FRAME_PARTS`: a crash) [N];
+          (:data:`~tetherland.sim.mjcf.FRAME_PARTS`: a crash; a part's force is the sum
+          over its contacts) [N];
         - ``out[9]``: the index in ``FRAME_PARTS`` of the part that force acted on (-1 when
           no part touched);
         - ``out[10]``: the deepest penetration of any vehicle geom into anything, >= 0 [m].
@@ -490,15 +501,16 @@ class Plant:
 
     @property
     def part_forces(self) -> FloatArray:
-        """Normal force of the strongest contact on each part of
-        :data:`~tetherland.sim.mjcf.FRAME_PARTS` at the start of the last step [N]."""
-        return self._contact_normals[_N_LANDER_PEAKS:].copy()
+        """Normal force on each part of :data:`~tetherland.sim.mjcf.FRAME_PARTS` (the sum
+        over its strongest :data:`~tetherland.sim.mjcf.PART_CONTACT_SLOTS` contacts) at
+        the start of the last step [N]."""
+        return (self._contact_sum @ self._contact_normals)[_N_LANDER_PEAKS:]
 
     @property
     def frame_contact_force(self) -> float:
         """Largest normal force on any part but the landers (hub, mount, arms, legs, rotor
         guards; a crash when > 0) at the start of the last step [N]."""
-        return float(self._contact_normals[_N_LANDER_PEAKS:].max())
+        return float(self.part_forces.max())
 
     @property
     def frame_contact_peak(self) -> float:
@@ -539,8 +551,9 @@ class Plant:
             qpos, qvel, factors, wrench = self._qpos, self._qvel, self._factors, self._wrench
             centres, samples, shapes, params = self._aero_args
         contact_normals, contact_peak = self._contact_normals, self._contact_peak
+        contact_sum, contact_now = self._contact_sum, self._contact_now
         depth, depth_min = self._depth_view, self._depth_min
-        maximum = np.maximum
+        maximum, dot = np.maximum, np.dot
         for _ in range(n):
             if self._spinning_up:
                 w0, w1, w2, w3 = w
@@ -556,7 +569,8 @@ class Plant:
                 aero_into(qpos, qvel, tgt, centres, samples, shapes, params, factors, ctrl,
                           wrench)  # fmt: skip
             advance()
-            maximum(contact_peak, contact_normals, out=contact_peak)
+            dot(contact_sum, contact_normals, out=contact_now)
+            maximum(contact_peak, contact_now, out=contact_peak)
             if depth[0] < depth_min:
                 depth_min = self._depth_min = depth.item()
             k = self._tick
