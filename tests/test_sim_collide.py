@@ -18,6 +18,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from penetration import assert_nothing_behind_surfaces, deepest_behind
 from tetherland import GRAVITY
 from tetherland.analysis.clearance import part_distances, segment_distance, surface_distance
 from tetherland.config import builtin_scenarios, load_scenario
@@ -396,3 +397,26 @@ def test_no_crash_on_the_start_pad_and_no_part_but_the_landers_touches(slope50):
     )
     assert 0.0 < log["penetration"].max() < 0.002
     assert judge(log, _record(slope50)).summary["crash"] is None
+
+
+def test_the_penetration_check_sees_a_vehicle_5_mm_inside_the_surface(slope50):
+    """Started in the landed pose pushed 5 mm into the slope: MuJoCo's contact distance
+    and the geometry of the logged pose both measure the 5 mm at t = 0, and the mission
+    tests' check refuses the run; 1 mm in, it passes."""
+    plant = Plant(slope50)
+    landed = plant.landed_state()
+    z_S = plant.layout.geometry.surface.z_S
+    for depth, ok in ((0.005, False), (0.001, True)):
+        start = RigidBodyState.at_rest(landed.p_W - depth * z_S, landed.q_WB)
+        log = Runner(slope50, ConstantSpeedController.motors_off(), plant=plant).run(
+            0.01, initial_state=start, cable_engaged=True
+        )
+        found = {m.where: m for m in deepest_behind(log, slope50)}
+        assert found["mujoco"].depth_m == pytest.approx(depth, rel=0.02)
+        assert found["surface"].depth_m == pytest.approx(depth, abs=1e-6)
+        assert found["mujoco"].t == found["surface"].t == 0.0
+        if ok:
+            assert_nothing_behind_surfaces(log, slope50)
+        else:
+            with pytest.raises(AssertionError, match=r"\d\.\d\d mm behind a surface"):
+                assert_nothing_behind_surfaces(log, slope50)
