@@ -12,6 +12,7 @@ what a real vehicle hits them with.
 
 from __future__ import annotations
 
+import json
 import math
 
 import mujoco
@@ -21,11 +22,13 @@ import pytest
 from penetration import assert_nothing_behind_surfaces, deepest_behind
 from tetherland import GRAVITY
 from tetherland.analysis.clearance import part_distances, segment_distance, surface_distance
+from tetherland.campaign.jobs import campaign_fields
 from tetherland.config import builtin_scenarios, load_scenario
 from tetherland.geometry import LandingGeometry
 from tetherland.mission import Phase
 from tetherland.models.airframe import Airframe
 from tetherland.rotations import rotmat_to_quat
+from tetherland.runs.closed_loop import RunResult
 from tetherland.sim.baselines import ConstantReference, ConstantSpeedController
 from tetherland.sim.mjcf import FRAME_PARTS, VEHICLE_CONAFFINITY, VEHICLE_CONTYPE
 from tetherland.sim.plant import CONTACT_PEAK_WIDTH, Plant
@@ -306,13 +309,22 @@ def test_an_arm_hitting_an_edge_is_a_crash_named_with_its_phase_time_and_force(e
     runner = Runner(truth, ConstantSpeedController.motors_off(), plant=plant,
                     reference=ConstantReference(phase=int(Phase.TETHERED_LANDING)))  # fmt: skip
     log = runner.run(0.15, initial_state=state)
-    verdict = judge(log, _record(truth))
+    record = _record(truth)
+    verdict = judge(log, record)
     crash = verdict.summary["crash"]
     assert verdict.summary["crashed"] and verdict.outcome.value == "crashed"
     assert crash["part"] == "arm0" and crash["phase"] == "tethered_landing"
     assert steps[k0, 0] <= crash["t"] < steps[k0, 0] + period
     assert crash["force_N"] == pytest.approx(steps[k0:k1, 1].max(), rel=1e-6)
     assert "arm0" in verdict.reason
+    # a campaign's results.jsonl line carries the same record, and explains the failure
+    result = RunResult("tethered", record, verdict, log, None, None, truth, truth)
+    fields = json.loads(json.dumps(campaign_fields(result)))
+    assert fields["crash"] == crash
+    first = fields["failures"][0]
+    assert (first["outcome"], first["part"], first["phase"]) == ("crashed", "arm0",
+                                                                 "tethered_landing")
+    assert first["force_N"] == crash["force_N"] and first["t"] == crash["t"]
     # every logged tick holds the peak of its control period's physics steps
     n = round(period / dt)
     for row in range(1, len(log)):
