@@ -554,6 +554,7 @@ class Plant:
         contact_sum, contact_now = self._contact_sum, self._contact_now
         depth, depth_min = self._depth_view, self._depth_min
         maximum, dot = np.maximum, np.dot
+        data = self.data
         for _ in range(n):
             if self._spinning_up:
                 w0, w1, w2, w3 = w
@@ -569,10 +570,11 @@ class Plant:
                 aero_into(qpos, qvel, tgt, centres, samples, shapes, params, factors, ctrl,
                           wrench)  # fmt: skip
             advance()
-            dot(contact_sum, contact_normals, out=contact_now)
-            maximum(contact_peak, contact_now, out=contact_peak)
-            if depth[0] < depth_min:
-                depth_min = self._depth_min = depth.item()
+            if data.ncon:  # (no contact: every contact sensor reads 0, nothing to track)
+                dot(contact_sum, contact_normals, out=contact_now)
+                maximum(contact_peak, contact_now, out=contact_peak)
+                if depth[0] < depth_min:
+                    depth_min = self._depth_min = depth.item()
             k = self._tick
             self._tick = k + 1
             if self._spinning_up:
