@@ -57,7 +57,7 @@ def _vehicle_geoms(plant: Plant) -> list[str]:
     return [
         mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)
         for g in range(m.ngeom)
-        if m.geom_bodyid[g] == body and (m.geom_contype[g] or m.geom_conaffinity[g])
+        if m.body_rootid[m.geom_bodyid[g]] == body and (m.geom_contype[g] or m.geom_conaffinity[g])
     ]
 
 
@@ -264,9 +264,10 @@ def test_an_arm_hitting_an_edge_is_a_crash_named_with_its_phase_time_and_force(e
     the phase the log holds, the time of the fall sqrt(2 h / g) (to a control period and
     a physics step), and the peak normal force the plant saw at the physics rate. The
     impulse of that contact's per-step normal forces equals the vehicle's change of
-    vertical momentum plus gravity's impulse over the impact (the patch is level: the normal
-    is z_W and friction horizontal), and it is the force of every contact of the arm
-    (MuJoCo's contact list, mj_contactForce)."""
+    vertical momentum plus gravity's impulse over the impact, and while the arm's end
+    presses on the level face (normal z_W, friction horizontal) it is the vertical force;
+    the plant's force is the sum over every contact of the arm (MuJoCo's contact list,
+    mj_contactForce)."""
     truth, plant, state = _arm_drop(edge_world)
     _first_to_touch(plant, state, "arm0", DROP)
 
@@ -281,14 +282,19 @@ def test_an_arm_hitting_an_edge_is_a_crash_named_with_its_phase_time_and_force(e
         v_before = plant.qvel[2]
         t = plant.time
         plant.step(1)
-        own = 0.0
+        own, lift = 0.0, 0.0  # the arm's normal forces, and their pull on the vehicle along z_W
         for i in range(d.ncon):
-            if arm in (d.contact.geom1[i], d.contact.geom2[i]):
+            g1, g2 = d.contact.geom1[i], d.contact.geom2[i]
+            if arm in (g1, g2):
                 mujoco.mj_contactForce(m, d, i, f6)
                 own += f6[0]
+                # the force on geom2 in F_W is frame^T f (the frame's rows: normal from
+                # geom1 to geom2, tangents); the vehicle gets it if it is geom2
+                f_W = d.contact.frame[i].reshape(3, 3).T @ f6[:3]
+                lift += f_W[2] if g2 == arm else -f_W[2]
         parts = plant.part_forces
         other = float(np.delete(parts, i_arm).max()) + float(plant.lander_forces.max())
-        steps.append((t, float(parts[i_arm]), own, other, v_before))
+        steps.append((t, float(parts[i_arm]), own, other, v_before, lift))
     steps = np.array(steps)
     touching = np.flatnonzero(steps[:, 1] > 0.0)
     k0 = int(touching[0])
@@ -300,9 +306,15 @@ def test_an_arm_hitting_an_edge_is_a_crash_named_with_its_phase_time_and_force(e
     t_hit = math.sqrt(2 * DROP / GRAVITY)
     assert abs(steps[k0, 0] - t_hit) <= 2 * plant.dt
     mass, dt = truth.vehicle.mass, plant.dt
-    impulse = float(steps[k0:k1, 1].sum() * dt)
+    impulse = float(steps[k0:k1, 5].sum() * dt)
     momentum = mass * (steps[k1, 4] - steps[k0, 4]) + mass * GRAVITY * (k1 - k0) * dt
     assert impulse == pytest.approx(momentum, rel=1e-6) and impulse > 0.0
+    # while the arm's end presses on the face (before it slides onto the edge) the normal
+    # is z_W: the impulse of the normal forces the plant reports is that impulse
+    tilted = np.abs(steps[k0:k1, 5] - steps[k0:k1, 1]) > 1e-9 * steps[k0, 1]
+    flat = k0 + (int(np.argmax(tilted)) if tilted.any() else k1 - k0)
+    assert flat > k0 + 5
+    np.testing.assert_allclose(steps[k0:flat, 1], steps[k0:flat, 5], rtol=1e-9)
 
     # the same drop through the runner and the judge
     period = 1.0 / truth.controller.rate_hz
@@ -322,8 +334,11 @@ def test_an_arm_hitting_an_edge_is_a_crash_named_with_its_phase_time_and_force(e
     fields = json.loads(json.dumps(campaign_fields(result)))
     assert fields["crash"] == crash
     first = fields["failures"][0]
-    assert (first["outcome"], first["part"], first["phase"]) == ("crashed", "arm0",
-                                                                 "tethered_landing")
+    assert (first["outcome"], first["part"], first["phase"]) == (
+        "crashed",
+        "arm0",
+        "tethered_landing",
+    )
     assert first["force_N"] == crash["force_N"] and first["t"] == crash["t"]
     # every logged tick holds the peak of its control period's physics steps
     n = round(period / dt)

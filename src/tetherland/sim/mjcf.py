@@ -25,10 +25,12 @@ at the centre of mass, cable tension at the attachment (``tendonlimitfrc``,
 ``actuatorfrc`` or a user sensor the plant writes) and length, lander touch forces, the
 contact force of each lander with the landing surface and with the ground (``contact``
 sensors filtered by partner geom: what a lander touches, for the judge;
-:data:`CONTACT_PARTNERS`), the strongest contacts of each other part (crashes,
-``<part>_contact``, :data:`PART_CONTACT_SLOTS`) and the deepest penetration of any
-vehicle geom into anything (``vehicle_depth``). The plant reads the contact sensors at
-every physics step.
+:data:`CONTACT_PARTNERS`), the number of contacts of the other parts (``frame_contacts``:
+the landers sit in a child body ``landers`` welded to the vehicle, so that the body
+``vehicle`` holds exactly :data:`FRAME_PARTS`) and the depth of the deepest contact of
+the whole vehicle (``vehicle_depth``). The plant reads them at every physics step; at a
+step with a frame contact (a crash) it sums each part's normal forces from MuJoCo's
+contact list.
 
 Names are fixed (``vehicle``, ``attachment``, ``cable``, ...): the plant, the renderer and
 tests find elements by these names.
@@ -86,15 +88,9 @@ FRAME_PARTS: tuple[str, ...] = (
     "hub", "mount", *(f"arm{i}" for i in range(4)), *(f"leg{i}" for i in range(4)),
     *(f"prop{i}" for i in range(4)),
 )  # fmt: skip
-"""The vehicle's colliding geoms other than the landers, in the order of their contact
-sensors ``<part>_contact`` and of the plant's part codes (the log's ``frame_part``): the
-hub, the cable's mount, the arms, the legs and the rotor guards. A contact force on any of
-them is a crash."""
-
-PART_CONTACT_SLOTS = 4
-"""Contacts each ``<part>_contact`` sensor reports, strongest first (a box or a guard's
-disk flat on a plane touches at up to four points; a capsule or a sphere at one or
-two): the plant sums their normal forces."""
+"""The vehicle's colliding geoms other than the landers, in the order of the plant's part
+codes (the log's ``frame_part``): the hub, the cable's mount, the arms, the legs and the
+rotor guards. A contact force on any of them is a crash."""
 
 VEHICLE_CONTYPE, VEHICLE_CONAFFINITY = 2, 1
 """Collision bits of every vehicle geom: it collides with geoms whose ``contype`` has bit
@@ -111,7 +107,7 @@ SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("lander2_touch", 1),
     ("lander3_touch", 1),
     *((f"lander{i}_{partner}", 3) for partner in CONTACT_PARTNERS for i in range(4)),
-    *((f"{part}_contact", 3 * PART_CONTACT_SLOTS) for part in FRAME_PARTS),
+    ("frame_contacts", 1),
     ("vehicle_depth", 1),
 )
 """Sensors in ``sensordata`` order: (name, dimension)."""
@@ -601,15 +597,18 @@ def add_vehicle(scene: SceneXml) -> None:
 
 def add_landers(scene: SceneXml, body: ET.Element) -> None:
     """The four lander spheres ``lander{i}`` (lowest points on the landers plane,
-    :func:`tetherland.models.airframe.lander_centres_B`), their legs ``leg{i}`` (capsules
-    from under the hub to the lander's centre), all colliding, and the touch zones
-    ``lander{i}_zone`` of the touch sensors."""
+    :func:`tetherland.models.airframe.lander_centres_B`) and the touch zones
+    ``lander{i}_zone`` of the touch sensors in the massless child body ``landers`` (welded
+    to the vehicle: the contact sensors tell the landers' contacts from the other parts'
+    by body), and their legs ``leg{i}`` (capsules from under the hub to the lander's
+    centre) on the vehicle; all collide."""
     v = scene.scenario.vehicle
     frame = Airframe.of(v)
     r = frame.lander_radius
+    feet = _sub(body, "body", name="landers")
     for i, tip in enumerate(frame.lander_centres_B):
         _sub(
-            body,
+            feet,
             "geom",
             name=f"lander{i}",
             class_="collision",
@@ -632,7 +631,7 @@ def add_landers(scene: SceneXml, body: ET.Element) -> None:
             group="1",
         )
         _sub(
-            body,
+            feet,
             "site",
             name=f"lander{i}_zone",
             type="sphere",
@@ -744,10 +743,10 @@ def add_sensors(scene: SceneXml) -> None:
         for i in range(4):
             _sub(sensor, "contact", name=f"lander{i}_{partner}", geom1=f"lander{i}",
                  geom2=partner, num="1", data="force", reduce="none")  # fmt: skip
-    for part in FRAME_PARTS:  # the part's strongest contacts with anything
-        _sub(sensor, "contact", name=f"{part}_contact", geom1=part,
-             num=str(PART_CONTACT_SLOTS), data="force", reduce="maxforce")  # fmt: skip
-    # the deepest contact of any geom of the vehicle's subtree (0 when none)
+    # how many contacts the body ``vehicle`` (every part but the landers) has, and the
+    # deepest contact of the vehicle's subtree (0 when none)
+    _sub(sensor, "contact", name="frame_contacts", body1="vehicle", num="1", data="found",
+         reduce="none")  # fmt: skip
     _sub(sensor, "contact", name="vehicle_depth", subtree1="vehicle", num="1", data="dist",
          reduce="mindist")  # fmt: skip
 

@@ -46,7 +46,6 @@ from tetherland.sim.hook import Hook, HookState
 from tetherland.sim.mjcf import (
     CONTACT_PARTNERS,
     FRAME_PARTS,
-    PART_CONTACT_SLOTS,
     SENSOR_SLICES,
     SceneLayout,
     build_mjcf,
@@ -137,25 +136,26 @@ class Plant:
         self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
         self.sensordata = self.data.sensordata
-        # the contact sensors of the landers (one contact each with the surface and the
-        # ground) and of every other part (its strongest contacts), contiguous: every
-        # third entry is a normal force, then two tangential ones. ``_contact_sum`` maps
-        # them to the landers' normal forces and each part's total, ``_contact_now`` holds
-        # those of the last step and ``_contact_peak`` their peaks since the last read.
+        # the landers' normal forces on the surface and the ground (contact sensors, every
+        # third entry: normal, tangent, tangent) and their peaks since the last read
         first = SENSOR_SLICES[f"lander0_{CONTACT_PARTNERS[0]}"].start
-        last = SENSOR_SLICES[f"{FRAME_PARTS[-1]}_contact"].stop
-        self._contact_normals = self.sensordata[first:last:3]
-        n_parts = len(FRAME_PARTS)
-        self._contact_sum = np.zeros((_N_LANDER_PEAKS + n_parts, len(self._contact_normals)))
-        self._contact_sum[:_N_LANDER_PEAKS, :_N_LANDER_PEAKS] = np.eye(_N_LANDER_PEAKS)
-        for j in range(n_parts):
-            slots = _N_LANDER_PEAKS + j * PART_CONTACT_SLOTS
-            self._contact_sum[_N_LANDER_PEAKS + j, slots : slots + PART_CONTACT_SLOTS] = 1.0
-        self._contact_now = np.zeros(_N_LANDER_PEAKS + n_parts)
-        self._contact_peak = np.zeros(_N_LANDER_PEAKS + n_parts)
-        # the deepest contact of the vehicle (distance <= 0) and its least since the last read
+        last = SENSOR_SLICES[f"lander3_{CONTACT_PARTNERS[-1]}"].stop
+        self._lander_normals = self.sensordata[first:last:3]
+        self._lander_peak = np.zeros(self._lander_normals.shape)
+        # the number of contacts of the parts but the landers (> 0: a crash), the deepest
+        # contact of the vehicle (distance <= 0) and its least since the last read
+        self._frame_found = self.sensordata[SENSOR_SLICES["frame_contacts"]]
         self._depth_view = self.sensordata[SENSOR_SLICES["vehicle_depth"]]
         self._depth_min = 0.0
+        # the other parts: geom id -> index in FRAME_PARTS, their normal forces at the last
+        # step with a part in contact and their peaks since the last read
+        self._part_of_geom = {
+            mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name): j
+            for j, name in enumerate(FRAME_PARTS)
+        }
+        self._part_now = np.zeros(len(FRAME_PARTS))
+        self._part_peak = np.zeros(len(FRAME_PARTS))
+        self._force6 = np.zeros(6)
         geo = self.layout.geometry
         self.cable: Cable = make_cable(m, self.data, scenario, geo.p_A, geo.R_WA[:, 0])
         self.hook = Hook(
@@ -217,7 +217,8 @@ class Plant:
         """
         mujoco.mj_resetData(self.model, self.data)
         self._tick = 0
-        self._contact_peak[:] = 0.0
+        self._lander_peak[:] = 0.0
+        self._part_peak[:] = 0.0
         self._depth_min = 0.0
         self.model.actuator_gear[0:4] = self._gear0
         self._write_state(self.start_state() if state is None else state)
@@ -483,28 +484,53 @@ class Plant:
           no part touched);
         - ``out[10]``: the deepest penetration of any vehicle geom into anything, >= 0 [m].
 
-        The contact sensors filter by geom (:mod:`tetherland.sim.mjcf`), and the peaks
-        are taken at every physics step: a touch that lasts a single step is seen (the
-        judge's touchdowns, bounces and crashes).
+        The landers' contact sensors filter by partner geom (:mod:`tetherland.sim.mjcf`);
+        a step at which another part has a contact (the sensor ``frame_contacts``) sums
+        each part's normal forces from MuJoCo's contact list. The peaks are taken at every
+        physics step: a touch that lasts a single step is seen (the judge's touchdowns,
+        bounces and crashes).
         """
-        peak = self._contact_peak
         n = _N_LANDER_PEAKS
-        out[:n] = peak[:n]
-        parts = peak[n:]
+        out[:n] = self._lander_peak
+        parts = self._part_peak
         k = int(parts.argmax())
         force = float(parts[k])
         out[n] = force
         out[n + 1] = k if force > 0.0 else -1
         out[n + 2] = -self._depth_min
-        peak[:] = 0.0
+        self._lander_peak[:] = 0.0
+        parts[:] = 0.0
         self._depth_min = 0.0
+
+    def _part_forces_into(self, out: FloatArray) -> None:
+        """Sum the normal force of every contact of each part of
+        :data:`~tetherland.sim.mjcf.FRAME_PARTS` at the start of the last step into
+        ``out`` (MuJoCo's contact list and ``mj_contactForce``) [N]."""
+        out[:] = 0.0
+        m, d, f6, part_of = self.model, self.data, self._force6, self._part_of_geom
+        ncon = d.ncon
+        if not ncon:
+            return
+        geoms = d.contact.geom[:ncon]
+        for i in range(ncon):
+            g1, g2 = geoms[i]
+            j = part_of.get(int(g1), part_of.get(int(g2)))
+            if j is not None:
+                mujoco.mj_contactForce(m, d, i, f6)
+                out[j] += f6[0]
+
+    def _track_parts(self) -> None:
+        """A step with a contact of a part but the landers: the parts' peaks."""
+        self._part_forces_into(self._part_now)
+        np.maximum(self._part_peak, self._part_now, out=self._part_peak)
 
     @property
     def part_forces(self) -> FloatArray:
-        """Normal force on each part of :data:`~tetherland.sim.mjcf.FRAME_PARTS` (the sum
-        over its strongest :data:`~tetherland.sim.mjcf.PART_CONTACT_SLOTS` contacts) at
-        the start of the last step [N]."""
-        return (self._contact_sum @ self._contact_normals)[_N_LANDER_PEAKS:]
+        """Normal force on each part of :data:`~tetherland.sim.mjcf.FRAME_PARTS` (summed
+        over its contacts) at the start of the last step [N]."""
+        out = np.zeros(len(FRAME_PARTS))
+        self._part_forces_into(out)
+        return out
 
     @property
     def frame_contact_force(self) -> float:
@@ -516,7 +542,7 @@ class Plant:
     def frame_contact_peak(self) -> float:
         """Largest normal force on any part but the landers over the physics steps since
         the last :meth:`contact_peaks_into` (or the reset), without starting over [N]."""
-        return float(self._contact_peak[_N_LANDER_PEAKS:].max())
+        return float(self._part_peak.max())
 
     @property
     def penetration(self) -> float:
@@ -550,10 +576,9 @@ class Plant:
         if aero:
             qpos, qvel, factors, wrench = self._qpos, self._qvel, self._factors, self._wrench
             centres, samples, shapes, params = self._aero_args
-        contact_normals, contact_peak = self._contact_normals, self._contact_peak
-        contact_sum, contact_now = self._contact_sum, self._contact_now
-        depth, depth_min = self._depth_view, self._depth_min
-        maximum, dot = np.maximum, np.dot
+        lander_normals, lander_peak = self._lander_normals, self._lander_peak
+        frame_found, depth, depth_min = self._frame_found, self._depth_view, self._depth_min
+        maximum = np.maximum
         data = self.data
         for _ in range(n):
             if self._spinning_up:
@@ -571,8 +596,9 @@ class Plant:
                           wrench)  # fmt: skip
             advance()
             if data.ncon:  # (no contact: every contact sensor reads 0, nothing to track)
-                dot(contact_sum, contact_normals, out=contact_now)
-                maximum(contact_peak, contact_now, out=contact_peak)
+                maximum(lander_peak, lander_normals, out=lander_peak)
+                if frame_found[0]:  # a part but the landers touches: a crash
+                    self._track_parts()
                 if depth[0] < depth_min:
                     depth_min = self._depth_min = depth.item()
             k = self._tick
