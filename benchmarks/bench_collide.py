@@ -3,8 +3,10 @@
 Prints one JSON line: the wall time of the first 10 s of the slope50 mission (seed 0,
 the whole closed loop: UKF, controllers, supervisor, plant) and of 10 s of the bare plant
 (``Plant.step``) hovering and landed (four lander contacts, cable taut), best of
-``REPEATS``. It uses only interfaces older than the change, so the same script measures
-the commit before it; on a shared machine compare runs made back to back, alternating:
+three. Wall times on a shared machine vary by tens of percent; the load-independent
+measure is callgrind's instruction count of ``Plant.step`` (docs/theory.md section 9.1).
+It uses only interfaces older than the change, so the same script measures the commit
+before it; on a shared machine compare runs made back to back, alternating:
 
     git worktree add --detach /tmp/base <commit before>
     for i in 1 2 3; do
@@ -21,13 +23,13 @@ import time
 
 import numpy as np
 
+from bench_plant import best
 from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.runs import run_mission
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
-REPEATS = 3
 SPAN = 10.0
 """Simulated time measured [s]."""
 
@@ -44,15 +46,6 @@ class _Clock:
             self.start = time.perf_counter()
         elif self.wall is None and t >= SPAN:
             self.wall = time.perf_counter() - self.start
-
-
-def _best(fn) -> float:
-    times = []
-    for _ in range(REPEATS):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:
@@ -75,8 +68,8 @@ def main() -> None:
 
     print(json.dumps({
         "mission_first_10s_wall_s": clock.wall,
-        "plant_hover_10s_wall_s": _best(hover),
-        "plant_landed_10s_wall_s": _best(landed),
+        "plant_hover_10s_wall_s": best(hover),
+        "plant_landed_10s_wall_s": best(landed),
     }))  # fmt: skip
 
 
