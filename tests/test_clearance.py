@@ -18,6 +18,7 @@ from tetherland.config import load_scenario
 from tetherland.geometry import LandingGeometry
 from tetherland.mission import MissionError, plan_mission
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
+from tetherland.sim.mjcf import FRAME_PARTS
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
@@ -131,7 +132,8 @@ def _vehicle_surface_distance(plant: Plant) -> float:
     surface = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "surface")
     fromto = np.zeros(6)
     geoms = [g for g in range(m.ngeom) if m.geom_bodyid[g] != 0 and m.geom_contype[g]]
-    assert len(geoms) == 9  # hub, four landers, four rotor guards
+    # hub, mount, four landers, legs, arms and rotor guards
+    assert len(geoms) == 2 + 4 * 4 == len(FRAME_PARTS) + 4
     return min(mujoco.mj_geomDistance(m, d, surface, g, 1.0, fromto) for g in geoms)
 
 

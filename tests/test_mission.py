@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from legacy_random import LegacySource
+from penetration import assert_nothing_behind_surfaces
 from tetherland.config import load_scenario, scenario_from_dict, with_overrides
 from tetherland.geometry import LandingGeometry
 from tetherland.mission import TRANSITIONS, Phase
@@ -50,7 +51,9 @@ def check_success(result) -> None:
     assert all(p["exit_reason"] for p in s["phases"])
     assert [e["kind"] for e in s["hook"]["events"]][:2] == ["ENGAGED", "RELEASED"]
     assert s["return"]["position_error_m"] < 0.05
-    assert not s["crashed"]
+    assert not s["crashed"] and s["crash"] is None
+    # no part of the vehicle more than 2 mm behind any surface, at any time of the run
+    assert_nothing_behind_surfaces(result.log, result.record.truth_scenario())
 
 
 def test_slope50_mission_succeeds(slope50_run):

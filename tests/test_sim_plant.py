@@ -14,7 +14,7 @@ from tetherland.errors import SimulationError
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import quat_to_rotmat
 from tetherland.sim.mjcf import SENSOR_SLICES, SceneLayout, build_mjcf
-from tetherland.sim.plant import Plant
+from tetherland.sim.plant import CONTACT_PEAK_WIDTH, Plant
 from tetherland.state import RigidBodyState
 
 
@@ -256,11 +256,11 @@ def test_lander_contact_forces_are_split_by_what_they_touch(where):
     plant = Plant(sc)
     plant.reset(plant.landed_state() if where == "surface" else None)
     plant.step(800)  # settle
-    peaks = np.zeros(8)
+    peaks = np.zeros(CONTACT_PEAK_WIDTH)
     plant.contact_peaks_into(peaks)
     plant.step(1)
     plant.contact_peaks_into(peaks)  # one physics step: the forces at rest
-    surface, ground = peaks[:4], peaks[4:]
+    surface, ground = peaks[:4], peaks[4:8]
     weight = sc.vehicle.mass * GRAVITY
     if where == "surface":
         assert surface.sum() == pytest.approx(weight * math.cos(math.radians(20)), rel=1e-3)
@@ -279,7 +279,7 @@ def test_lander_contact_peaks_are_taken_at_every_physics_step(scenario):
     s = plant.start_state()
     plant.reset(RigidBodyState.at_rest(s.p_W + np.array([0.0, 0.0, 0.02]), s.q_WB))
     plant.step(60)  # just before the impact (free fall of 2 cm: 64 ms)
-    peaks = np.zeros(8)
+    peaks = np.zeros(CONTACT_PEAK_WIDTH)
     plant.contact_peaks_into(peaks)
     first, last = SENSOR_SLICES["lander0_ground"], SENSOR_SLICES["lander3_ground"]
     ground = np.s_[first.start : last.stop : 3]  # the ground sensors' normal entries
@@ -288,7 +288,7 @@ def test_lander_contact_peaks_are_taken_at_every_physics_step(scenario):
         plant.step(1)
         per_step.append(plant.sensordata[ground].copy())
     plant.contact_peaks_into(peaks)
-    np.testing.assert_array_equal(peaks[4:], np.max(per_step, axis=0))
+    np.testing.assert_array_equal(peaks[4:8], np.max(per_step, axis=0))
     assert np.max(per_step) > np.max(per_step[-1])  # the peak is not the last step's value
     plant.contact_peaks_into(peaks)
-    assert not np.any(peaks)
+    assert not np.any(peaks[:9]) and peaks[9] == -1  # no force, no part touched

@@ -198,7 +198,7 @@ def test_scene_is_the_plants_mujoco_scene(pipe60):
     np.testing.assert_allclose(np.cross(top - geo.surface.origin, geo.surface.x_S), 0, atol=1e-9)
     vehicle = next(e for e in update.entities if e.id == "vehicle")
     assert vehicle.frame_id == "body" and vehicle.frame_locked
-    assert len(vehicle.spheres) == 4  # the landers
+    assert len(vehicle.spheres) == 5  # the landers and the cable's mount
 
 
 def test_cable_colour_follows_the_tension():

@@ -7,29 +7,23 @@ horizontal distance R from the centre meet a surface that rises R tan(beta). The
 checks this before it flies and reports the hook drop the slope needs instead of crashing.
 
 The vehicle's collision shape is the one the plant simulates
-(:mod:`tetherland.models.airframe`);
-the frame is sampled on the rims of the rotor guards (5 degree steps, under 0.3 mm error)
-and the corners of the hub.
+(:class:`tetherland.models.airframe.Airframe`): the rotor guards, sampled on their rims
+(5 degree steps, under 0.3 mm error), the corners of the hub, the lander and mount spheres
+and the leg and arm capsules (exact against a plane or a pipe).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tetherland.config import Scenario
+from tetherland.config import Scenario, VehicleConfig
 from tetherland.geometry import FloatArray
-from tetherland.models.airframe import (
-    HUB_HALF_SIZE,
-    PROP_HALF_THICKNESS,
-    PROP_HEIGHT,
-    PROP_RADIUS_FRACTION,
-    lander_centres_B,
-)
-from tetherland.models.quadrotor import RotorLayout
+from tetherland.models.airframe import Airframe
 from tetherland.rotations import rotation_from_z_and_yaw
 from tetherland.surface import Surface
 
@@ -57,35 +51,120 @@ def surface_distance(surface: Surface, points_W: ArrayLike) -> FloatArray:
     return np.linalg.norm(radial, axis=1) - surface.pipe_radius
 
 
+def segment_distance(surface: Surface, a_W: ArrayLike, b_W: ArrayLike) -> FloatArray:
+    """Signed distance of segments a-b from the surface, positive outside [m].
+
+    Planes: the nearer end. Pipes: the segment's least distance from the pipe axis minus
+    the radius (exact: the radial offset from the axis is affine along the segment).
+    """
+    a = np.atleast_2d(np.asarray(a_W, dtype=float))
+    b = np.atleast_2d(np.asarray(b_W, dtype=float))
+    if surface.kind != "pipe":
+        return np.minimum(surface_distance(surface, a), surface_distance(surface, b))
+    axis = surface.origin - surface.pipe_radius * surface.z_S
+    x = surface.x_S
+    ra = (a - axis) - np.outer((a - axis) @ x, x)
+    rb = (b - axis) - np.outer((b - axis) @ x, x)
+    d = rb - ra
+    dd = np.einsum("ij,ij->i", d, d)
+    s = np.clip(-np.einsum("ij,ij->i", ra, d) / np.where(dd > 0.0, dd, 1.0), 0.0, 1.0)
+    return np.linalg.norm(ra + s[:, None] * d, axis=1) - surface.pipe_radius
+
+
+@dataclass(frozen=True)
+class _Shape:
+    """A vehicle's collision shape as arrays in F_B, for many distance queries."""
+
+    points_B: FloatArray  # guard rims (both faces), then hub corners
+    n_guard: int  # rows of points_B on the guard rims
+    spheres_B: FloatArray  # four landers, then the mount
+    sphere_radii: FloatArray
+    a_B: FloatArray  # capsules (legs, arms): ends and radii
+    b_B: FloatArray
+    capsule_radii: FloatArray
+    capsule_names: tuple[str, ...]
+
+
+@functools.lru_cache(maxsize=64)
+def _shape(vehicle: VehicleConfig) -> _Shape:
+    frame = Airframe.of(vehicle)
+    guards = [
+        c + [0.0, 0.0, dz] + frame.guard_radius * _RIM
+        for c in frame.guard_centres_B
+        for dz in (-frame.guard_half_thickness, frame.guard_half_thickness)
+    ]
+    hx, hy, hz = frame.hub_half_size
+    signs = (-1.0, 1.0)
+    hub = np.array([[sx * hx, sy * hy, sz * hz] for sx in signs for sy in signs for sz in signs])
+    n = len(frame.lander_centres_B)
+    return _Shape(
+        points_B=np.vstack([*guards, hub]),
+        n_guard=sum(len(g) for g in guards),
+        spheres_B=np.vstack((frame.lander_centres_B, frame.mount_B)),
+        sphere_radii=np.array([frame.lander_radius] * n + [frame.mount_radius]),
+        a_B=np.array([c.a_B for c in frame.capsules]),
+        b_B=np.array([c.b_B for c in frame.capsules]),
+        capsule_radii=np.array([c.radius for c in frame.capsules]),
+        capsule_names=tuple(c.name for c in frame.capsules),
+    )
+
+
+def _distances(
+    vehicle: VehicleConfig, surface: Surface, p_W: ArrayLike, R_WB: ArrayLike
+) -> tuple[_Shape, FloatArray, FloatArray, FloatArray]:
+    """The shape and the signed distances of its points, spheres and capsules [m]."""
+    shape = _shape(vehicle)
+    R = np.asarray(R_WB, dtype=float)
+    p = np.asarray(p_W, dtype=float)
+    d_points = surface_distance(surface, p + shape.points_B @ R.T)
+    d_spheres = surface_distance(surface, p + shape.spheres_B @ R.T) - shape.sphere_radii
+    d_caps = (
+        segment_distance(surface, p + shape.a_B @ R.T, p + shape.b_B @ R.T) - shape.capsule_radii
+    )
+    return shape, d_points, d_spheres, d_caps
+
+
+def part_distances(
+    vehicle: VehicleConfig, surface: Surface, p_W: ArrayLike, R_WB: ArrayLike
+) -> dict[str, float]:
+    """Smallest signed distance [m] of each part of the vehicle's collision shape from
+    the surface, the vehicle's centre of mass at ``p_W`` [m] with attitude ``R_WB``.
+
+    Keys: ``landers`` (the four spheres), ``guards`` (rims of the rotor guards), ``hub``
+    (its corners), ``mount``, and each capsule by the plant's geom name (``leg0`` ...
+    ``leg3``, ``arm0`` ... ``arm3``).
+    """
+    shape, d_points, d_spheres, d_caps = _distances(vehicle, surface, p_W, R_WB)
+    out = {
+        "landers": float(d_spheres[:-1].min()),
+        "guards": float(d_points[: shape.n_guard].min()),
+        "hub": float(d_points[shape.n_guard :].min()),
+        "mount": float(d_spheres[-1]),
+    }
+    out.update({name: float(d) for name, d in zip(shape.capsule_names, d_caps, strict=True)})
+    return out
+
+
+def vehicle_distance(
+    vehicle: VehicleConfig, surface: Surface, p_W: ArrayLike, R_WB: ArrayLike
+) -> float:
+    """Smallest signed distance [m] of the vehicle's whole collision shape from the surface
+    (the least of :func:`part_distances`)."""
+    _, d_points, d_spheres, d_caps = _distances(vehicle, surface, p_W, R_WB)
+    return float(min(d_points.min(), d_spheres.min(), d_caps.min()))
+
+
 def level_vehicle_distance(
     scenario: Scenario, surface: Surface, p_W: ArrayLike, yaw: float
 ) -> float:
     """Smallest signed distance [m] of the level vehicle's collision shape from the surface.
 
-    The shape is the one the plant simulates (:mod:`tetherland.models.airframe`): rotor
-    guards (disks of radius PROP_RADIUS_FRACTION arm_length, PROP_HEIGHT above the rotors),
-    the hub box and the four lander spheres, with the vehicle level at centre of mass
-    ``p_W`` [m] and heading ``yaw`` [rad].
+    The shape is the one the plant simulates (:class:`tetherland.models.airframe.Airframe`:
+    rotor guards, hub, landers, legs, arms and the cable's mount, :func:`part_distances`),
+    with the vehicle level at centre of mass ``p_W`` [m] and heading ``yaw`` [rad].
     """
-    v = scenario.vehicle
     R = rotation_from_z_and_yaw((0.0, 0.0, 1.0), yaw)
-    rotors = RotorLayout.from_config(v).positions_B
-    r_prop = PROP_RADIUS_FRACTION * v.arm_length
-    guards = [
-        r_i + [0.0, 0.0, PROP_HEIGHT + dz] + r_prop * _RIM
-        for r_i in rotors
-        for dz in (-PROP_HALF_THICKNESS, PROP_HALF_THICKNESS)
-    ]
-    hx, hy, hz = HUB_HALF_SIZE
-    signs = (-1.0, 1.0)
-    hub = np.array([[sx * hx, sy * hy, sz * hz] for sx in signs for sy in signs for sz in signs])
-    frame_B = np.vstack([*guards, hub])
-    r = v.lander_radius
-    landers_B = lander_centres_B(v.lander_half_width, v.h_R, r)
-    p = np.asarray(p_W, dtype=float)
-    frame = surface_distance(surface, p + frame_B @ R.T).min()
-    landers = surface_distance(surface, p + landers_B @ R.T).min() - r
-    return float(min(frame, landers))
+    return vehicle_distance(scenario.vehicle, surface, p_W, R)
 
 
 @dataclass(frozen=True)

@@ -172,6 +172,7 @@ def campaign_fields(result: RunResult) -> dict[str, Any]:
             for p in summary.get("phases", [])
         ],
         "crashed": summary["crashed"],
+        "crash": summary.get("crash"),
         "failures": [f.to_dict() for f in explain(summary, result.log, result.record)],
         "landing": {k: landing.get(k) for k in _LANDING_KEYS}
         | {"conditions": landing.get("conditions")},

@@ -55,7 +55,8 @@ class VerdictConfig(Section):
     """Return: largest ||p_RL - pad|| at the end of the run; the cable must also be
     unhooked by then [m]."""
     crash_force: float = Field(1e-6, gt=0, le=100)
-    """Crash: a normal force above this on the hub or a rotor guard, at any time [N]."""
+    """Crash: a normal force above this on any part of the vehicle but the landers (hub,
+    cable mount, arms, legs, rotor guards), at any physics step [N]."""
 
     @model_validator(mode="after")
     def _settle_within_rest(self) -> VerdictConfig:

@@ -20,7 +20,8 @@ The rest ends early if the rotors are driven again. The final
 reward is the number of conditions held plus ``success_bonus`` when all five hold.
 Takeoff: the episode ends ``rest_time`` after the planned end; success when the link
 elevation and the tilt are within ``takeoff_tolerance`` of the planned taut end hover.
-A frame contact above ``verdict.crash_force`` (crash) or a slack cable (true tension
+A contact above ``verdict.crash_force`` on any part but the landers, at any physics
+step (crash), or a slack cable (true tension
 below ``SLACK_TENSION`` for ``mission.detection.slack_dwell`` while airborne) ends the
 episode with ``-failure_penalty``;
 each step costs ``dt`` x the distance to the goal [m s]. Episodes are truncated at
@@ -336,7 +337,7 @@ class TetheredEnv(gymnasium.Env):
         p_RL = p_W - geo.h_R * z_B
         info: dict[str, Any] = {"tension": plant.tension}
         cfg = self.scenario.verdict
-        frame = plant.frame_contact_force
+        frame = plant.frame_contact_peak  # every physics step since the last tick
         if frame > cfg.crash_force:
             return -self.failure_penalty, Outcome.CRASHED, info
         force = max(float(plant.lander_forces.max()), frame)

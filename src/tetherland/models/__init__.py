@@ -8,7 +8,8 @@
   CasADi;
 * :mod:`.flatness`: the flatness map from y^b = [phi, delta, theta_A, psi] to the nominal
   state and input;
-* :mod:`.airframe`: the vehicle's collision shape (lander tips, hub, rotor guards);
+* :mod:`.airframe`: the vehicle's collision shape (landers, legs, hub, arms, rotor guards,
+  cable mount);
 * :mod:`.hook`: the hook model (where the hook point is, relative to the attachment).
 """
 

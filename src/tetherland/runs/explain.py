@@ -4,8 +4,8 @@ the numbers behind it (a part and a force for a crash, a value and its limit oth
 :func:`explain` reads the verdict's ``summary.json`` document, the run's log (the plant's
 truth) and its :class:`~tetherland.verdict.RunRecord`, nothing the robot believed. A crash
 record of the judge (``summary["crash"]``: ``t``, ``phase``, ``part``, ``force_N``) is used
-as it is when the judge gives one; otherwise the crash is the first logged tick at which
-the frame's normal force exceeds ``verdict.crash_force`` (the log does not name the part).
+as it is; for a summary written before the judge gave one, the crash is the first logged
+tick at which the frame's normal force exceeds ``verdict.crash_force`` (no part named).
 """
 
 from __future__ import annotations

@@ -124,7 +124,6 @@ TRUTH: tuple[Column, ...] = (
     _c("tension", 1, "N", "cable tension (tendonlimitfrc)"),
     _c("cable_length", 1, "m", "anchor-to-attachment distance"),
     _c("lander_forces", 4, "N", "normal force on each lander"),
-    _c("frame_force", 1, "N", "normal force on hub and rotor guards (crash if > 0)"),
     _c("rotor_speeds", 4, "rad/s", "rotor speeds"),
     _c("rotor_thrusts", 4, "N", "acting rotor thrusts (surface factors included)"),
     _c("ground_effect", 4, "-", "surface factor T/T_OGE of each rotor (ground, ceiling)"),
@@ -133,6 +132,13 @@ TRUTH: tuple[Column, ...] = (
        "each lander over the physics steps since the previous control tick"),
     _c("lander_ground_forces", 4, "N", "largest normal force of the ground (start pad) on "
        "each lander over the physics steps since the previous control tick"),
+    _c("frame_force", 1, "N", "largest normal force on any part but the landers (hub, "
+       "mount, arms, legs, rotor guards; a crash if > 0) over the physics steps since the "
+       "previous control tick"),
+    _c("frame_part", 1, "-", "index in sim.mjcf.FRAME_PARTS (metadata 'frame_parts') of "
+       "the part that frame_force acted on, -1 when none", True),
+    _c("penetration", 1, "m", "deepest penetration of any vehicle geom into anything "
+       "(MuJoCo's contact distance) over the physics steps since the previous control tick"),
     _c("hook_p_W", 3, "m", "true hook position: the hook body's crown (bar mechanism), "
        "else the capture-disk model's hook point"),
 )

@@ -15,12 +15,22 @@ the cable (docs/tether.md), by ``tether.cable_model``:
   connect ``hook`` to the attachment site; the tendon stays, hidden, to measure the
   anchor-attachment distance.
 
+Every part of the vehicle collides (:data:`FRAME_PARTS` and the landers, the shapes of
+:class:`tetherland.models.airframe.Airframe`): with the environment (ground, surface and
+whatever else the world holds with the default ``contype``), never with each other
+(:data:`VEHICLE_CONTYPE`, :data:`VEHICLE_CONAFFINITY`).
+
 Sensors (in ``sensordata`` order, see :data:`SENSOR_LAYOUT`): IMU accelerometer and gyro
 at the centre of mass, cable tension at the attachment (``tendonlimitfrc``,
-``actuatorfrc`` or a user sensor the plant writes) and length, lander touch forces and a
-touch sensor around the frame (crash detection), and the contact force of each lander
-with the landing surface and with the ground (``contact`` sensors filtered by partner
-geom: what a lander touches, for the judge; :data:`CONTACT_PARTNERS`).
+``actuatorfrc`` or a user sensor the plant writes) and length, lander touch forces, the
+contact force of each lander with the landing surface and with the ground (``contact``
+sensors filtered by partner geom: what a lander touches, for the judge;
+:data:`CONTACT_PARTNERS`), the number of contacts of the other parts (``frame_contacts``:
+the landers sit in a child body ``landers`` welded to the vehicle, so that the body
+``vehicle`` holds exactly :data:`FRAME_PARTS`) and the depth of the deepest contact of
+the whole vehicle (``vehicle_depth``). The plant reads them at every physics step; at a
+step with a frame contact (a crash) it sums each part's normal forces from MuJoCo's
+contact list.
 
 Names are fixed (``vehicle``, ``attachment``, ``cable``, ...): the plant, the renderer and
 tests find elements by these names.
@@ -45,12 +55,9 @@ from tetherland import GRAVITY
 from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.models.airframe import (
-    HUB_HALF_SIZE,
     LANDER_CORNERS,
-    PROP_HALF_THICKNESS,
-    PROP_HEIGHT,
     PROP_RADIUS_FRACTION,
-    lander_centres_B,
+    Airframe,
 )
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import rotmat_to_quat
@@ -77,6 +84,19 @@ CONTACT_PARTNERS: tuple[str, ...] = ("surface", "ground")
 the force of the first contact of the pair in its contact frame (normal, tangent 1,
 tangent 2) [N]; a lander sphere meets the box, cylinder or plane at one point."""
 
+FRAME_PARTS: tuple[str, ...] = (
+    "hub", "mount", *(f"arm{i}" for i in range(4)), *(f"leg{i}" for i in range(4)),
+    *(f"prop{i}" for i in range(4)),
+)  # fmt: skip
+"""The vehicle's colliding geoms other than the landers, in the order of the plant's part
+codes (the log's ``frame_part``): the hub, the cable's mount, the arms, the legs and the
+rotor guards. A contact force on any of them is a crash."""
+
+VEHICLE_CONTYPE, VEHICLE_CONAFFINITY = 2, 1
+"""Collision bits of every vehicle geom: it collides with geoms whose ``contype`` has bit
+0 set (the world's: ground, surface, anchor; MuJoCo's default 1) and with no other
+vehicle geom (2 & 1 = 0)."""
+
 SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("accelerometer", 3),
     ("gyro", 3),
@@ -86,8 +106,9 @@ SENSOR_LAYOUT: tuple[tuple[str, int], ...] = (
     ("lander1_touch", 1),
     ("lander2_touch", 1),
     ("lander3_touch", 1),
-    ("frame_touch", 1),
     *((f"lander{i}_{partner}", 3) for partner in CONTACT_PARTNERS for i in range(4)),
+    ("frame_contacts", 1),
+    ("vehicle_depth", 1),
 )
 """Sensors in ``sensordata`` order: (name, dimension)."""
 
@@ -388,7 +409,8 @@ class SceneXml:
 def add_options_and_assets(scene: SceneXml) -> None:
     """Compiler and physics options (time step, integrator, solver, gravity), the visual
     settings, textures and materials, and the default classes ``visual`` (drawn only) and
-    ``collision`` (massless contact geometry)."""
+    ``collision`` (the vehicle's massless contact geometry: :data:`VEHICLE_CONTYPE`,
+    :data:`VEHICLE_CONAFFINITY`)."""
     sim = scene.scenario.sim
     root = scene.root
     _sub(root, "compiler", angle="radian", autolimits="true")
@@ -442,7 +464,8 @@ def add_options_and_assets(scene: SceneXml) -> None:
     vis = _sub(default, "default", class_="visual")
     _sub(vis, "geom", contype="0", conaffinity="0", group="1", mass="0")
     col = _sub(default, "default", class_="collision")
-    _sub(col, "geom", group="3", mass="0", condim="3")
+    _sub(col, "geom", group="3", mass="0", condim="3", contype=str(VEHICLE_CONTYPE),
+         conaffinity=str(VEHICLE_CONAFFINITY))  # fmt: skip
 
 
 def add_ground_and_surface(scene: SceneXml) -> None:
@@ -679,8 +702,11 @@ def add_hanging_line(scene: SceneXml) -> None:
 def add_vehicle(scene: SceneXml) -> None:
     """The vehicle at the start pad (the plant sets the initial state): one rigid body with
     a free joint, mass and principal inertia, the IMU and cable attachment sites, the hub,
-    the landers (:func:`add_landers`) and the rotors (:func:`add_rotors`)."""
+    the cable's mount (a small sphere on the attachment point), the landers and legs
+    (:func:`add_landers`) and the rotors (:func:`add_rotors`), every shape from
+    :class:`~tetherland.models.airframe.Airframe`."""
     v = scene.scenario.vehicle
+    frame = Airframe.of(v)
     start_com = scene.layout.start_position + np.array([0.0, 0.0, v.h_R])
     body = _sub(scene.world, "body", name="vehicle", pos=_fmt(start_com))
     scene.vehicle = body
@@ -701,25 +727,39 @@ def add_vehicle(scene: SceneXml) -> None:
         name="hub",
         class_="collision",
         type="box",
-        size=_fmt(HUB_HALF_SIZE),
+        size=_fmt(frame.hub_half_size),
         material="frame",
         group="1",
     )
-    reach = v.arm_length + scene.layout.prop_radius
-    _sub(body, "site", name="frame_zone", type="box", group="4", size=_fmt((reach, reach, 0.04)))
+    _sub(
+        body,
+        "geom",
+        name="mount",
+        class_="collision",
+        type="sphere",
+        size=f"{frame.mount_radius:.12g}",
+        pos=_fmt(frame.mount_B),
+        rgba=".9 .2 .1 1",
+        group="1",
+    )
     add_landers(scene, body)
     add_rotors(scene, body)
 
 
 def add_landers(scene: SceneXml, body: ET.Element) -> None:
-    """The four lander spheres ``lander{i}`` (collision; lowest points on the landers plane,
-    :func:`tetherland.models.airframe.lander_centres_B`), their drawn legs and the touch
-    zones ``lander{i}_zone`` of the touch sensors."""
+    """The four lander spheres ``lander{i}`` (lowest points on the landers plane,
+    :func:`tetherland.models.airframe.lander_centres_B`) and the touch zones
+    ``lander{i}_zone`` of the touch sensors in the massless child body ``landers`` (welded
+    to the vehicle: the contact sensors tell the landers' contacts from the other parts'
+    by body), and their legs ``leg{i}`` (capsules from under the hub to the lander's
+    centre) on the vehicle; all collide."""
     v = scene.scenario.vehicle
-    r = v.lander_radius
-    for i, tip in enumerate(lander_centres_B(v.lander_half_width, v.h_R, r)):
+    frame = Airframe.of(v)
+    r = frame.lander_radius
+    feet = _sub(body, "body", name="landers")
+    for i, tip in enumerate(frame.lander_centres_B):
         _sub(
-            body,
+            feet,
             "geom",
             name=f"lander{i}",
             class_="collision",
@@ -729,18 +769,20 @@ def add_landers(scene: SceneXml, body: ET.Element) -> None:
             rgba=".1 .1 .1 1",
             group="1",
         )
+        leg = frame.capsule(f"leg{i}")
         _sub(
             body,
             "geom",
-            name=f"leg{i}",
-            class_="visual",
+            name=leg.name,
+            class_="collision",
             type="capsule",
-            size=f"{0.35 * r:.12g}",
-            fromto=_fmt(np.concatenate((np.array([0.5 * tip[0], 0.5 * tip[1], -0.02]), tip))),
+            size=f"{leg.radius:.12g}",
+            fromto=_fmt(np.concatenate((leg.a_B, leg.b_B))),
             material="frame",
+            group="1",
         )
         _sub(
-            body,
+            feet,
             "site",
             name=f"lander{i}_zone",
             type="sphere",
@@ -751,20 +793,23 @@ def add_landers(scene: SceneXml, body: ET.Element) -> None:
 
 
 def add_rotors(scene: SceneXml, body: ET.Element) -> None:
-    """Per rotor: the site ``rotor{i}`` its thrust acts at, the drawn arm and the rotor
-    guard ``prop{i}`` (collision)."""
+    """Per rotor: the site ``rotor{i}`` its thrust acts at, the arm ``arm{i}`` (a capsule
+    from the centre of mass to the rotor) and the rotor guard ``prop{i}``, both colliding."""
     layout = scene.layout
+    frame = Airframe.of(scene.scenario.vehicle)
     for i, r_i in enumerate(layout.rotors.positions_B):
         _sub(body, "site", name=f"rotor{i}", pos=_fmt(r_i), size="0.01", group="4")
+        arm = frame.capsule(f"arm{i}")
         _sub(
             body,
             "geom",
-            name=f"arm{i}",
-            class_="visual",
+            name=arm.name,
+            class_="collision",
             type="capsule",
-            size="0.008",
-            fromto=_fmt(np.concatenate((np.zeros(3), r_i))),
+            size=f"{arm.radius:.12g}",
+            fromto=_fmt(np.concatenate((arm.a_B, arm.b_B))),
             material="frame",
+            group="1",
         )
         _sub(
             body,
@@ -772,8 +817,8 @@ def add_rotors(scene: SceneXml, body: ET.Element) -> None:
             name=f"prop{i}",
             class_="collision",
             type="cylinder",
-            size=_fmt((layout.prop_radius, PROP_HALF_THICKNESS)),
-            pos=_fmt(r_i + np.array([0, 0, PROP_HEIGHT])),
+            size=_fmt((frame.guard_radius, frame.guard_half_thickness)),
+            pos=_fmt(frame.guard_centres_B[i]),
             material="prop",
             group="1",
         )
@@ -856,11 +901,16 @@ def add_sensors(scene: SceneXml) -> None:
     _sub(sensor, "tendonpos", name="cable_length", tendon="cable")
     for i in range(len(LANDER_CORNERS)):
         _sub(sensor, "touch", name=f"lander{i}_touch", site=f"lander{i}_zone")
-    _sub(sensor, "touch", name="frame_touch", site="frame_zone")
     for partner in CONTACT_PARTNERS:
         for i in range(4):
             _sub(sensor, "contact", name=f"lander{i}_{partner}", geom1=f"lander{i}",
                  geom2=partner, num="1", data="force", reduce="none")  # fmt: skip
+    # how many contacts the body ``vehicle`` (every part but the landers) has, and the
+    # deepest contact of the vehicle's subtree (0 when none)
+    _sub(sensor, "contact", name="frame_contacts", body1="vehicle", num="1", data="found",
+         reduce="none")  # fmt: skip
+    _sub(sensor, "contact", name="vehicle_depth", subtree1="vehicle", num="1", data="dist",
+         reduce="mindist")  # fmt: skip
 
 
 def add_mechanism_sensors(scene: SceneXml) -> None:

@@ -43,7 +43,13 @@ from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.aero import aero_model
 from tetherland.sim.cable import Cable, HangingLine, make_cable
 from tetherland.sim.hook import Hook, HookState
-from tetherland.sim.mjcf import CONTACT_PARTNERS, SENSOR_SLICES, SceneLayout, build_mjcf
+from tetherland.sim.mjcf import (
+    CONTACT_PARTNERS,
+    FRAME_PARTS,
+    SENSOR_SLICES,
+    SceneLayout,
+    build_mjcf,
+)
 from tetherland.state import LinkState, RigidBodyState, link_state_of
 
 _BAD_STATE_WARNINGS = (
@@ -55,6 +61,10 @@ LINE_SETTLE_TIME = 0.5
 """Time the bar mechanism's line and hook settle at reset, the vehicle held [s]."""
 ROTOR_STATE_WIDTH = 15
 """Width of :meth:`Plant.rotor_state_into`'s row: speeds, thrusts, factors, aero force."""
+CONTACT_PEAK_WIDTH = 11
+"""Width of :meth:`Plant.contact_peaks_into`'s row: the landers' peaks on the surface (4)
+and the ground (4), the frame's peak force, the part code and the deepest penetration."""
+_N_LANDER_PEAKS = 4 * len(CONTACT_PARTNERS)
 
 
 def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
@@ -132,8 +142,22 @@ class Plant:
         # third entry: normal, tangent, tangent) and their peaks since the last read
         first = SENSOR_SLICES[f"lander0_{CONTACT_PARTNERS[0]}"].start
         last = SENSOR_SLICES[f"lander3_{CONTACT_PARTNERS[-1]}"].stop
-        self._contact_normals = self.sensordata[first:last:3]
-        self._contact_peak = np.zeros(self._contact_normals.shape)
+        self._lander_normals = self.sensordata[first:last:3]
+        self._lander_peak = np.zeros(self._lander_normals.shape)
+        # the number of contacts of the parts but the landers (> 0: a crash), the deepest
+        # contact of the vehicle (distance <= 0) and its least since the last read
+        self._frame_found = self.sensordata[SENSOR_SLICES["frame_contacts"]]
+        self._depth_view = self.sensordata[SENSOR_SLICES["vehicle_depth"]]
+        self._depth_min = 0.0
+        # the other parts: geom id -> index in FRAME_PARTS, their normal forces at the last
+        # step with a part in contact and their peaks since the last read
+        self._part_of_geom = {
+            mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name): j
+            for j, name in enumerate(FRAME_PARTS)
+        }
+        self._part_now = np.zeros(len(FRAME_PARTS))
+        self._part_peak = np.zeros(len(FRAME_PARTS))
+        self._force6 = np.zeros(6)
         geo = self.layout.geometry
         self.cable: Cable = make_cable(m, self.data, scenario, geo.p_A, geo.R_WA[:, 0])
         self._line = self.cable if isinstance(self.cable, HangingLine) else None
@@ -200,7 +224,9 @@ class Plant:
         """
         mujoco.mj_resetData(self.model, self.data)
         self._tick = 0
-        self._contact_peak[:] = 0.0
+        self._lander_peak[:] = 0.0
+        self._part_peak[:] = 0.0
+        self._depth_min = 0.0
         self.model.actuator_gear[0:4] = self._gear0
         self._write_state(self.start_state() if state is None else state)
         w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
@@ -483,21 +509,83 @@ class Plant:
         ].copy()
 
     def contact_peaks_into(self, out: FloatArray) -> None:
-        """Write the largest normal force of each lander on the landing surface (4), then
-        on the ground (4), over the physics steps since the last call (or the reset) into
-        ``out[:8]``, and start over [N].
+        """Write the contact peaks over the physics steps since the last call (or the
+        reset) into ``out[:11]`` (:data:`CONTACT_PEAK_WIDTH`), and start over:
 
-        The contact sensors filter by partner geom (:data:`~tetherland.sim.mjcf.
-        CONTACT_PARTNERS`), and the peak is taken at every physics step: a touch that
-        lasts a single step is seen (the judge's touchdowns and bounces).
+        - ``out[0:4]``, ``out[4:8]``: the largest normal force of each lander on the
+          landing surface, then on the ground [N];
+        - ``out[8]``: the largest normal force on any other part of the vehicle
+          (:data:`~tetherland.sim.mjcf.FRAME_PARTS`: a crash; a part's force is the sum
+          over its contacts) [N];
+        - ``out[9]``: the index in ``FRAME_PARTS`` of the part that force acted on (-1 when
+          no part touched);
+        - ``out[10]``: the deepest penetration of any vehicle geom into anything, >= 0 [m].
+
+        The landers' contact sensors filter by partner geom (:mod:`tetherland.sim.mjcf`);
+        a step at which another part has a contact (the sensor ``frame_contacts``) sums
+        each part's normal forces from MuJoCo's contact list. The peaks are taken at every
+        physics step: a touch that lasts a single step is seen (the judge's touchdowns,
+        bounces and crashes).
         """
-        out[:8] = self._contact_peak
-        self._contact_peak[:] = 0.0
+        n = _N_LANDER_PEAKS
+        out[:n] = self._lander_peak
+        parts = self._part_peak
+        k = int(parts.argmax())
+        force = float(parts[k])
+        out[n] = force
+        out[n + 1] = k if force > 0.0 else -1
+        out[n + 2] = -self._depth_min
+        self._lander_peak[:] = 0.0
+        parts[:] = 0.0
+        self._depth_min = 0.0
+
+    def _part_forces_into(self, out: FloatArray) -> None:
+        """Sum the normal force of every contact of each part of
+        :data:`~tetherland.sim.mjcf.FRAME_PARTS` at the start of the last step into
+        ``out`` (MuJoCo's contact list and ``mj_contactForce``) [N]."""
+        out[:] = 0.0
+        m, d, f6, part_of = self.model, self.data, self._force6, self._part_of_geom
+        ncon = d.ncon
+        if not ncon:
+            return
+        geoms = d.contact.geom[:ncon]
+        for i in range(ncon):
+            g1, g2 = geoms[i]
+            j = part_of.get(int(g1), part_of.get(int(g2)))
+            if j is not None:
+                mujoco.mj_contactForce(m, d, i, f6)
+                out[j] += f6[0]
+
+    def _track_parts(self) -> None:
+        """A step with a contact of a part but the landers: the parts' peaks."""
+        self._part_forces_into(self._part_now)
+        np.maximum(self._part_peak, self._part_now, out=self._part_peak)
+
+    @property
+    def part_forces(self) -> FloatArray:
+        """Normal force on each part of :data:`~tetherland.sim.mjcf.FRAME_PARTS` (summed
+        over its contacts) at the start of the last step [N]."""
+        out = np.zeros(len(FRAME_PARTS))
+        self._part_forces_into(out)
+        return out
 
     @property
     def frame_contact_force(self) -> float:
-        """Normal force on the hub and rotor guards (a crash when > 0) [N]."""
-        return float(self.sensordata[SENSOR_SLICES["frame_touch"]][0])
+        """Largest normal force on any part but the landers (hub, mount, arms, legs, rotor
+        guards; a crash when > 0) at the start of the last step [N]."""
+        return float(self.part_forces.max())
+
+    @property
+    def frame_contact_peak(self) -> float:
+        """Largest normal force on any part but the landers over the physics steps since
+        the last :meth:`contact_peaks_into` (or the reset), without starting over [N]."""
+        return float(self._part_peak.max())
+
+    @property
+    def penetration(self) -> float:
+        """Depth of the deepest contact of any vehicle geom at the start of the last step,
+        >= 0 (MuJoCo's contact distance) [m]."""
+        return -float(self._depth_view[0])
 
     # -- stepping -------------------------------------------------------------------------
 
@@ -525,12 +613,14 @@ class Plant:
         if aero:
             qpos, qvel, factors, wrench = self._qpos, self._qvel, self._factors, self._wrench
             centres, samples, shapes, params = self._aero_args
-        contact_normals, contact_peak = self._contact_normals, self._contact_peak
+        lander_normals, lander_peak = self._lander_normals, self._lander_peak
+        frame_found, depth, depth_min = self._frame_found, self._depth_view, self._depth_min
         maximum = np.maximum
         line = self._line
         if line is not None:  # no capture plane: the contact decides (HangingLine)
             n_dot_p0 = math.inf
             nx = ny = nz = 0.0
+        data = self.data
         for _ in range(n):
             if self._spinning_up:
                 w0, w1, w2, w3 = w
@@ -546,7 +636,12 @@ class Plant:
                 aero_into(qpos, qvel, tgt, centres, samples, shapes, params, factors, ctrl,
                           wrench)  # fmt: skip
             advance()
-            maximum(contact_peak, contact_normals, out=contact_peak)
+            if data.ncon:  # (no contact: every contact sensor reads 0, nothing to track)
+                maximum(lander_peak, lander_normals, out=lander_peak)
+                if frame_found[0]:  # a part but the landers touches: a crash
+                    self._track_parts()
+                if depth[0] < depth_min:
+                    depth_min = self._depth_min = depth.item()
             k = self._tick
             self._tick = k + 1
             if self._spinning_up:

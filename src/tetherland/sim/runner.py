@@ -48,8 +48,8 @@ from tetherland.randomness import RandomSource
 from tetherland.sim.baselines import ConstantReference, TruthEstimator
 from tetherland.sim.faults import FaultInjector, mocap_outage
 from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
-from tetherland.sim.mjcf import SENSOR_SLICES
-from tetherland.sim.plant import ROTOR_STATE_WIDTH, Plant, link_state_of
+from tetherland.sim.mjcf import FRAME_PARTS, SENSOR_SLICES
+from tetherland.sim.plant import CONTACT_PEAK_WIDTH, ROTOR_STATE_WIDTH, Plant, link_state_of
 from tetherland.sim.sensors import Imu, Mocap
 from tetherland.state import RigidBodyState
 
@@ -323,10 +323,10 @@ class Runner:
         dt = plant.dt
         sd = plant.sensordata
         imu_truth = sd[0:6]
-        sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["frame_touch"].stop]
+        sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["lander3_touch"].stop]
         qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
         rotor_buf, scalars = np.zeros(ROTOR_STATE_WIDTH), np.zeros(9)
-        contact_buf = np.zeros(8)
+        contact_buf = np.zeros(CONTACT_PEAK_WIDTH)  # contact peaks, every physics step
         hook_buf = np.zeros(3)
         hook_point_into = plant.hook_point_into
         # the measurement columns, contiguous in the row: last IMU sample, its true biases,
@@ -525,6 +525,7 @@ class Runner:
             "anchor_W": self._p_A,
             "R_WA": self._R_WA,
             "cable_attachment_B": self._r_att,
+            "frame_parts": list(FRAME_PARTS),
         }
 
 

@@ -21,8 +21,11 @@ serve every landing method (docs/theory.md section 5):
   ``verdict.min_rest_time`` with a lander on the surface; the slip of p_RL along the
   surface (sliding; its settling along the normal is reported apart) is measured from
   t_L until spin-up, the speed from ``verdict.rest_settle_time`` after the rest begins;
-* crash: a normal force above ``verdict.crash_force`` on the hub or a rotor guard, at any
-  time of the run.
+* crash: a normal force above ``verdict.crash_force`` on any part of the vehicle but the
+  landers (hub, cable mount, arms, legs, rotor guards: the log's ``frame_force``, the peak
+  over the physics steps), at any time of the run, whatever the robot declared; the crash
+  record names the first such tick, its part, the phase the log holds there and the peak
+  force of that contact (:func:`crash_of`).
 
 What a method must achieve beyond that (which conditions, a taut cable, a takeoff and a
 return) is its :class:`~tetherland.verdict.Expectations`, stored in the record.
@@ -53,6 +56,7 @@ from tetherland.config.verdict import motors_off_thrust
 from tetherland.geometry import LandingGeometry
 from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
 from tetherland.sim.log import RunStatus, SimLog
+from tetherland.sim.mjcf import FRAME_PARTS
 from tetherland.verdict.record import RunRecord
 from tetherland.verdict.touchdown import Touchdowns, find_touchdowns
 
@@ -67,7 +71,8 @@ class Outcome(enum.Enum):
     SIM_FAILED = "sim_failed"
     """The physics diverged or a component raised an error during the run."""
     CRASHED = "crashed"
-    """The frame (hub or rotor guards) touched something."""
+    """A part of the vehicle other than the landers (hub, mount, arms, legs, rotor guards)
+    touched something."""
     SAFE_STOP = "safe_stop"
     """The supervisor detected a fault and reached its defined safe state (hover held,
     landed on the start pad, or motors off on the surface), at rest and without a crash."""
@@ -315,6 +320,42 @@ def _min_clearance(p_RL: np.ndarray, geo: LandingGeometry, truth: Scenario) -> f
     return float((d[over] @ geo.surface.z_S).min()) if over.any() else None
 
 
+def crash_of(log: SimLog, record: RunRecord, crash_force: float) -> dict[str, Any] | None:
+    """The run's first crash from the plant's truth, or None.
+
+    The crash starts at the first logged tick whose ``frame_force`` (the largest normal
+    force on any part but the landers over the physics steps since the tick before)
+    exceeds ``crash_force``; it lasts while the following ticks do. Returns ``t`` (that
+    tick [s]: the contact began within the control period ending there), ``phase`` (the
+    name of the phase code the log holds at that tick, for naming only; None if the method
+    has no such code), ``part`` (the geom the force acted on, from the log's
+    ``frame_part`` and its metadata ``frame_parts``; None for a log without them) and
+    ``force_N`` (the peak of ``frame_force`` over the contact [N]).
+    """
+    if not len(log):
+        return None
+    force = np.nan_to_num(np.asarray(log["frame_force"], dtype=float))
+    over = force > crash_force
+    if not over.any():
+        return None
+    k = int(np.argmax(over))
+    end = k + int(np.argmin(over[k:])) if not over[k:].all() else len(log)
+    names = {code: name for name, code in record.phase_codes.items()}
+    code = log["phase"][k]
+    part = None
+    if "frame_part" in log:
+        parts = log.metadata.get("frame_parts", FRAME_PARTS)
+        j = log["frame_part"][k]
+        if np.isfinite(j) and 0 <= int(j) < len(parts):
+            part = str(parts[int(j)])
+    return {
+        "t": float(log["t"][k]),
+        "phase": names.get(int(code)) if np.isfinite(code) else None,
+        "part": part,
+        "force_N": float(force[k:end].max()),
+    }
+
+
 def _takeoff(log: SimLog, record: RunRecord, geo: LandingGeometry) -> dict[str, Any]:
     if not record.expects.takeoff:
         return {"required": False}
@@ -378,14 +419,17 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
     landing = _landing(log, record, truth) if len(log) else {"reached": False}
     takeoff = _takeoff(log, record, geo)
     ret = _return(log, record, truth)
-    crashed = bool(np.any(np.nan_to_num(log["frame_force"]) > truth.verdict.crash_force))
+    crash = crash_of(log, record, truth.verdict.crash_force)
+    crashed = crash is not None
     sim_time = float(log["t"][-1]) if len(log) else 0.0
     checks: list[tuple[Outcome, str]] = []
     if status in (RunStatus.DIVERGED, RunStatus.FAILED):
         message = log.metadata.get("message", "")
         checks.append((Outcome.SIM_FAILED, f"run {status.value}: {message}"))
-    if crashed:
-        checks.append((Outcome.CRASHED, "the frame touched something (crash)"))
+    if crash is not None:
+        checks.append((Outcome.CRASHED,
+                       f"crash: the {crash['part'] or 'frame'} touched something at t = "
+                       f"{crash['t']:.3f} s ({crash['force_N']:.3g} N)"))  # fmt: skip
     if not landing.get("reached", False):
         checks.append((Outcome.NO_TOUCHDOWN, "no touchdown on the landing surface"))
     elif not landing["all_conditions"]:
@@ -434,6 +478,7 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
         "abort_reason": record.abort_reason,
         "safe_stop": safe_stop,
         "crashed": crashed,
+        "crash": crash,
         "phases": [p.to_dict() for p in record.phases],
         "times": dict(record.times),
         "hook": _hook(log, record),
@@ -478,7 +523,7 @@ def _safe_stop(log: SimLog, record: RunRecord, truth: Scenario) -> dict[str, Any
     if record.safe_state is None:
         return {"reached": False, "why": "no safe state reached by the end of the run"}
     speed = float(np.linalg.norm(log["v_W"][-1])) if len(log) else math.nan
-    crashed = bool(np.any(np.nan_to_num(log["frame_force"]) > truth.verdict.crash_force))
+    crashed = crash_of(log, record, truth.verdict.crash_force) is not None
     limit = truth.verdict.safe_stop_speed
     out: dict[str, Any] = {"state": record.safe_state, "final_speed_mps": speed}
     if crashed:
@@ -513,6 +558,7 @@ def not_flown(record: RunRecord, reason: str) -> Verdict:
         "abort_reason": None,
         "safe_stop": {"reached": False},
         "crashed": False,
+        "crash": None,
         "landing": {"reached": False},
         "takeoff": {"required": record.expects.takeoff},
         "return": {"required": record.expects.return_home},

@@ -114,7 +114,10 @@ def _body_entity(
 ) -> SceneEntity:
     parts = []
     for g in range(model.ngeom):
-        if int(model.geom_bodyid[g]) == body and int(model.geom_group[g]) in _VISIBLE_GROUPS:
+        in_body = int(model.geom_bodyid[g]) == body or (
+            body != 0 and int(model.body_rootid[model.geom_bodyid[g]]) == body
+        )  # the body's welded children too (the vehicle's landers)
+        if in_body and int(model.geom_group[g]) in _VISIBLE_GROUPS:
             rgba = _geom_rgba(model, g).copy()
             if alpha is not None:
                 rgba[3] = alpha
