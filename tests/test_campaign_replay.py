@@ -24,6 +24,7 @@ from tetherland.randomness import RandomSource
 from tetherland.runs import load_run
 from tetherland.runs.explain import explain
 from tetherland.sim.log import Column, SimLog
+from tetherland.sim.mjcf import FRAME_PARTS
 from tetherland.verdict import RunRecord
 from tetherland.verdict.record import Expectations, PhaseSpan
 
@@ -65,7 +66,7 @@ def test_a_crash_in_results_jsonl_carries_time_phase_part_and_force(crashed):
         phases = [p["name"] for p in r["verdict"]["phases"]]
         assert first["phase"] in phases
         assert first["force_N"] > limit and first["limit"] == limit
-        assert "part" not in first or isinstance(first["part"], str)
+        assert first["part"] in FRAME_PARTS  # the part that hit, from the plant's contacts
         # the kept log (plant truth) shows the frame force above the limit at that time
         log, _ = load_run(crashed / r["run_dir"])
         period = 1.0 / load_scenario("slope50").controller.rate_hz
@@ -118,6 +119,10 @@ def test_replay_of_a_crashed_run_gives_the_identical_record(crashed, tmp_path, c
     summary = json.loads((out / "summary.json").read_text())
     assert summary["outcome"] == "crashed"
     assert summary["provenance"]["perturbation"]["seed"] == recorded["seed"]
+    crash, first = summary["crash"], recorded["verdict"]["failures"][0]
+    assert crash["part"] == first["part"] and crash["part"] in FRAME_PARTS
+    assert crash["phase"] == first["phase"] and crash["t"] == first["t"]
+    assert crash["force_N"] == pytest.approx(first["force_N"])
 
 
 @pytest.mark.slow
