@@ -68,6 +68,13 @@ class MechanismConfig(Section):
     lift_margin: float = Field(0.3, ge=0, le=5)
     """The mission's takeoff point is at least this far above the hanging hook's depth
     below the vehicle (the hook leaves the ground during the climb) [m]."""
+    lift_speed: float = Field(0.05, gt=0, le=5)
+    """Peak climb speed of the takeoff while the hanging hook leaves the ground (within
+    ``lift_band`` of the height where the line comes taut): a hook snatched off the
+    ground at the climb speed bounces on the line, and that energy ends in its swing [m/s]."""
+    lift_band: float = Field(0.1, ge=0, le=1)
+    """Half-height of the slow part of the takeoff (``lift_speed``) around the height
+    where the hanging line comes taut [m]."""
     release_depth: float = Field(0.10, gt=0, le=5)
     """Depth of the hanging hook below the bar where the unhooking pass begins (replaces
     ``mission.hooking.unhook_depth`` for the bar): flown back over the bar with that much

@@ -234,6 +234,22 @@ def takeoff_height(scenario: Scenario) -> float:
     return max(h, hang + m.lift_margin)
 
 
+def lift_off_band(scenario: Scenario) -> tuple[float, float] | None:
+    """Heights above the start pad [m] between which the takeoff climbs at
+    ``mechanism.lift_speed``: ``mechanism.lift_band`` around the climb at which the
+    hanging line comes taut and lifts the hook off the ground (the bar mechanism; None
+    otherwise). Snatched off the ground at the cruise climb (0.7 m/s) the hook bounced on
+    the line and that energy went into a swing of up to 30 cm."""
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar" or m.lift_band <= 0.0:
+        return None
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
+    top = takeoff_height(scenario)
+    lo, hi = max(0.0, hang - m.lift_band), min(top, hang + m.lift_band)
+    return (lo, hi) if hi > lo else None
+
+
 def unhook_depth(scenario: Scenario) -> float:
     """Depth of the hook point beyond the anchor where the unhooking pass begins [m]:
     ``mission.hooking.unhook_depth``, or ``mechanism.release_depth`` for the bar (flown back

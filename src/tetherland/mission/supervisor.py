@@ -56,7 +56,12 @@ from tetherland.mission.contact import (
     guarded_descent,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
-from tetherland.mission.hooking import shortest_leg, takeoff_height, unhooking_path
+from tetherland.mission.hooking import (
+    lift_off_band,
+    shortest_leg,
+    takeoff_height,
+    unhooking_path,
+)
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
@@ -154,9 +159,12 @@ class MissionSupervisor:
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
-        self._path = self._new_path(0.0, wp.start).to(
-            wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time
-        )
+        self._path = self._new_path(0.0, wp.start)
+        band = lift_off_band(scenario)
+        if band is not None:  # the hanging hook leaves the ground slowly
+            self._path.to(wp.start + band[0] * Z_W).to(
+                wp.start + band[1] * Z_W, speed=scenario.mechanism.lift_speed)
+        self._path.to(wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time)
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
         self._release_pull: ReleasePull | None = None
