@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike
 from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.mission.paths import ZVShaper
 from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset, swing_period
 from tetherland.rotations import rotation_from_z_and_yaw
 
@@ -217,6 +218,18 @@ def shortest_leg(scenario: Scenario) -> float:
         return 0.5
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
     return max(0.5, m.swing_periods * swing_period(line, m.hook_shank))
+
+
+def swing_shaper(scenario: Scenario) -> ZVShaper | None:
+    """The zero-vibration shaper of the free-flight moves (:class:`ZVShaper`): with a
+    hook hanging on a line (the bar mechanism) at its believed swing period
+    (:func:`tetherland.models.hook.swing_period`), so that no move leaves it swinging;
+    None otherwise."""
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar":
+        return None
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    return ZVShaper(swing_period(line, m.hook_shank))
 
 
 def takeoff_height(scenario: Scenario) -> float:

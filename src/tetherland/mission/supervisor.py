@@ -59,6 +59,7 @@ from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
     lift_off_band,
     shortest_leg,
+    swing_shaper,
     takeoff_height,
     unhooking_path,
 )
@@ -132,6 +133,7 @@ class MissionSupervisor:
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._min_leg = shortest_leg(scenario)
+        self._shaper = swing_shaper(scenario)
         self._climb_slack: np.ndarray | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
         self._takeoff_height = takeoff_height(scenario)
@@ -229,7 +231,7 @@ class MissionSupervisor:
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
         return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
-                    self._min_leg)  # fmt: skip
+                    self._min_leg, self._shaper)  # fmt: skip
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""
