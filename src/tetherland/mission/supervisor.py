@@ -161,7 +161,7 @@ class MissionSupervisor:
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
-        self._path = self._new_path(0.0, wp.start)
+        self._path = self._new_path(0.0, wp.start, free_hook=True)
         band = lift_off_band(scenario)
         if band is not None:  # the hanging hook leaves the ground slowly
             self._path.to(wp.start + band[0] * Z_W).to(
@@ -229,9 +229,14 @@ class MissionSupervisor:
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
 
-    def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
+    def _new_path(self, t: float, start: np.ndarray, speed: float | None = None,
+                  free_hook: bool = False) -> Path:  # fmt: skip
+        """A free-flight path from ``start``; ``free_hook``: a leg on which a hanging hook
+        swings free of the mechanism (takeoff, approach, retry, return), shaped so that it
+        leaves no swing (:func:`~tetherland.mission.hooking.swing_shaper`); legs near or on
+        the mechanism (passes, take-up, release, unhooking) are not shaped."""
         return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
-                    self._min_leg, self._shaper)  # fmt: skip
+                    self._min_leg, self._shaper if free_hook else None)  # fmt: skip
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""
@@ -383,7 +388,7 @@ class MissionSupervisor:
             up = np.array([*self._path.end[:2], wp.z_safe])
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
-                self._new_path(t, self._path.end)
+                self._new_path(t, self._path.end, free_hook=True)
                 .to(up)
                 .to(above)
                 .to(wp.hook_start, pause=cfg.settle_time)
@@ -439,7 +444,9 @@ class MissionSupervisor:
                 return self._free(t, est)
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
-                self._new_path(t, est.body.p_W).to(above).to(wp.hook_start, pause=cfg.settle_time)
+                self._new_path(t, est.body.p_W, free_hook=True)
+                .to(above)
+                .to(wp.hook_start, pause=cfg.settle_time)
             )
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t, est)
@@ -646,7 +653,7 @@ class MissionSupervisor:
             home_high = np.array([*wp.start[:2], wp.z_safe])
             home = wp.start + self._takeoff_height * Z_W
             self._path = (
-                self._new_path(t, wp.hook_start)
+                self._new_path(t, wp.hook_start, free_hook=True)
                 .to(up)
                 .to(home_high)
                 .to(home, pause=cfg.settle_time)
