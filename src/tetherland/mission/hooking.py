@@ -64,11 +64,11 @@ class HookingPass:
     n_W: FloatArray
     yaw: float
 
-    def entry(self, depth: float, overshoot: float) -> FloatArray:
+    def entry(self, depth: float, overshoot: float, beyond: bool = False) -> FloatArray:
         """Centre of mass on the pass axis with the hook point ``depth`` beyond the capture
         plane, for a pass that ends ``overshoot`` beyond it (``depth`` is clipped to
-        ``overshoot``: never beyond the pass's end) [m]."""
-        return self.p_end_W - (overshoot - min(depth, overshoot)) * self.n_W
+        ``overshoot``, never beyond the pass's end, unless ``beyond``) [m]."""
+        return self.p_end_W - (overshoot - (depth if beyond else min(depth, overshoot))) * self.n_W
 
     def points(self, count: int) -> FloatArray:
         """``count`` centre-of-mass points evenly along the pass, (count, 3) [m]."""
@@ -86,7 +86,7 @@ def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) ->
         hook_drop=t.hook_drop,
         r_att_B=scenario.vehicle.cable_attachment,
         approach_distance=cfg.hooking.approach_distance,
-        hook_overshoot=cfg.hooking.overshoot,
+        hook_overshoot=pass_overshoot(scenario),
         offset_W=scenario_hook_offset(scenario, geo),
     )
 
@@ -261,6 +261,16 @@ def lift_off_band(scenario: Scenario) -> tuple[float, float] | None:
     top = takeoff_height(scenario)
     lo, hi = max(0.0, hang - m.lift_band), min(top, hang + m.lift_band)
     return (lo, hi) if hi > lo else None
+
+
+def pass_overshoot(scenario: Scenario) -> float:
+    """Hook-point distance beyond the anchor where the hooking pass ends [m]:
+    ``mission.hooking.overshoot``, or ``mechanism.pass_depth`` for the bar (the crown that
+    little below the bar's axis, the line meets the bar above the hook's eye as soon as
+    the vehicle flies toward the landing point, and the hook's arm passes under it)."""
+    if scenario.mechanism.kind == "bar":
+        return scenario.mechanism.pass_depth
+    return scenario.mission.hooking.overshoot
 
 
 def unhook_depth(scenario: Scenario) -> float:
