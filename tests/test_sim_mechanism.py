@@ -69,13 +69,17 @@ def test_bar_config_needs_a_standoff_and_a_vertical_pass() -> None:
         load_scenario("slope50", ["mechanism.kind=bar", "anchor.h_A=0.3"])
     with pytest.raises(ConfigError, match="pass_offset"):
         load_scenario("slope50", ["mechanism.kind=bar", "mechanism.pass_offset=0.02"])
+    for depth in (0.02, 0.04):  # tips at the bar / eye under the bar
+        with pytest.raises(ConfigError, match="pass_depth"):
+            load_scenario("slope50", ["mechanism.kind=bar", f"mechanism.pass_depth={depth}"])
     with pytest.raises(ConfigError, match="approach_direction"):
         load_scenario("slope50", ["mechanism.kind=bar", "tether.approach_direction=[1, 0, -1]"])
 
 
 def test_hooking_pass_puts_the_resting_hook_beside_the_bar(bar_plant: Plant) -> None:
     """The plan's pass and the plant's hook are one geometry: at the pass's end, the hook
-    body hanging at rest is ``pass_offset`` from the bar's axis, ``overshoot`` below it."""
+    body hanging at rest is ``pass_offset`` from the bar's axis, ``pass_depth`` below it;
+    its eye is then above the bar's top and its tips' tops under the bar's bottom."""
     s, plant = bar_plant.scenario, bar_plant
     geo = plant.layout.geometry
     hp = hooking_pass(s, geo)
@@ -83,8 +87,14 @@ def test_hooking_pass_puts_the_resting_hook_beside_the_bar(bar_plant: Plant) -> 
                 rotor_speeds=[_hover_speed(plant)] * 4)  # fmt: skip
     crown = plant.hook_point_W
     x_A = geo.R_WA[:, 0]
-    expected = geo.p_A - s.mission.hooking.overshoot * Z - s.mechanism.pass_offset * x_A
+    expected = geo.p_A - s.mechanism.pass_depth * Z - s.mechanism.pass_offset * x_A
     np.testing.assert_allclose(crown, expected, atol=2e-3)
+    m = s.mechanism
+    top = geo.p_A[2] + m.bar_radius
+    eye = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SITE, "hook_eye")
+    assert plant.data.site_xpos[eye][2] - m.line_radius > top
+    tips = crown[2] + m.hook_tip_length + m.hook_radius
+    assert tips < geo.p_A[2] - m.bar_radius
     # and the offset the planner uses is the plant's crown minus attachment, less the pass offset
     off = scenario_hook_offset(s, geo)
     np.testing.assert_allclose(crown - plant.attachment_point(),
