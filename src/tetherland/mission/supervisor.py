@@ -414,11 +414,16 @@ class MissionSupervisor:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
             take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
-            self._path = (
-                self._new_path(t, wp.hook_end, take_up)
-                .to(wp.slack_out)
-                .to(wp.stretch, speed=cfg.stretch.speed)
-            )
+            self._path = self._new_path(t, wp.hook_end, take_up)
+            m = self.scenario.mechanism
+            if m.kind == "bar":
+                # level first, to the mirror of the pass across the bar (same distance
+                # from it: the line is not pulled): the line meets the bar above the
+                # hook's eye before the vehicle descends (descending at once let the hook
+                # drop under the bar on pipe60)
+                x = np.array([*self.geo.R_WA[:2, 0], 0.0])
+                self._path.to(wp.hook_end + 2.0 * m.pass_offset * x / np.linalg.norm(x))
+            self._path.to(wp.slack_out).to(wp.stretch, speed=cfg.stretch.speed)
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
