@@ -61,6 +61,12 @@ class MechanismConfig(Section):
     pass_offset: float = Field(0.05, ge=0.01, le=0.5)
     """Horizontal distance of the hook's vertical hooking pass from the bar's axis, on the
     side away from the landing point (the line then drapes over the bar) [m]."""
+    pass_depth: float = Field(0.03, ge=0.005, le=0.5)
+    """Depth of the hook's crown below the bar's axis where the hooking pass ends
+    (replaces ``mission.hooking.overshoot`` for the bar): the hook's eye must be above the
+    bar (hook_shank - pass_depth > bar_radius + line_radius: the line meets the bar when
+    the vehicle flies toward the landing point) and the tips under it (pass_depth >
+    hook_tip_length + hook_radius + bar_radius: an arm passes under the bar) [m]."""
     swing_periods: float = Field(2.0, ge=0, le=10)
     """Shortest free-flight leg of the mission, in swing periods of the hanging hook
     (2 pi sqrt(L/g)): a smooth rest-to-rest leg that long leaves the hook almost still
@@ -68,6 +74,13 @@ class MechanismConfig(Section):
     lift_margin: float = Field(0.3, ge=0, le=5)
     """The mission's takeoff point is at least this far above the hanging hook's depth
     below the vehicle (the hook leaves the ground during the climb) [m]."""
+    lift_speed: float = Field(0.05, gt=0, le=5)
+    """Peak climb speed of the takeoff while the hanging hook leaves the ground (within
+    ``lift_band`` of the height where the line comes taut): a hook snatched off the
+    ground at the climb speed bounces on the line, and that energy ends in its swing [m/s]."""
+    lift_band: float = Field(0.1, ge=0, le=1)
+    """Half-height of the slow part of the takeoff (``lift_speed``) around the height
+    where the hanging line comes taut [m]."""
     release_depth: float = Field(0.10, gt=0, le=5)
     """Depth of the hanging hook below the bar where the unhooking pass begins (replaces
     ``mission.hooking.unhook_depth`` for the bar): flown back over the bar with that much
@@ -90,6 +103,15 @@ class MechanismConfig(Section):
                 f"reach (hook_reach + hook_tip_length sin(hook_tip_angle_deg)) + hook_radius "
                 f"+ bar_radius = "
                 f"{self.pass_offset - gap:g} m (the hook must pass beside the bar)"
+            )
+        lo = self.hook_tip_length * math.cos(math.radians(self.hook_tip_angle_deg)) + (
+            self.hook_radius + self.bar_radius)
+        hi = self.hook_shank - self.bar_radius - self.line_radius
+        if not lo < self.pass_depth < hi:
+            raise ValueError(
+                f"mechanism.pass_depth = {self.pass_depth:g} m must be in ({lo:g}, {hi:g}) m: "
+                "the tips under the bar (> tip height + hook_radius + bar_radius) and the "
+                "eye above it (< hook_shank - bar_radius - line_radius)"
             )
         if self.standoff <= self.bar_radius + 2.0 * self.hook_radius:
             raise ValueError(

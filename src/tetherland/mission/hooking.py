@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike
 from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.mission.paths import ZVShaper
 from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset, swing_period
 from tetherland.rotations import rotation_from_z_and_yaw
 
@@ -63,11 +64,11 @@ class HookingPass:
     n_W: FloatArray
     yaw: float
 
-    def entry(self, depth: float, overshoot: float) -> FloatArray:
+    def entry(self, depth: float, overshoot: float, beyond: bool = False) -> FloatArray:
         """Centre of mass on the pass axis with the hook point ``depth`` beyond the capture
         plane, for a pass that ends ``overshoot`` beyond it (``depth`` is clipped to
-        ``overshoot``: never beyond the pass's end) [m]."""
-        return self.p_end_W - (overshoot - min(depth, overshoot)) * self.n_W
+        ``overshoot``, never beyond the pass's end, unless ``beyond``) [m]."""
+        return self.p_end_W - (overshoot - (depth if beyond else min(depth, overshoot))) * self.n_W
 
     def points(self, count: int) -> FloatArray:
         """``count`` centre-of-mass points evenly along the pass, (count, 3) [m]."""
@@ -85,7 +86,7 @@ def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) ->
         hook_drop=t.hook_drop,
         r_att_B=scenario.vehicle.cable_attachment,
         approach_distance=cfg.hooking.approach_distance,
-        hook_overshoot=cfg.hooking.overshoot,
+        hook_overshoot=pass_overshoot(scenario),
         offset_W=scenario_hook_offset(scenario, geo),
     )
 
@@ -219,6 +220,18 @@ def shortest_leg(scenario: Scenario) -> float:
     return max(0.5, m.swing_periods * swing_period(line, m.hook_shank))
 
 
+def swing_shaper(scenario: Scenario) -> ZVShaper | None:
+    """The zero-vibration shaper of the free-flight moves (:class:`ZVShaper`): with a
+    hook hanging on a line (the bar mechanism) at its believed swing period
+    (:func:`tetherland.models.hook.swing_period`), so that no move leaves it swinging;
+    None otherwise."""
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar":
+        return None
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    return ZVShaper(swing_period(line, m.hook_shank))
+
+
 def takeoff_height(scenario: Scenario) -> float:
     """Height of the takeoff point above the start pad [m]: ``mission.flight.takeoff_height``,
     and with a hook hanging on a line (the bar mechanism) at least the hook's depth below
@@ -232,6 +245,32 @@ def takeoff_height(scenario: Scenario) -> float:
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
     hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
     return max(h, hang + m.lift_margin)
+
+
+def lift_off_band(scenario: Scenario) -> tuple[float, float] | None:
+    """Heights above the start pad [m] between which the takeoff climbs at
+    ``mechanism.lift_speed``: ``mechanism.lift_band`` around the climb at which the
+    hanging line comes taut and lifts the hook off the ground (the bar mechanism; None
+    otherwise). Snatched off the ground at the cruise climb (0.7 m/s) the hook bounced on
+    the line and that energy went into a swing of up to 30 cm."""
+    m, t = scenario.mechanism, scenario.tether
+    if m.kind != "bar" or m.lift_band <= 0.0:
+        return None
+    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
+    top = takeoff_height(scenario)
+    lo, hi = max(0.0, hang - m.lift_band), min(top, hang + m.lift_band)
+    return (lo, hi) if hi > lo else None
+
+
+def pass_overshoot(scenario: Scenario) -> float:
+    """Hook-point distance beyond the anchor where the hooking pass ends [m]:
+    ``mission.hooking.overshoot``, or ``mechanism.pass_depth`` for the bar (the crown that
+    little below the bar's axis, the line meets the bar above the hook's eye as soon as
+    the vehicle flies toward the landing point, and the hook's arm passes under it)."""
+    if scenario.mechanism.kind == "bar":
+        return scenario.mechanism.pass_depth
+    return scenario.mission.hooking.overshoot
 
 
 def unhook_depth(scenario: Scenario) -> float:

@@ -3,6 +3,11 @@
 Each segment moves from p0 to p1 along a straight line with the 9th-order smoothstep of
 :func:`tetherland.planning.spline.smoothstep9` (zero velocity, acceleration, jerk and snap
 at both ends), so every chain is C^4 and starts and ends at rest.
+
+A path may carry a :class:`ZVShaper` (a load swinging under the vehicle with a known
+period, the bar mechanism's hook): every move is then the smoothstep convolved with the
+shaper's impulses, still straight from p0 to p1 and rest to rest, longer by half the
+period, and leaves an undamped pendulum of that period without residual swing.
 """
 
 from __future__ import annotations
@@ -34,13 +39,46 @@ def segment_duration(distance: float, speed: float, accel: float, minimum: float
 
 
 @dataclass(frozen=True)
+class ZVShaper:
+    """Zero-vibration input shaper of an undamped pendulum of period ``period`` [s].
+
+    Two impulses of 1/2 at 0 and period/2: a move convolved with them excites the
+    pendulum twice, half a period apart, and the two swings cancel. If the true period
+    is P_true, the residual swing is :meth:`residual_ratio` times the unshaped move's.
+    """
+
+    period: float
+
+    @property
+    def times(self) -> tuple[float, float]:
+        """Impulse times [s]."""
+        return (0.0, 0.5 * self.period)
+
+    amplitudes: tuple[float, float] = (0.5, 0.5)
+    """Impulse amplitudes [-] (sum 1: the move still ends at p1)."""
+
+    @property
+    def span(self) -> float:
+        """How much longer a shaped move lasts [s]."""
+        return 0.5 * self.period
+
+    def residual_ratio(self, true_period: float) -> float:
+        """Residual swing of a shaped move over the unshaped move's, for an undamped
+        pendulum of period ``true_period`` [s]: |1/2 + 1/2 exp(-i w T/2)| =
+        |cos(pi period / (2 true_period))| [-] (0 at the design period)."""
+        return abs(math.cos(0.5 * math.pi * self.period / true_period))
+
+
+@dataclass(frozen=True)
 class Segment:
-    """A straight rest-to-rest move from ``p0`` to ``p1``, from ``t0`` for ``duration``."""
+    """A straight rest-to-rest move from ``p0`` to ``p1``, from ``t0`` for ``duration``;
+    ``base`` is the unshaped move's duration (``duration`` less the shaper's span) [s]."""
 
     t0: float
     duration: float
     p0: FloatArray
     p1: FloatArray
+    base: float = 0.0
 
     @property
     def t_end(self) -> float:
@@ -60,11 +98,14 @@ class Path:
         Peak speed [m/s] and acceleration [m/s^2] used to size the segments.
     min_duration : float
         Shortest move [s] (a hanging hook's legs last a few of its swing periods).
+    shaper : ZVShaper, optional
+        Shape every move (not the pauses) for a load swinging with the shaper's period.
     """
 
     def __init__(self, t0: float, start: ArrayLike, speed: float, accel: float,
-                 min_duration: float = 0.5):  # fmt: skip
+                 min_duration: float = 0.5, shaper: ZVShaper | None = None):  # fmt: skip
         self.t0 = float(t0)
+        self.shaper = shaper
         self.min_duration = float(min_duration)
         self.start = np.asarray(start, dtype=float).copy()
         self.speed = speed
@@ -89,7 +130,8 @@ class Path:
         p = np.asarray(p, dtype=float)
         d = float(np.linalg.norm(p - self.end))
         T = segment_duration(d, speed or self.speed, self.accel, self.min_duration)
-        self._append(Segment(self.t_end, T, self.end.copy(), p.copy()))
+        span = self.shaper.span if self.shaper is not None and d > 0.0 else 0.0
+        self._append(Segment(self.t_end, T + span, self.end.copy(), p.copy(), base=T))
         if pause > 0.0:
             self._append(Segment(self.t_end, pause, p.copy(), p.copy()))
         return self
@@ -125,8 +167,14 @@ class Path:
         seg = segs[i]
         if t >= seg.t_end:  # past the end of the path: held at its end
             return _rest_rows(seg.p1)
-        T = seg.duration
-        s0, s1, s2 = smoothstep9_scalar((t - seg.t0) / T, 2)
+        T = seg.base if seg.base > 0.0 else seg.duration
+        if self.shaper is None or seg.duration == T:
+            s0, s1, s2 = smoothstep9_scalar((t - seg.t0) / T, 2)
+        else:  # the smoothstep convolved with the shaper's impulses
+            s0 = s1 = s2 = 0.0
+            for ti, ai in zip(self.shaper.times, self.shaper.amplitudes, strict=True):
+                r0, r1, r2 = smoothstep9_scalar((t - seg.t0 - ti) / T, 2)
+                s0, s1, s2 = s0 + ai * r0, s1 + ai * r1, s2 + ai * r2
         delta = self._delta[i]
         rows = np.empty((3, 3))
         rows[0] = seg.p0 + s0 * delta

@@ -56,7 +56,13 @@ from tetherland.mission.contact import (
     guarded_descent,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
-from tetherland.mission.hooking import shortest_leg, takeoff_height, unhooking_path
+from tetherland.mission.hooking import (
+    lift_off_band,
+    shortest_leg,
+    swing_shaper,
+    takeoff_height,
+    unhooking_path,
+)
 from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
@@ -127,6 +133,7 @@ class MissionSupervisor:
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._min_leg = shortest_leg(scenario)
+        self._shaper = swing_shaper(scenario)
         self._climb_slack: np.ndarray | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
         self._takeoff_height = takeoff_height(scenario)
@@ -154,9 +161,12 @@ class MissionSupervisor:
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
-        self._path = self._new_path(0.0, wp.start).to(
-            wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time
-        )
+        self._path = self._new_path(0.0, wp.start, free_hook=True)
+        band = lift_off_band(scenario)
+        if band is not None:  # the hanging hook leaves the ground slowly
+            self._path.to(wp.start + band[0] * Z_W).to(
+                wp.start + band[1] * Z_W, speed=scenario.mechanism.lift_speed)
+        self._path.to(wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time)
         self._track: BlendedTrack | None = None
         self._hold: Reference | None = None
         self._release_pull: ReleasePull | None = None
@@ -219,9 +229,14 @@ class MissionSupervisor:
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
 
-    def _new_path(self, t: float, start: np.ndarray, speed: float | None = None) -> Path:
+    def _new_path(self, t: float, start: np.ndarray, speed: float | None = None,
+                  free_hook: bool = False) -> Path:  # fmt: skip
+        """A free-flight path from ``start``; ``free_hook``: a leg on which a hanging hook
+        swings free of the mechanism (takeoff, approach, retry, return), shaped so that it
+        leaves no swing (:func:`~tetherland.mission.hooking.swing_shaper`); legs near or on
+        the mechanism (passes, take-up, release, unhooking) are not shaped."""
         return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
-                    self._min_leg)  # fmt: skip
+                    self._min_leg, self._shaper if free_hook else None)  # fmt: skip
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""
@@ -373,7 +388,7 @@ class MissionSupervisor:
             up = np.array([*self._path.end[:2], wp.z_safe])
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
-                self._new_path(t, self._path.end)
+                self._new_path(t, self._path.end, free_hook=True)
                 .to(up)
                 .to(above)
                 .to(wp.hook_start, pause=cfg.settle_time)
@@ -399,11 +414,16 @@ class MissionSupervisor:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
             take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
-            self._path = (
-                self._new_path(t, wp.hook_end, take_up)
-                .to(wp.slack_out)
-                .to(wp.stretch, speed=cfg.stretch.speed)
-            )
+            self._path = self._new_path(t, wp.hook_end, take_up)
+            m = self.scenario.mechanism
+            if m.kind == "bar":
+                # level first, to the mirror of the pass across the bar (same distance
+                # from it: the line is not pulled): the line meets the bar above the
+                # hook's eye before the vehicle descends (descending at once let the hook
+                # drop under the bar on pipe60)
+                x = np.array([*self.geo.R_WA[:2, 0], 0.0])
+                self._path.to(wp.hook_end + 2.0 * m.pass_offset * x / np.linalg.norm(x))
+            self._path.to(wp.slack_out).to(wp.stretch, speed=cfg.stretch.speed)
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
@@ -429,7 +449,9 @@ class MissionSupervisor:
                 return self._free(t, est)
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
-                self._new_path(t, est.body.p_W).to(above).to(wp.hook_start, pause=cfg.settle_time)
+                self._new_path(t, est.body.p_W, free_hook=True)
+                .to(above)
+                .to(wp.hook_start, pause=cfg.settle_time)
             )
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t, est)
@@ -636,7 +658,7 @@ class MissionSupervisor:
             home_high = np.array([*wp.start[:2], wp.z_safe])
             home = wp.start + self._takeoff_height * Z_W
             self._path = (
-                self._new_path(t, wp.hook_start)
+                self._new_path(t, wp.hook_start, free_hook=True)
                 .to(up)
                 .to(home_high)
                 .to(home, pause=cfg.settle_time)
