@@ -237,7 +237,7 @@ def test_a_culled_shape_is_missed_by_every_ray_of_the_disk(seed):
             pack_shape(kind, rng.normal(0, 0.5, 3), quat_to_rotmat(rotmat_to_quat(
                 quat_to_rotmat(rng.normal(size=4) / 2))), size),
         ))  # fmt: skip
-        q = rng.normal(0, 0.4, 4) + [2.0, 0, 0, 0]
+        q = rng.normal(0, 0.4, 4) + np.array([2.0, 0.0, 0.0, 0.0])  # near level
         qpos = np.array([*rng.normal(0, 0.3, 3), *(q / np.linalg.norm(q))])
         loc = _local_frames(shapes, qpos)
         R_WB = quat_to_rotmat(qpos[3:7])
