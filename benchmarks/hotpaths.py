@@ -11,8 +11,10 @@ hot path with ``--toggle-collect=math_fsum``:
 Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
 ``estimator`` (one control tick: two IMU samples, the estimate, a mocap update every 4th
 tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
-prints the number of ticks). ``benchmarks/bench_callgrind.sh`` runs them all and prints
-instructions per call.
+prints the number of ticks), ``aero`` (the plant's surface-factor kernel ``aero_into``
+of slope50, cycling over poses of the planned landing, on the pad and at cruise height)
+and ``believed`` (the estimator's believed ground effect at the same poses).
+``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
 """
 
 from __future__ import annotations
@@ -89,6 +91,44 @@ def _estimator():
     return call
 
 
+def _aero(name: str):
+    """One surface-factor evaluation per call, cycling over 64 poses: the planned slope50
+    landing (the last 4 s to the touchdown, the lower rotors centimetres from the slope),
+    the start pad and 1.3 m above it."""
+    from tetherland.estimation.ground_effect import BelievedGroundEffect
+    from tetherland.models.aero import aero_into
+    from tetherland.planning import Planner
+    from tetherland.sim.plant import Plant
+
+    sc = load_scenario("slope50")
+    traj = Planner().plan(sc, "landing").require()
+    plant = Plant(sc)
+    pad = plant.qpos.copy()
+    cruise = pad + np.array([0.0, 0.0, 1.3, 0.0, 0.0, 0.0, 0.0])
+    poses = [np.concatenate((n.p_W, n.q_WB)) for n in map(traj.nominal, np.linspace(0, 4, 48))]
+    poses += [pad] * 8 + [cruise] * 8
+    thrusts, v_W = np.full(4, 2.45), np.zeros(3)
+    k = [0]
+    if name == "believed":
+        belief = BelievedGroundEffect(sc)
+
+        def call() -> None:
+            k[0] += 1
+            q = poses[k[0] % len(poses)]
+            belief.total_thrust(q[0:3], q[3:7], thrusts)
+
+        return call
+    m = plant.aero
+    args = (m.rotor_centres_B, m.samples, m.shapes, m.params)
+    factors, acting, wrench = np.empty(4), np.empty(4), np.empty(6)
+
+    def call() -> None:
+        k[0] += 1
+        aero_into(poses[k[0] % len(poses)], v_W, thrusts, *args, factors, acting, wrench)
+
+    return call
+
+
 def _counted(fn) -> None:
     """Run ``fn()`` inside math.fsum: the region callgrind collects."""
     math.fsum(map(lambda _: fn() or 0.0, range(1)))
@@ -118,7 +158,10 @@ def main() -> None:
             run_mission(sc, seed=seed, planners=planners)
         print(f"ticks={sum(len(log) for log in logs)}")
         return
-    call = _estimator() if name == "estimator" else _controllers(name)
+    if name in ("aero", "believed"):
+        call = _aero(name)
+    else:
+        call = _estimator() if name == "estimator" else _controllers(name)
     for _ in range(50):
         call()
 

@@ -253,9 +253,13 @@ def _ray_local(kind: float, a: float, b: float, c: float, lx: float, ly: float, 
             return _INF
         return -lz / uz
     if kind == 1.0:  # box: slabs
-        t0, t1 = 0.0, _INF
-        t0, t1 = _slab(lx, ux, a, t0, t1)
+        # (an empty interval stays empty: each slab only shrinks it, so stop at the first)
+        t0, t1 = _slab(lx, ux, a, 0.0, _INF)
+        if t0 > t1:
+            return _INF
         t0, t1 = _slab(ly, uy, b, t0, t1)
+        if t0 > t1:
+            return _INF
         t0, t1 = _slab(lz, uz, c, t0, t1)
         return t0 if t0 <= t1 else _INF
     # cylinder: radius a, half length b along local z
