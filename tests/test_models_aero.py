@@ -11,6 +11,7 @@ from tetherland.models.aero import (
     WALL_RAYS,
     AeroModel,
     ShapeKind,
+    _plane_bound,
     _reachable,
     _to_local,
     aero_into,
@@ -224,11 +225,12 @@ def _local_frames(shapes, qpos):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_a_culled_shape_is_missed_by_every_ray_of_the_disk(seed):
-    # _reachable may drop a shape for a rotor only when no ray of its disk hits it: check
-    # the claim on a dense disk (far more points than the kernel's samples)
+    # _reachable may drop a shape for a rotor only when no ray of its disk hits it, and a
+    # plane's bound must lie below every ray's distance: check both on a dense disk (far
+    # more points than the kernel's samples)
     rng = np.random.default_rng(seed)
     dense = disk_samples(16, 64) * (1.0 - 1e-12)  # strictly inside the unit disk
-    culled = kept = 0
+    culled = kept = bounded = 0
     for _ in range(60):
         kind = ShapeKind.BOX if rng.random() < 0.5 else ShapeKind.CYLINDER
         size = (0.3, 0.2, 0.05) if kind is ShapeKind.BOX else (0.15, 0.4, 0.0)
@@ -248,11 +250,16 @@ def test_a_culled_shape_is_missed_by_every_ray_of_the_disk(seed):
                 for sign in (-1.0, 1.0):
                     if _reachable(shapes, loc, k, *c_B, sign, R):
                         kept += 1
+                        if k == 0:  # the plane: its bound is below every ray's distance
+                            d = ray_distance_reference(shapes[k], pts, sign * R_WB[:, 2])
+                            bound = _plane_bound(loc, k, *c_B, sign, R)
+                            assert 0.0 <= bound <= d.min()
+                            bounded += bound > 0.0
                         continue
                     culled += 1
                     d = ray_distance_reference(shapes[k], pts, sign * R_WB[:, 2])
                     assert np.all(np.isinf(d)), (k, sign)
-    assert culled > 50 and kept > 50  # both sides of the test were exercised
+    assert culled > 50 and kept > 50 and bounded > 50  # every branch was exercised
 
 
 def test_a_shape_beside_the_rotors_leaves_the_factors_bit_identical():

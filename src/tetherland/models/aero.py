@@ -361,10 +361,14 @@ def _nearest(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: floa
              sign: float, axis: int, mask: FloatArray) -> float:  # fmt: skip
     """Shortest distance from the body point (bx, by, bz) (F_B, about the centre of mass)
     along ``sign`` times body axis ``axis`` (0 x, 1 y, 2 z) to any shape whose ``mask``
-    entry is nonzero [m]."""
+    entry is >= 0 [m]. The entry is a lower bound of the shape's distance (0 if none is
+    known): a shape whose bound is not below the nearest hit so far cannot be nearer and
+    is not cast. The shapes are taken last to first (planes usually come first, and have
+    a bound; the minimum does not depend on the order)."""
     best = _INF
-    for k in range(shapes.shape[0]):
-        if mask[k] == 0.0:
+    for k in range(shapes.shape[0] - 1, -1, -1):
+        bound = mask[k]
+        if bound < 0.0 or bound >= best:
             continue
         L = loc[k]
         lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
@@ -376,6 +380,24 @@ def _nearest(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: floa
         if t < best:
             best = t
     return best
+
+
+@njit(cache=True)
+def _plane_bound(loc: FloatArray, k: int, bx: float, by: float, bz: float, sign: float,
+                 radius: float) -> float:  # fmt: skip
+    """A lower bound of the distance along ``sign`` z_B from any point of the disk of
+    ``radius`` [m] about the body point (bx, by, bz) to plane shape ``k`` [m]: its lowest
+    start height over the plane, less :data:`CULL_MARGIN`, over the ray's descent rate
+    (0 when a start may lie on or below it, or the rays do not descend)."""
+    L = loc[k]
+    uz = sign * L[11]
+    if uz >= 0.0:
+        return 0.0
+    lz = L[2] + L[5] * bx + L[8] * by + L[11] * bz
+    low = lz - radius * math.sqrt(L[5] * L[5] + L[8] * L[8]) - CULL_MARGIN
+    if low <= 0.0:
+        return 0.0
+    return low / -uz  # (rounded division is monotone: below every start's -lz / uz)
 
 
 @njit(cache=True)
@@ -458,11 +480,16 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
         if ground:
             any_down = any_up = False
             for s_k in range(n_shapes):  # cull the shapes no ray of the disk can hit
+                plane = shapes[s_k, 0] == 0.0
                 reach_down = _reachable(shapes, loc, s_k, cx, cy, cz, -1.0, R)
-                down[s_k] = 1.0 if reach_down else 0.0
+                down[s_k] = -1.0
+                if reach_down:
+                    down[s_k] = _plane_bound(loc, s_k, cx, cy, cz, -1.0, R) if plane else 0.0
                 any_down = any_down or reach_down
                 reach_up = k_c > 0.0 and _reachable(shapes, loc, s_k, cx, cy, cz, 1.0, R)
-                up[s_k] = 1.0 if reach_up else 0.0
+                up[s_k] = -1.0
+                if reach_up:
+                    up[s_k] = _plane_bound(loc, s_k, cx, cy, cz, 1.0, R) if plane else 0.0
                 any_up = any_up or reach_up
             acc = 0.0 if (any_down or any_up) else float(n_s)  # (every factor exactly 1)
             for j in range(n_s if (any_down or any_up) else 0):
