@@ -12,7 +12,7 @@ Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
 ``estimator`` (one control tick: two IMU samples, the estimate, a mocap update every 4th
 tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
 prints the number of ticks), ``aero`` (the plant's surface-factor kernel ``aero_into``
-of slope50, cycling over poses of the planned landing, on the pad and at cruise height)
+of slope50, cycling over poses near the slope, on the pad and at cruise height)
 and ``believed`` (the estimator's believed ground effect at the same poses).
 ``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
 """
@@ -92,20 +92,28 @@ def _estimator():
 
 
 def _aero(name: str):
-    """One surface-factor evaluation per call, cycling over 64 poses: the planned slope50
-    landing (the last 4 s to the touchdown, the lower rotors centimetres from the slope),
-    the start pad and 1.3 m above it."""
+    """One surface-factor evaluation per call, cycling over 64 poses: 48 on the normal of
+    the slope50 landing point, from the landed height to 1.5 m out, level and aligned
+    with the slope (as on the tethered landing), 8 on the start pad and 8 at 1.3 m above
+    it (no planner: quick under valgrind)."""
     from tetherland.estimation.ground_effect import BelievedGroundEffect
+    from tetherland.geometry import LandingGeometry
     from tetherland.models.aero import aero_into
-    from tetherland.planning import Planner
+    from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
     from tetherland.sim.plant import Plant
 
     sc = load_scenario("slope50")
-    traj = Planner().plan(sc, "landing").require()
+    geo = LandingGeometry.from_scenario(sc)
+    z_S = geo.surface.z_S
     plant = Plant(sc)
     pad = plant.qpos.copy()
     cruise = pad + np.array([0.0, 0.0, 1.3, 0.0, 0.0, 0.0, 0.0])
-    poses = [np.concatenate((n.p_W, n.q_WB)) for n in map(traj.nominal, np.linspace(0, 4, 48))]
+    level, aligned = (
+        np.array([1.0, 0.0, 0.0, 0.0]),
+        rotmat_to_quat(rotation_from_z_and_yaw(z_S, 0.0)),
+    )
+    poses = [np.concatenate((geo.p_L + h * z_S, q))
+             for h in np.linspace(sc.vehicle.h_R, 1.5, 24) for q in (level, aligned)]  # fmt: skip
     poses += [pad] * 8 + [cruise] * 8
     thrusts, v_W = np.full(4, 2.45), np.zeros(3)
     k = [0]
