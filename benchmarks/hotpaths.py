@@ -15,6 +15,10 @@ prints the number of ticks), ``aero`` (the plant's surface-factor kernel ``aero_
 of slope50, cycling over poses near the slope, on the pad and at cruise height)
 and ``believed`` (the estimator's believed ground effect at the same poses).
 ``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
+
+Measured (issue 25, exact culling in ``aero_into``, the same bits): ``aero`` 74.6k ->
+53.7k and ``believed`` 68.5k -> 56.1k instructions per call, main b01e26b -> i25-speed
+(the same workload file run against both source trees).
 """
 
 from __future__ import annotations
