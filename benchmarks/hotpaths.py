@@ -11,8 +11,14 @@ hot path with ``--toggle-collect=math_fsum``:
 Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
 ``estimator`` (one control tick: two IMU samples, the estimate, a mocap update every 4th
 tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
-prints the number of ticks). ``benchmarks/bench_callgrind.sh`` runs them all and prints
-instructions per call.
+prints the number of ticks), ``aero`` (the plant's surface-factor kernel ``aero_into``
+of slope50, cycling over poses near the slope, on the pad and at cruise height)
+and ``believed`` (the estimator's believed ground effect at the same poses).
+``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
+
+Measured (issue 25, exact culling in ``aero_into``, the same bits): ``aero`` 74.6k ->
+53.7k and ``believed`` 68.5k -> 56.1k instructions per call, main b01e26b -> i25-speed
+(the same workload file run against both source trees).
 """
 
 from __future__ import annotations
@@ -89,6 +95,52 @@ def _estimator():
     return call
 
 
+def _aero(name: str):
+    """One surface-factor evaluation per call, cycling over 64 poses: 48 on the normal of
+    the slope50 landing point, from the landed height to 1.5 m out, level and aligned
+    with the slope (as on the tethered landing), 8 on the start pad and 8 at 1.3 m above
+    it (no planner: quick under valgrind)."""
+    from tetherland.estimation.ground_effect import BelievedGroundEffect
+    from tetherland.geometry import LandingGeometry
+    from tetherland.models.aero import aero_into
+    from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
+    from tetherland.sim.plant import Plant
+
+    sc = load_scenario("slope50")
+    geo = LandingGeometry.from_scenario(sc)
+    z_S = geo.surface.z_S
+    plant = Plant(sc)
+    pad = plant.qpos.copy()
+    cruise = pad + np.array([0.0, 0.0, 1.3, 0.0, 0.0, 0.0, 0.0])
+    level, aligned = (
+        np.array([1.0, 0.0, 0.0, 0.0]),
+        rotmat_to_quat(rotation_from_z_and_yaw(z_S, 0.0)),
+    )
+    poses = [np.concatenate((geo.p_L + h * z_S, q))
+             for h in np.linspace(sc.vehicle.h_R, 1.5, 24) for q in (level, aligned)]  # fmt: skip
+    poses += [pad] * 8 + [cruise] * 8
+    thrusts, v_W = np.full(4, 2.45), np.zeros(3)
+    k = [0]
+    if name == "believed":
+        belief = BelievedGroundEffect(sc)
+
+        def call() -> None:
+            k[0] += 1
+            q = poses[k[0] % len(poses)]
+            belief.total_thrust(q[0:3], q[3:7], thrusts)
+
+        return call
+    m = plant.aero
+    args = (m.rotor_centres_B, m.samples, m.shapes, m.params)
+    factors, acting, wrench = np.empty(4), np.empty(4), np.empty(6)
+
+    def call() -> None:
+        k[0] += 1
+        aero_into(poses[k[0] % len(poses)], v_W, thrusts, *args, factors, acting, wrench)
+
+    return call
+
+
 def _counted(fn) -> None:
     """Run ``fn()`` inside math.fsum: the region callgrind collects."""
     math.fsum(map(lambda _: fn() or 0.0, range(1)))
@@ -118,7 +170,10 @@ def main() -> None:
             run_mission(sc, seed=seed, planners=planners)
         print(f"ticks={sum(len(log) for log in logs)}")
         return
-    call = _estimator() if name == "estimator" else _controllers(name)
+    if name in ("aero", "believed"):
+        call = _aero(name)
+    else:
+        call = _estimator() if name == "estimator" else _controllers(name)
     for _ in range(50):
         call()
 

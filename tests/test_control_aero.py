@@ -131,3 +131,25 @@ def test_drag_feedforward_goes_on_the_acceleration_and_jerk_rows():
     assert inner.seen[-1].p_W is not None and inner.seen[-1].p_W.shape == (1, 3)
     ctrl.update(0.0, est, Reference(t=0.0))
     assert inner.seen[-1].p_W is None
+
+
+@pytest.mark.parametrize("name", ["slope50", "pipe60"])
+def test_the_reach_distance_is_the_distance_to_the_slab_or_the_pipe_axis(name):
+    """The scalar distance bound of the reach test against the geometry written plainly:
+    the slab's far face along z_S, or the infinite cylinder of the pipe."""
+    from tetherland.estimation.ground_effect import PATCH_HALF_THICKNESS
+    from tetherland.geometry import surface_from_config
+
+    sc = load_scenario(name)
+    surf = surface_from_config(sc)
+    belief = BelievedGroundEffect(sc)
+    rng = np.random.default_rng(3)
+    for p in surf.origin + rng.normal(0.0, 2.0, (50, 3)):
+        d = p - surf.origin
+        if surf.kind == "pipe":
+            r = surf.pipe_radius
+            radial = d - (d @ surf.x_S) * surf.x_S + r * surf.z_S  # from the axis
+            expected = np.linalg.norm(radial) - r
+        else:
+            expected = abs(d @ surf.z_S) - 2.0 * PATCH_HALF_THICKNESS
+        assert belief._distance(p) == pytest.approx(expected, abs=1e-12)

@@ -11,12 +11,16 @@ from tetherland.models.aero import (
     WALL_RAYS,
     AeroModel,
     ShapeKind,
+    _plane_bound,
+    _reachable,
+    _to_local,
     aero_into,
     aero_reference,
     disk_samples,
     ground_factor,
     ground_plane,
     pack_shape,
+    ray_distance_reference,
 )
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 
@@ -210,3 +214,81 @@ def test_kernel_matches_the_plain_reference(seed):
         np.testing.assert_allclose(wrench[:3], ref.force_W, atol=1e-12)
         np.testing.assert_allclose(wrench[3:], ref.torque_B, atol=1e-12)
         assert np.all(f <= m.factor_bound * (1 + 1e-12)) and np.all(f >= 1.0)
+
+
+def _local_frames(shapes, qpos):
+    """The kernel's per-shape local frames of the pose (see models/aero.py ``_to_local``)."""
+    loc = np.empty((shapes.shape[0], 12))
+    _to_local(shapes, qpos[0], qpos[1], qpos[2], quat_to_rotmat(qpos[3:7]), loc)
+    return loc
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_culled_shape_is_missed_by_every_ray_of_the_disk(seed):
+    # _reachable may drop a shape for a rotor only when no ray of its disk hits it, and a
+    # plane's bound must lie below every ray's distance: check both on a dense disk (far
+    # more points than the kernel's samples)
+    rng = np.random.default_rng(seed)
+    dense = disk_samples(16, 64) * (1.0 - 1e-12)  # strictly inside the unit disk
+    culled = kept = bounded = 0
+    for _ in range(60):
+        kind = ShapeKind.BOX if rng.random() < 0.5 else ShapeKind.CYLINDER
+        size = (0.3, 0.2, 0.05) if kind is ShapeKind.BOX else (0.15, 0.4, 0.0)
+        shapes = np.vstack((
+            ground_plane(rng.uniform(-1.0, 0.0)),
+            pack_shape(kind, rng.normal(0, 0.5, 3), quat_to_rotmat(rotmat_to_quat(
+                quat_to_rotmat(rng.normal(size=4) / 2))), size),
+        ))  # fmt: skip
+        q = rng.normal(0, 0.4, 4) + np.array([2.0, 0.0, 0.0, 0.0])  # near level
+        qpos = np.array([*rng.normal(0, 0.3, 3), *(q / np.linalg.norm(q))])
+        loc = _local_frames(shapes, qpos)
+        R_WB = quat_to_rotmat(qpos[3:7])
+        for c_B in CENTRES:
+            pts = qpos[:3] + R_WB @ c_B + R * (np.outer(dense[:, 0], R_WB[:, 0])
+                                               + np.outer(dense[:, 1], R_WB[:, 1]))  # fmt: skip
+            for k in range(2):
+                for sign in (-1.0, 1.0):
+                    if _reachable(shapes, loc, k, *c_B, sign, R):
+                        kept += 1
+                        if k == 0:  # the plane: its bound is below every ray's distance
+                            d = ray_distance_reference(shapes[k], pts, sign * R_WB[:, 2])
+                            bound = _plane_bound(loc, k, *c_B, sign, R)
+                            assert 0.0 <= bound <= d.min()
+                            bounded += bound > 0.0
+                        continue
+                    culled += 1
+                    d = ray_distance_reference(shapes[k], pts, sign * R_WB[:, 2])
+                    assert np.all(np.isinf(d)), (k, sign)
+    assert culled > 50 and kept > 50 and bounded > 50  # every branch was exercised
+
+
+def test_a_shape_beside_the_rotors_leaves_the_factors_bit_identical():
+    # a box whose shadow misses every disk is culled: the same bits as without it
+    ground = ground_plane(-0.3)
+    beside = pack_shape(ShapeKind.BOX, (1.0, 0.0, -0.25), np.eye(3), (0.4, 0.4, 0.05))
+    qpos = level((0.0, 0.0, 0.0))
+    assert 0.2 + R < 1.0 - 0.4  # the nearest disk edge is short of the box's edge
+    with_box = run(model(np.vstack((ground, beside))), qpos)
+    without = run(model(ground), qpos)
+    for a, b in zip(with_box, without, strict=True):
+        assert np.array_equal(a, b)
+    # moved under the rotors it acts: the factor of the rotors over it grows
+    under = pack_shape(ShapeKind.BOX, (0.2, 0.0, -0.25), np.eye(3), (0.4, 0.4, 0.05))
+    f_under = run(model(np.vstack((ground, under))), qpos)[0]
+    assert np.all(f_under > without[0])
+
+
+def test_rays_that_leave_a_plane_cull_it():
+    # rotors above the ground, level: the inflow rays (+z_B) never meet it
+    ground = ground_plane(-0.3)
+    qpos = level((0.0, 0.0, 0.0))
+    loc = _local_frames(ground[None, :], qpos)
+    for c_B in CENTRES:
+        assert not _reachable(ground[None, :], loc, 0, *c_B, 1.0, R)
+        assert _reachable(ground[None, :], loc, 0, *c_B, -1.0, R)
+    # upside down, the wake goes up: then the downward (inflow) side meets the ground
+    flipped = np.array([0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0])
+    loc = _local_frames(ground[None, :], flipped)
+    for c_B in CENTRES:
+        assert _reachable(ground[None, :], loc, 0, *c_B, 1.0, R)
+        assert not _reachable(ground[None, :], loc, 0, *c_B, -1.0, R)

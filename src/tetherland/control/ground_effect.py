@@ -18,7 +18,6 @@ thrust (:mod:`tetherland.control.tracking`).
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -57,8 +56,9 @@ class GroundEffectCompensation:
         if self.ground_effect.beyond_reach(p_W):
             return cmd  # every believed factor is 1: the command as it is
         q_WB = quat_multiply(b.q_WB, rotvec_to_quat(tau * np.asarray(b.omega_B, dtype=float)))
-        k = self.ground_effect.factors_at(p_W, q_WB / np.linalg.norm(q_WB))
-        return replace(cmd, rotor_speeds=w / np.sqrt(k))
+        k = self.ground_effect.factors_at(p_W, q_WB / np.linalg.norm(q_WB), near=True)
+        # (the fields as dataclasses.replace would copy them, without its generic walk)
+        return Command(w / np.sqrt(k), cmd.thrust, cmd.torque_B, cmd.diagnostics)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.inner, name)

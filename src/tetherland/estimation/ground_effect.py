@@ -13,6 +13,8 @@ reads the plant's ``[aero]``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from tetherland.config import Scenario
@@ -74,7 +76,9 @@ class BelievedGroundEffect:
         reach = float(np.max(np.linalg.norm(centres, axis=1))) + radius
         self._far = FAR_RATIO * radius + reach
         surf = surface_from_config(scenario)
-        self._origin, self._z_S, self._x_S = surf.origin, surf.z_S, surf.x_S
+        self._origin_f = tuple(float(x) for x in surf.origin)
+        self._z_S_f = tuple(float(x) for x in surf.z_S)
+        self._x_S_f = tuple(float(x) for x in surf.x_S)
         self._pipe_radius = surf.pipe_radius if surf.kind == "pipe" else None
         self._args = (m.rotor_centres_B, m.samples, m.shapes, m.params)
         self._qpos = np.empty(7)
@@ -93,6 +97,11 @@ class BelievedGroundEffect:
         if self.beyond_reach(p_W):
             self._factors[:] = 1.0
             return float(np.sum(thrusts))
+        return self._evaluate(p_W, q_WB, thrusts)
+
+    def _evaluate(self, p_W: FloatArray, q_WB: FloatArray, thrusts: FloatArray) -> float:
+        """The believed model at the pose, whatever the distance: the sum of the acting
+        thrusts [N] (the factors in ``_factors``)."""
         q = self._qpos
         q[0:3] = p_W
         q[3:7] = q_WB
@@ -108,19 +117,28 @@ class BelievedGroundEffect:
 
     def _distance(self, p_W: FloatArray) -> float:
         """A lower bound of the distance from ``p_W`` to the believed surface patch: to its
-        slab, or to the pipe's infinite cylinder [m]."""
-        d = np.asarray(p_W, dtype=float) - self._origin
+        slab, or to the pipe's infinite cylinder [m] (scalar form: a control-rate path)."""
+        px, py, pz = np.asarray(p_W, dtype=float).tolist()
+        ox, oy, oz = self._origin_f
+        dx, dy, dz = px - ox, py - oy, pz - oz
+        zx, zy, zz = self._z_S_f
         if self._pipe_radius is None:
-            return abs(float(d @ self._z_S)) - PATCH_HALF_THICKNESS * 2.0
+            return abs(dx * zx + dy * zy + dz * zz) - PATCH_HALF_THICKNESS * 2.0
         r = self._pipe_radius
-        along = float(d @ self._x_S)
-        radial = d - along * self._x_S + r * self._z_S  # from the axis
-        return float(np.linalg.norm(radial)) - r  # to the infinite cylinder
+        xx, xy, xz = self._x_S_f
+        along = dx * xx + dy * xy + dz * xz
+        # from the axis
+        rx, ry, rz = dx - along * xx + r * zx, dy - along * xy + r * zy, dz - along * xz + r * zz
+        return math.sqrt(rx * rx + ry * ry + rz * rz) - r  # to the infinite cylinder
 
-    def factors_at(self, p_W: FloatArray, q_WB: FloatArray) -> FloatArray:
+    def factors_at(self, p_W: FloatArray, q_WB: FloatArray, near: bool = False) -> FloatArray:
         """Believed factor of each rotor at the pose (p_W [m], q_WB [-]) [-] (a view, valid
-        until the next call)."""
-        self.total_thrust(p_W, q_WB, self._ones)
+        until the next call). ``near``: the caller has just found the pose not
+        :meth:`beyond_reach` (the check is not made again)."""
+        if near:
+            self._evaluate(p_W, q_WB, self._ones)
+        else:
+            self.total_thrust(p_W, q_WB, self._ones)
         return self._factors
 
     @property

@@ -96,6 +96,8 @@ class FaultMonitor:
         self._torque_cmd = (0.0, 0.0)
         self._lp_x = self._lp_y = 0.0
         self._t_last: float | None = None
+        self._lp_dt = math.nan  # the step of the low-pass weight _lp_a [s]
+        self._lp_a = 0.0
         self._rotor = ThresholdDwell(cfg.rotor_torque, cfg.rotor_dwell)
         self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
         self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
@@ -173,7 +175,7 @@ class FaultMonitor:
         cfg = self.cfg
         cov = est.covariance
         if cov is not None:
-            std = math.sqrt(max(cov[0, 0], cov[1, 1], cov[2, 2]))
+            std = math.sqrt(max(cov.diagonal()[:3].tolist()))  # (one call, not 3 indexings)
             self.position_std = std
             if t >= cfg.airborne_delay and std > cfg.position_std:
                 return FaultDetection(
@@ -208,7 +210,10 @@ class FaultMonitor:
             self._rotor.reset()
             return None
         cx, cy = self.cable_torque_xy(est)
-        a = 1.0 - math.exp(-dt / self.cfg.rotor_torque_time_constant)
+        if dt != self._lp_dt:  # (the tick is constant: the weight is computed once)
+            self._lp_dt = dt
+            self._lp_a = 1.0 - math.exp(-dt / self.cfg.rotor_torque_time_constant)
+        a = self._lp_a
         self._lp_x += a * (self._torque_cmd[0] + cx - self._lp_x)
         self._lp_y += a * (self._torque_cmd[1] + cy - self._lp_y)
         self.torque_residual = r = math.hypot(self._lp_x, self._lp_y)

@@ -253,9 +253,13 @@ def _ray_local(kind: float, a: float, b: float, c: float, lx: float, ly: float, 
             return _INF
         return -lz / uz
     if kind == 1.0:  # box: slabs
-        t0, t1 = 0.0, _INF
-        t0, t1 = _slab(lx, ux, a, t0, t1)
+        # (an empty interval stays empty: each slab only shrinks it, so stop at the first)
+        t0, t1 = _slab(lx, ux, a, 0.0, _INF)
+        if t0 > t1:
+            return _INF
         t0, t1 = _slab(ly, uy, b, t0, t1)
+        if t0 > t1:
+            return _INF
         t0, t1 = _slab(lz, uz, c, t0, t1)
         return t0 if t0 <= t1 else _INF
     # cylinder: radius a, half length b along local z
@@ -299,12 +303,22 @@ def _to_local(shapes: FloatArray, px: float, py: float, pz: float, R_WB: FloatAr
                 )
 
 
+CULL_MARGIN = 1e-9
+"""Margin of the exact culling tests [m]: a shape is skipped only when it misses every ray
+of a disk by more than this (far above the rounding of the ray tests)."""
+
+
 @njit(cache=True)
 def _reachable(shapes: FloatArray, loc: FloatArray, k: int, bx: float, by: float, bz: float,
-               sign: float) -> bool:  # fmt: skip
-    """False when shape ``k`` lies wholly behind the plane through the body point
-    (bx, by, bz) normal to z_B, seen along ``sign`` z_B: no ray along sign z_B from that
-    plane can hit it (its support function along sign z_B is below the plane)."""
+               sign: float, radius: float) -> bool:  # fmt: skip
+    """False when no ray along ``sign`` z_B from the disk of ``radius`` [m] about the body
+    point (bx, by, bz) (normal to z_B) can hit shape ``k``: the shape lies wholly behind
+    the disk's plane (its support function along sign z_B is below it), or its shadow
+    along z_B on that plane is separated from the disk along x_B, y_B or the direction to
+    its centre (the box, or the cylinder's bounding box, by more than
+    :data:`CULL_MARGIN`), or it is a plane the rays leave with every start above it.
+    Culled shapes would give ``inf`` for every ray of the disk, so the nearest distances
+    are the same with or without them."""
     s, L = shapes[k], loc[k]
     kind = s[0]
     zx, zy, zz = sign * L[9], sign * L[10], sign * L[11]  # sign z_B in shape-local axes
@@ -312,14 +326,34 @@ def _reachable(shapes: FloatArray, loc: FloatArray, k: int, bx: float, by: float
     lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
     ly = L[1] + L[4] * bx + L[7] * by + L[10] * bz
     lz = L[2] + L[5] * bx + L[8] * by + L[11] * bz
+    if kind == 0.0:  # plane z_L = 0, solid below: rays going up (or level) from above miss
+        low = lz - radius * math.sqrt(L[5] * L[5] + L[8] * L[8])  # lowest start on the disk
+        return not (zz >= 0.0 and low > CULL_MARGIN)
     h0 = -(zx * lx + zy * ly + zz * lz)  # the shape centre's height along sign z_B
+    a, b, c = s[13], s[14], s[15]
     if kind == 1.0:
-        reach = h0 + s[13] * abs(zx) + s[14] * abs(zy) + s[15] * abs(zz)
-    elif kind == 2.0:
-        reach = h0 + s[13] * math.sqrt(max(0.0, 1.0 - zz * zz)) + s[14] * abs(zz)
+        reach = h0 + a * abs(zx) + b * abs(zy) + c * abs(zz)
     else:
-        return True
-    return reach > 0.0
+        b, c = a, b  # the cylinder's bounding box (r, r, h)
+        reach = h0 + a * math.sqrt(max(0.0, 1.0 - zz * zz)) + c * abs(zz)
+    if reach <= 0.0:
+        return False
+    # the shadow: centre offsets and half extents along x_B and y_B (shape-local columns)
+    ox = -(L[3] * lx + L[4] * ly + L[5] * lz)
+    oy = -(L[6] * lx + L[7] * ly + L[8] * lz)
+    gap = radius + CULL_MARGIN
+    if abs(ox) > gap + a * abs(L[3]) + b * abs(L[4]) + c * abs(L[5]):
+        return False
+    if abs(oy) > gap + a * abs(L[6]) + b * abs(L[7]) + c * abs(L[8]):
+        return False
+    n = math.sqrt(ox * ox + oy * oy)
+    if n > 0.0:
+        ex, ey = ox / n, oy / n  # toward the centre, in the disk plane
+        half = (a * abs(ex * L[3] + ey * L[6]) + b * abs(ex * L[4] + ey * L[7])
+                + c * abs(ex * L[5] + ey * L[8]))  # fmt: skip
+        if n > gap + half:
+            return False
+    return True
 
 
 @njit(cache=True)
@@ -327,10 +361,14 @@ def _nearest(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: floa
              sign: float, axis: int, mask: FloatArray) -> float:  # fmt: skip
     """Shortest distance from the body point (bx, by, bz) (F_B, about the centre of mass)
     along ``sign`` times body axis ``axis`` (0 x, 1 y, 2 z) to any shape whose ``mask``
-    entry is nonzero [m]."""
+    entry is >= 0 [m]. The entry is a lower bound of the shape's distance (0 if none is
+    known): a shape whose bound is not below the nearest hit so far cannot be nearer and
+    is not cast. The shapes are taken last to first (planes usually come first, and have
+    a bound; the minimum does not depend on the order)."""
     best = _INF
-    for k in range(shapes.shape[0]):
-        if mask[k] == 0.0:
+    for k in range(shapes.shape[0] - 1, -1, -1):
+        bound = mask[k]
+        if bound < 0.0 or bound >= best:
             continue
         L = loc[k]
         lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
@@ -342,6 +380,24 @@ def _nearest(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: floa
         if t < best:
             best = t
     return best
+
+
+@njit(cache=True)
+def _plane_bound(loc: FloatArray, k: int, bx: float, by: float, bz: float, sign: float,
+                 radius: float) -> float:  # fmt: skip
+    """A lower bound of the distance along ``sign`` z_B from any point of the disk of
+    ``radius`` [m] about the body point (bx, by, bz) to plane shape ``k`` [m]: its lowest
+    start height over the plane, less :data:`CULL_MARGIN`, over the ray's descent rate
+    (0 when a start may lie on or below it, or the rays do not descend)."""
+    L = loc[k]
+    uz = sign * L[11]
+    if uz >= 0.0:
+        return 0.0
+    lz = L[2] + L[5] * bx + L[8] * by + L[11] * bz
+    low = lz - radius * math.sqrt(L[5] * L[5] + L[8] * L[8]) - CULL_MARGIN
+    if low <= 0.0:
+        return 0.0
+    return low / -uz  # (rounded division is monotone: below every start's -lz / uz)
 
 
 @njit(cache=True)
@@ -394,7 +450,8 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
     """
     qw, qx, qy, qz = qpos[3], qpos[4], qpos[5], qpos[6]
     s2 = 2.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
-    Rm = np.empty((3, 3))
+    work = np.empty(9 + 36 * shapes.shape[0])  # R_WB, the local frames, the masks
+    Rm = work[0:9].reshape((3, 3))
     Rm[0, 0] = 1.0 - s2 * (qy * qy + qz * qz)
     Rm[0, 1] = s2 * (qx * qy - qw * qz)
     Rm[0, 2] = s2 * (qx * qz + qw * qy)
@@ -405,9 +462,10 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
     Rm[2, 1] = s2 * (qy * qz + qw * qx)
     Rm[2, 2] = 1.0 - s2 * (qx * qx + qy * qy)
     n_shapes = shapes.shape[0]
-    loc = np.empty((n_shapes, 12))
+    frames = work[9:].reshape((3, n_shapes, 12))
+    loc = frames[0]
     _to_local(shapes, qpos[0], qpos[1], qpos[2], Rm, loc)
-    down, up = np.empty(n_shapes), np.empty(n_shapes)
+    down, up = frames[1, :, 0], frames[2, :, 0]
     R = p[P_R]
     z_min = p[P_ZMIN]
     k_c = p[P_KC]
@@ -420,20 +478,28 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
         cx, cy, cz = centres_B[i, 0], centres_B[i, 1], centres_B[i, 2]
         k = 1.0
         if ground:
-            any_up = False
-            for s_k in range(n_shapes):  # cull shapes behind the rotor plane
-                down[s_k] = 1.0 if _reachable(shapes, loc, s_k, cx, cy, cz, -1.0) else 0.0
-                reach_up = k_c > 0.0 and _reachable(shapes, loc, s_k, cx, cy, cz, 1.0)
-                up[s_k] = 1.0 if reach_up else 0.0
-                any_up = any_up or up[s_k] != 0.0
-            acc = 0.0
-            for j in range(n_s):
+            any_down = any_up = False
+            for s_k in range(n_shapes):  # cull the shapes no ray of the disk can hit
+                plane = shapes[s_k, 0] == 0.0
+                reach_down = _reachable(shapes, loc, s_k, cx, cy, cz, -1.0, R)
+                down[s_k] = -1.0
+                if reach_down:
+                    down[s_k] = _plane_bound(loc, s_k, cx, cy, cz, -1.0, R) if plane else 0.0
+                any_down = any_down or reach_down
+                reach_up = k_c > 0.0 and _reachable(shapes, loc, s_k, cx, cy, cz, 1.0, R)
+                up[s_k] = -1.0
+                if reach_up:
+                    up[s_k] = _plane_bound(loc, s_k, cx, cy, cz, 1.0, R) if plane else 0.0
+                any_up = any_up or reach_up
+            acc = 0.0 if (any_down or any_up) else float(n_s)  # (every factor exactly 1)
+            for j in range(n_s if (any_down or any_up) else 0):
                 bx, by = cx + R * samples[j, 0], cy + R * samples[j, 1]
                 g = 1.0
-                d = _nearest(shapes, loc, bx, by, cz, -1.0, 2, down)  # along the wake
-                if d < _INF:
-                    d = max(d, z_min)
-                    g = 1.0 / (1.0 - 0.0625 * (R / d) ** 2)
+                if any_down:
+                    d = _nearest(shapes, loc, bx, by, cz, -1.0, 2, down)  # along the wake
+                    if d < _INF:
+                        d = max(d, z_min)
+                        g = 1.0 / (1.0 - 0.0625 * (R / d) ** 2)
                 if any_up:
                     d = _nearest(shapes, loc, bx, by, cz, 1.0, 2, up)  # the inflow side
                     if d < _INF:
