@@ -153,6 +153,8 @@ class MissionSupervisor:
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
+        self._sign_t: float | None = None  # time of the first sign of contact [s]
+        self._scale_at_contact = 1.0  # thrust scale at the confirmed contact [-]
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
         self._path = self._new_path(0.0, wp.start).to(
             wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time
@@ -439,13 +441,14 @@ class MissionSupervisor:
     ) -> Reference:
         """Touchdown confirmed: hold the link at contact until the motors go off."""
         self.times["t_L"] = t
+        self._scale_at_contact = self._preload_scale(t)
         self._hold = contact_hold(self.cfg.contact, t, est, ref, int(Phase.TOUCHDOWN))
         assert decision.evidence is not None
         reason = f"contact {when} (t_L): {decision.evidence.describe()}"
         self._event(t, "touchdown", reason)
         if self.phase != Phase.TOUCHDOWN:
             self._enter(Phase.TOUCHDOWN, t, reason)
-        return self._hold
+        return dataclasses.replace(self._hold, thrust_scale=self._scale_at_contact)
 
     def _tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
@@ -467,7 +470,7 @@ class MissionSupervisor:
             self._search_start = t
             self._hold = None
             self._enter(Phase.TOUCHDOWN, t, "planned landing completed: guarded descent to contact")
-        return ref
+        return self._preloaded(ref, t)
 
     def _lateral(self, ref: Reference, release: bool) -> Reference:
         """``ref`` with the link azimuth left to gravity (``release``, the lateral release
@@ -487,18 +490,33 @@ class MissionSupervisor:
         landers, a vehicle slides along the surface wherever the sideways forces (a thrust
         tilted by the belief's surface error, the rotors' ground effect) leave it."""
         ev = decision.evidence
-        if (
-            self._delta_lock is None
-            and self.cfg.touchdown.lateral_lock
-            and self.cfg.touchdown.lateral_clearance > 0.0
-            and ev is not None
-            and ev.normal_force is not None
-            and ev.near
-            and ev.pressed
+        if self._sign_t is not None or not (
+            ev is not None and ev.normal_force is not None and ev.near and ev.pressed
             and est.link is not None
-        ):
+        ):  # fmt: skip
+            return
+        self._sign_t = t
+        td = self.cfg.touchdown
+        done = []
+        if td.lateral_lock and td.lateral_clearance > 0.0:
             self._delta_lock = est.link.delta
-            self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
+            done.append("link azimuth held")
+        if td.preload > 0.0:
+            done.append(f"thrust shed to {1.0 - td.preload:.2f} at {td.preload_rate:g}/s")
+        if done:
+            self._event(t, "contact", f"first sign of contact, {', '.join(done)}: {ev.describe()}")
+
+    def _preload_scale(self, t: float) -> float:
+        """The thrust scale of the preload at ``t`` (1 before the first sign of contact)."""
+        if self._sign_t is None or self.cfg.touchdown.preload == 0.0:
+            return 1.0
+        td = self.cfg.touchdown
+        return 1.0 - min(td.preload_rate * (t - self._sign_t), td.preload)
+
+    def _preloaded(self, ref: Reference, t: float) -> Reference:
+        """``ref`` with the preload's thrust scale."""
+        scale = self._preload_scale(t)
+        return ref if scale == 1.0 else dataclasses.replace(ref, thrust_scale=scale)
 
     def _search_reference(self, t: float) -> Reference:
         """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
@@ -521,14 +539,16 @@ class MissionSupervisor:
                 depth = td.search_depth_deg
                 self.abort(t, est, f"fault: no contact within {depth:g} deg beyond phi*")
                 return self._free(t, est)
-            return ref
+            return self._preloaded(ref, t)
         since = t - self.times["t_L"]  # time on the surface, the spin-down under way [s]
         spin_down = cfg.touchdown.spin_down_time
         if since >= max(cfg.settle_time, spin_down):
             self.times["t_G"] = t
             self._enter(Phase.MOTORS_OFF, t, "landed: motors off (t_G)")
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
-        scale = max(1.0 - since / spin_down, 0.0) if spin_down > 0.0 else 1.0
+        scale = self._scale_at_contact
+        if spin_down > 0.0:
+            scale *= max(1.0 - since / spin_down, 0.0)
         return Reference(
             t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=self._hold.output,
             thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
