@@ -130,3 +130,45 @@ def test_the_lateral_release_ends_at_the_first_sign_of_contact():
     along = d - np.outer(d @ geo.surface.z_S, geo.surface.z_S)
     assert np.linalg.norm(along, axis=1).max() < truth.verdict.rest_slip
     assert sign <= t[k_L] + truth.mission.contact.dwell  # sensed before the contact rule's dwell
+
+
+@pytest.mark.slow
+def test_the_preload_holds_the_vehicle_against_a_gust_at_the_first_touch():
+    """Sweep draw tethered-20-00000 (20 deg, seed 2026): before, a 0.46 N sideways gust from
+    t = 33.48 s slid the vehicle 15.9 mm along the surface (condition (5): 1 cm) while the
+    landers carried almost nothing, because the contact was confirmed only 1.5 s after its
+    first sign. Now the thrust is shed from that sign at ``mission.touchdown.preload_rate``
+    down to 1 - ``preload``: the true thrust just before the confirmation is well below the
+    hover thrust before the sign, the true lander point moves less than half of condition
+    (5)'s 1 cm along the surface from the first true touchdown to spin-up, every judged
+    contact keeps condition (4), and the mission succeeds with conditions (1)-(5)."""
+    record, result = run_job(study_run(20.0, runs=20, index=0))
+    assert record["status"] == "ok", record.get("error")
+    verdict = result.verdict.summary
+    assert verdict["success"], verdict["reason"]
+    landing = verdict["landing"]
+    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    log, truth, belief = result.log, result.plant_scenario, result.belief_scenario
+    td = belief.mission.touchdown
+    t, phase = log["t"], log["phase"].astype(int)
+    (sign,) = [e["t"] for e in log.events if e.get("kind") == "contact"]
+    (t_L,) = [e["t"] for e in log.events if e.get("kind") == "touchdown"]
+    assert t_L - sign > 0.5  # the confirmation still takes its time: the preload acts first
+    # the true thrust before the sign against the thrust just before the confirmation
+    thrust = log["rotor_thrusts"].sum(axis=1)
+    before = (t > sign - 0.3) & (t < sign)
+    late = (t > t_L - 0.1) & (t < t_L)
+    m_g = belief.vehicle.mass * GRAVITY
+    assert thrust[before].mean() > 0.8 * m_g  # hovering on the rotors before the sign
+    assert thrust[late].mean() < (1.0 - 0.5 * td.preload) * thrust[before].mean()
+    # the slide along the surface, from the first true touchdown to the spin-up
+    geo = LandingGeometry.from_scenario(truth)
+    z_B = quat_to_rotmat_many(log["q_WB"])[:, :, 2]
+    p_RL = log["p_W"] - geo.h_R * z_B
+    k_L = int(np.searchsorted(t, landing["t_L"]))
+    k_up = int(np.flatnonzero(phase == int(Phase.SPIN_UP))[0])
+    d = p_RL[k_L:k_up] - p_RL[k_L]
+    along = d - np.outer(d @ geo.surface.z_S, geo.surface.z_S)
+    assert np.linalg.norm(along, axis=1).max() < 0.5 * truth.verdict.rest_slip
+    tol = truth.verdict
+    assert all(b["touchdown_accel_mps2"] <= tol.touchdown_accel for b in landing["bounces"])
