@@ -40,6 +40,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from tetherland import GRAVITY
 from tetherland.config import FaultKind, Scenario
 from tetherland.control.common import heading_of
 from tetherland.errors import TetherlandError
@@ -154,7 +155,10 @@ class MissionSupervisor:
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._sign_t: float | None = None  # time of the first sign of contact [s]
-        self._scale_at_contact = 1.0  # thrust scale at the confirmed contact [-]
+        self._shed_at_contact = 0.0  # preload's thrust shed at the confirmed contact [-]
+        self._shed = 0.0  # preload's thrust shed now [-]
+        self._shed_t: float | None = None  # time of its last update [s]
+        self._surface_force = 0.0  # last estimated surface push of the contact rule [N]
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
         self._path = self._new_path(0.0, wp.start).to(
             wp.start + self._takeoff_height * Z_W, pause=cfg.settle_time
@@ -441,14 +445,14 @@ class MissionSupervisor:
     ) -> Reference:
         """Touchdown confirmed: hold the link at contact until the motors go off."""
         self.times["t_L"] = t
-        self._scale_at_contact = self._preload_scale(t)
+        self._shed_at_contact = self._preload_shed(t)
         self._hold = contact_hold(self.cfg.contact, t, est, ref, int(Phase.TOUCHDOWN))
         assert decision.evidence is not None
         reason = f"contact {when} (t_L): {decision.evidence.describe()}"
         self._event(t, "touchdown", reason)
         if self.phase != Phase.TOUCHDOWN:
             self._enter(Phase.TOUCHDOWN, t, reason)
-        return dataclasses.replace(self._hold, thrust_scale=self._scale_at_contact)
+        return dataclasses.replace(self._hold, thrust_shed=self._shed_at_contact)
 
     def _tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
@@ -490,6 +494,8 @@ class MissionSupervisor:
         landers, a vehicle slides along the surface wherever the sideways forces (a thrust
         tilted by the belief's surface error, the rotors' ground effect) leave it."""
         ev = decision.evidence
+        if ev is not None and ev.normal_force is not None:
+            self._surface_force = ev.normal_force
         if self._sign_t is not None or not (
             ev is not None and ev.normal_force is not None and ev.near and ev.pressed
             and est.link is not None
@@ -506,17 +512,30 @@ class MissionSupervisor:
         if done:
             self._event(t, "contact", f"first sign of contact, {', '.join(done)}: {ev.describe()}")
 
-    def _preload_scale(self, t: float) -> float:
-        """The thrust scale of the preload at ``t`` (1 before the first sign of contact)."""
-        if self._sign_t is None or self.cfg.touchdown.preload == 0.0:
-            return 1.0
+    def _preload_shed(self, t: float) -> float:
+        """Advance the preload to ``t`` and return the thrust fraction it sheds [-].
+
+        From the first sign of contact the shed fraction moves at ``preload_rate`` towards
+        min(``preload``, (N + ``preload_lead``) / (m g)), N the estimated surface push: the
+        landers are handed only the load they are measured to take, plus a small lead. On
+        the surface N grows with the shed and the fraction climbs to ``preload``; after a
+        sign that came early (the landers still in the air, N about 0) it stays at the
+        lead's few per cent, and a vehicle that leaves the surface gets the thrust back."""
         td = self.cfg.touchdown
-        return 1.0 - min(td.preload_rate * (t - self._sign_t), td.preload)
+        if self._sign_t is None or td.preload == 0.0:
+            return 0.0
+        dt = max(t - self._shed_t, 0.0) if self._shed_t is not None else 0.0
+        self._shed_t = t
+        push = max(self._surface_force, 0.0)
+        target = min(td.preload, (push + td.preload_lead) / (self.mass * GRAVITY))
+        step = td.preload_rate * dt
+        self._shed += min(max(target - self._shed, -step), step)
+        return self._shed
 
     def _preloaded(self, ref: Reference, t: float) -> Reference:
-        """``ref`` with the preload's thrust scale."""
-        scale = self._preload_scale(t)
-        return ref if scale == 1.0 else dataclasses.replace(ref, thrust_scale=scale)
+        """``ref`` with the preload's thrust shed."""
+        shed = self._preload_shed(t)
+        return ref if shed == 0.0 else dataclasses.replace(ref, thrust_shed=shed)
 
     def _search_reference(self, t: float) -> Reference:
         """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
@@ -546,13 +565,12 @@ class MissionSupervisor:
             self.times["t_G"] = t
             self._enter(Phase.MOTORS_OFF, t, "landed: motors off (t_G)")
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
-        scale = self._scale_at_contact
-        if spin_down > 0.0:
-            scale *= max(1.0 - since / spin_down, 0.0)
+        scale = max(1.0 - since / spin_down, 0.0) if spin_down > 0.0 else 1.0
         return Reference(
             t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=self._hold.output,
             thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
             lateral_free=self._hold.lateral_free, thrust_scale=scale,
+            thrust_shed=self._shed_at_contact,
         )  # fmt: skip
 
     def _motors_off(self, t: float, est: StateEstimate) -> Reference:
