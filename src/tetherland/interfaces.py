@@ -180,6 +180,11 @@ class Reference:
         speeds by its square root, the wanted thrust and torque by it) [-]: the
         supervisor's spin-down on the surface before the motors go off
         (``mission.touchdown.spin_down_time``); 1 in flight.
+    thrust_shed : float
+        This fraction of the commanded total thrust, 0 to 1, is taken off every rotor
+        equally before ``thrust_scale`` applies, the torques kept [-]: the supervisor's
+        preload from the first sign of contact (``mission.touchdown.preload``); 0 in
+        flight.
     """
 
     t: float
@@ -193,6 +198,7 @@ class Reference:
     terminate: bool = False
     lateral_free: bool = False
     thrust_scale: float = 1.0
+    thrust_shed: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)

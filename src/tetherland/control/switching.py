@@ -3,7 +3,8 @@
 The supervisor makes the transfer bumpless by starting the next controller's reference at
 the current output (by flatness, the same output means the same nominal input); this
 controller dispatches on ``Reference.mode`` (and scales the command by
-``Reference.thrust_scale``, the spin-down before the motors go off), resets the controller
+``Reference.thrust_scale``, the spin-down before the motors go off, after taking
+``Reference.thrust_shed`` off the collective thrust, the preload before it), resets the controller
 it switches to (the DFL thrust extension starts at the last commanded thrust; from
 tethered flight the free-flight position integral starts at the force the tethered law was
 commanding) and records the command jump of every switch.
@@ -70,6 +71,23 @@ def scaled(command: Command, scale: float) -> Command:
     )
 
 
+def shed(command: Command, fraction: float, thrust_coefficient: float) -> Command:
+    """``command`` with ``fraction`` (clipped to 0-1) of its total thrust taken off every
+    rotor equally, each rotor thrust c_f w^2 staying >= 0: the roll, pitch and yaw torques
+    are kept (equal changes cancel in each), so the attitude keeps its full authority while
+    the collective thrust presses the vehicle onto its landers."""
+    p = min(max(float(fraction), 0.0), 1.0)
+    w = np.asarray(command.rotor_speeds, dtype=float)
+    f = thrust_coefficient * w * w
+    f_new = np.maximum(f - p * float(f.sum()) / 4.0, 0.0)
+    return Command(
+        rotor_speeds=np.sqrt(f_new / thrust_coefficient),
+        thrust=None if command.thrust is None else (1.0 - p) * command.thrust,
+        torque_B=command.torque_B,
+        diagnostics=command.diagnostics,
+    )
+
+
 class SwitchingController:
     """Dispatches to the free-flight or tethered controller by ``Reference.mode``.
 
@@ -86,6 +104,7 @@ class SwitchingController:
     def __init__(self, scenario: Scenario, tethered: str | Controller | None = None):
         self.free_flight = FreeFlightController(scenario)
         self.tethered = make_tethered_controller(scenario, tethered)
+        self._c_f = scenario.vehicle.thrust_coefficient
         self.mode: ControlMode | None = None
         self.last: Command | None = None
         self.switches: list[SwitchRecord] = []
@@ -113,6 +132,8 @@ class SwitchingController:
             cmd = self.tethered.update(t, estimate, reference)
         else:
             cmd = self.free_flight.update(t, estimate, reference)
+        if reference.thrust_shed > 0.0 and mode != ControlMode.MOTORS_OFF:
+            cmd = shed(cmd, reference.thrust_shed, self._c_f)
         if reference.thrust_scale < 1.0 and mode != ControlMode.MOTORS_OFF:
             cmd = scaled(cmd, reference.thrust_scale)
         if mode != self.mode and self.mode is not None and self.last is not None:

@@ -40,6 +40,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from tetherland import GRAVITY
 from tetherland.config import FaultKind, Scenario
 from tetherland.control.common import heading_of
 from tetherland.errors import TetherlandError
@@ -160,6 +161,11 @@ class MissionSupervisor:
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
+        self._sign_t: float | None = None  # time of the first sign of contact [s]
+        self._shed_at_contact = 0.0  # preload's thrust shed at the confirmed contact [-]
+        self._shed = 0.0  # preload's thrust shed now [-]
+        self._shed_t: float | None = None  # time of its last update [s]
+        self._surface_force = 0.0  # last estimated surface push of the contact rule [N]
         self._slack = ThresholdDwell(0.0, cfg.detection.slack_dwell)
         self._path = self._new_path(0.0, wp.start, free_hook=True)
         band = lift_off_band(scenario)
@@ -461,13 +467,14 @@ class MissionSupervisor:
     ) -> Reference:
         """Touchdown confirmed: hold the link at contact until the motors go off."""
         self.times["t_L"] = t
+        self._shed_at_contact = self._preload_shed(t)
         self._hold = contact_hold(self.cfg.contact, t, est, ref, int(Phase.TOUCHDOWN))
         assert decision.evidence is not None
         reason = f"contact {when} (t_L): {decision.evidence.describe()}"
         self._event(t, "touchdown", reason)
         if self.phase != Phase.TOUCHDOWN:
             self._enter(Phase.TOUCHDOWN, t, reason)
-        return self._hold
+        return dataclasses.replace(self._hold, thrust_shed=self._shed_at_contact)
 
     def _tethered_landing(self, t: float, est: StateEstimate) -> Reference:
         assert self._track is not None
@@ -489,7 +496,7 @@ class MissionSupervisor:
             self._search_start = t
             self._hold = None
             self._enter(Phase.TOUCHDOWN, t, "planned landing completed: guarded descent to contact")
-        return ref
+        return self._preloaded(ref, t)
 
     def _lateral(self, ref: Reference, release: bool) -> Reference:
         """``ref`` with the link azimuth left to gravity (``release``, the lateral release
@@ -509,18 +516,48 @@ class MissionSupervisor:
         landers, a vehicle slides along the surface wherever the sideways forces (a thrust
         tilted by the belief's surface error, the rotors' ground effect) leave it."""
         ev = decision.evidence
-        if (
-            self._delta_lock is None
-            and self.cfg.touchdown.lateral_lock
-            and self.cfg.touchdown.lateral_clearance > 0.0
-            and ev is not None
-            and ev.normal_force is not None
-            and ev.near
-            and ev.pressed
+        if ev is not None and ev.normal_force is not None:
+            self._surface_force = ev.normal_force
+        if self._sign_t is not None or not (
+            ev is not None and ev.normal_force is not None and ev.near and ev.pressed
             and est.link is not None
-        ):
+        ):  # fmt: skip
+            return
+        self._sign_t = t
+        td = self.cfg.touchdown
+        done = []
+        if td.lateral_lock and td.lateral_clearance > 0.0:
             self._delta_lock = est.link.delta
-            self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
+            done.append("link azimuth held")
+        if td.preload > 0.0:
+            done.append(f"thrust shed to {1.0 - td.preload:.2f} at {td.preload_rate:g}/s")
+        if done:
+            self._event(t, "contact", f"first sign of contact, {', '.join(done)}: {ev.describe()}")
+
+    def _preload_shed(self, t: float) -> float:
+        """Advance the preload to ``t`` and return the thrust fraction it sheds [-].
+
+        From the first sign of contact the shed fraction moves at ``preload_rate`` towards
+        min(``preload``, (N + ``preload_lead``) / (m g)), N the estimated surface push: the
+        landers are handed only the load they are measured to take, plus a small lead. On
+        the surface N grows with the shed and the fraction climbs to ``preload``; after a
+        sign that came early (the landers still in the air, N about 0) it stays at the
+        lead's few per cent, and a vehicle that leaves the surface gets the thrust back."""
+        td = self.cfg.touchdown
+        if self._sign_t is None or td.preload == 0.0:
+            return 0.0
+        dt = max(t - self._shed_t, 0.0) if self._shed_t is not None else 0.0
+        self._shed_t = t
+        push = max(self._surface_force, 0.0)
+        target = min(td.preload, (push + td.preload_lead) / (self.mass * GRAVITY))
+        step = td.preload_rate * dt
+        self._shed += min(max(target - self._shed, -step), step)
+        return self._shed
+
+    def _preloaded(self, ref: Reference, t: float) -> Reference:
+        """``ref`` with the preload's thrust shed."""
+        shed = self._preload_shed(t)
+        return ref if shed == 0.0 else dataclasses.replace(ref, thrust_shed=shed)
 
     def _search_reference(self, t: float) -> Reference:
         """The planned end with phi_d descending at touchdown_rate (guarded touchdown)."""
@@ -543,7 +580,7 @@ class MissionSupervisor:
                 depth = td.search_depth_deg
                 self.abort(t, est, f"fault: no contact within {depth:g} deg beyond phi*")
                 return self._free(t, est)
-            return ref
+            return self._preloaded(ref, t)
         since = t - self.times["t_L"]  # time on the surface, the spin-down under way [s]
         spin_down = cfg.touchdown.spin_down_time
         if since >= max(cfg.settle_time, spin_down):
@@ -555,6 +592,7 @@ class MissionSupervisor:
             t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=self._hold.output,
             thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
             lateral_free=self._hold.lateral_free, thrust_scale=scale,
+            thrust_shed=self._shed_at_contact,
         )  # fmt: skip
 
     def _motors_off(self, t: float, est: StateEstimate) -> Reference:
