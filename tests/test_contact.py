@@ -276,10 +276,11 @@ STUDY = ["tether.length=1.2", "tether.hook_drop=1.0"]
 
 
 def study_run(slope: float, seed: int | None = None, *, runs: int = 100,
-              index: int | None = None) -> Job:  # fmt: skip
+              index: int | None = None, extra: tuple[str, ...] = ()) -> Job:  # fmt: skip
     """The campaign job of the study (``runs`` per slope) whose per-run seed is ``seed``, or
-    whose run index is ``index``, at ``slope``."""
-    base = load_scenario("slope50", STUDY)
+    whose run index is ``index``, at ``slope``; ``extra`` overrides go on the study's
+    scenario (the draw is the same: it depends on the seeds only)."""
+    base = load_scenario("slope50", [*STUDY, *extra])
     spec = CampaignSpec(
         scenario=base.model_dump(mode="json"), runs=runs, methods=("tethered",),
         sweep=Sweep.parse("surface.slope_deg=20,35,50,60,70"), seed=2026,
