@@ -170,6 +170,37 @@ def test_a_killed_pool_worker_is_retried_and_every_result_comes_once(tmp_path):
     assert Path(marker).exists() and pool.restarts == 1
 
 
+def square(job: int) -> int:
+    return job * job
+
+
+def test_a_pool_that_breaks_between_two_waits_is_rebuilt_and_no_run_is_lost(monkeypatch):
+    """The race of a worker killed after the last wait: the pool is already broken when the
+    next run is submitted, so ``submit`` itself raises ``BrokenProcessPool`` (it raised out
+    of the campaign once). The run goes back to the queue, the pool is rebuilt, and every
+    job still yields exactly one result."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    pool = LocalPoolExecutor(2, retries=0)
+    submitted = {"n": 0}
+    first = pool._pool
+    real_submit = first.submit
+
+    def submit_then_break(*args, **kwargs):
+        submitted["n"] += 1
+        if submitted["n"] == 6:  # the pool "broke" after five runs went in
+            raise BrokenProcessPool("a child process terminated abruptly")
+        return real_submit(*args, **kwargs)
+
+    monkeypatch.setattr(first, "submit", submit_then_break)
+    try:
+        results = list(pool.map_unordered(square, range(10)))
+    finally:
+        pool.close()
+    assert sorted(results) == [j * j for j in range(10)]
+    assert pool.restarts == 1 and submitted["n"] == 6
+
+
 def test_a_run_whose_worker_dies_every_time_is_lost_after_its_retries(tmp_path):
     pool = LocalPoolExecutor(2, retries=1)
     lost: list[int] = []

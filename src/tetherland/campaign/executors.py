@@ -254,18 +254,25 @@ class LocalPoolExecutor:
         again: deque[tuple[int, Any, int]] = deque()  # (key, job, attempts) to run again
         pending: dict[Future, tuple[int, Any, int]] = {}
 
-        def refill() -> None:
-            # keep a bounded number in flight, so an interrupt abandons little work
+        def refill() -> bool:
+            """Keep a bounded number in flight, so an interrupt abandons little work.
+            True when the pool broke meanwhile (a worker died since the last wait): the
+            item goes back to the front, the pool is rebuilt below."""
             while len(pending) < 2 * self.workers:
                 item = again.popleft() if again else next(((k, j, 0) for k, j in keyed), None)
                 if item is None:
-                    return
-                pending[self._pool.submit(tracked, item[:2])] = item
+                    return False
+                try:
+                    pending[self._pool.submit(tracked, item[:2])] = item
+                except BrokenProcessPool:
+                    again.appendleft(item)
+                    return True
+            return False
 
-        refill()
-        while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            if not any(isinstance(f.exception(), BrokenProcessPool) for f in done):
+        broken = refill()
+        while pending or broken:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED) if pending else (set(), None)
+            if not broken and not any(isinstance(f.exception(), BrokenProcessPool) for f in done):
                 for fut in done:
                     key, job, attempts = pending.pop(fut)
                     if fut.exception() is None:
@@ -274,7 +281,7 @@ class LocalPoolExecutor:
                         raise fut.exception()  # type: ignore[misc]
                     else:  # fn raised, or its job or result could not be sent
                         yield lost(job, fut.exception())  # type: ignore[arg-type]
-                refill()
+                broken = refill()
                 continue
             # a worker died: every run in flight fails; collect them, rebuild the pool
             processes = dict(getattr(self._pool, "_processes", None) or {})
@@ -296,7 +303,7 @@ class LocalPoolExecutor:
                     yield lost(job, error)
             self._pool = self._new_pool()
             self.restarts += 1
-            refill()
+            broken = refill()
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
