@@ -93,7 +93,7 @@ def test_the_preload_follows_the_measured_surface_push():
     scenario = load_scenario("slope50", PRELOAD)
     td = scenario.mission.touchdown
     m_g = scenario.vehicle.mass * GRAVITY
-    sup = SimpleNamespace(cfg=scenario.mission, mass=scenario.vehicle.mass, _sign_t=10.0,
+    sup = SimpleNamespace(cfg=scenario.mission, mass=scenario.vehicle.mass, _press_t=10.0,
                           _shed=0.0, _shed_t=None, _surface_force=0.0)  # fmt: skip
     step = MissionSupervisor._preload_shed
 

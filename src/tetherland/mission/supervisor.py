@@ -162,6 +162,7 @@ class MissionSupervisor:
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._sign_t: float | None = None  # time of the first sign of contact [s]
+        self._press_t: float | None = None  # time the preload began (landers stopped) [s]
         self._shed_at_contact = 0.0  # preload's thrust shed at the confirmed contact [-]
         self._shed = 0.0  # preload's thrust shed now [-]
         self._shed_t: float | None = None  # time of its last update [s]
@@ -514,37 +515,54 @@ class MissionSupervisor:
         """End the lateral release at the first sign of contact: the landers near the
         believed surface and the surface force (or an impact) sensed. Hanging free on its
         landers, a vehicle slides along the surface wherever the sideways forces (a thrust
-        tilted by the belief's surface error, the rotors' ground effect) leave it."""
+        tilted by the belief's surface error, the rotors' ground effect) leave it.
+
+        The preload (``mission.touchdown.preload``) begins later, once the link has also
+        stopped descending (its estimated rate above -``contact.stall_rate_deg_s``): a
+        first sign can come while the landers are still a centimetre or so off the surface
+        (the estimated push faked by the approach), and shedding thrust then drives them
+        into it rocking (condition (3)); a link that the descending reference no longer
+        moves is held by something."""
         ev = decision.evidence
         if ev is not None and ev.normal_force is not None:
             self._surface_force = ev.normal_force
-        if self._sign_t is not None or not (
+        sign = (
             ev is not None and ev.normal_force is not None and ev.near and ev.pressed
             and est.link is not None
+        )  # fmt: skip
+        if not sign:
+            return
+        assert ev is not None and est.link is not None
+        td = self.cfg.touchdown
+        if (
+            self._press_t is None and td.preload > 0.0
+            and ev.link_rate > -math.radians(self.cfg.contact.stall_rate_deg_s)
         ):  # fmt: skip
+            self._press_t = t
+            self._event(
+                t, "contact",
+                f"landers stopped on the surface, thrust shed to {1.0 - td.preload:.2f} at "
+                f"{td.preload_rate:g}/s: {ev.describe()}",
+            )  # fmt: skip
+        if self._sign_t is not None:
             return
         self._sign_t = t
-        td = self.cfg.touchdown
-        done = []
         if td.lateral_lock and td.lateral_clearance > 0.0:
             self._delta_lock = est.link.delta
-            done.append("link azimuth held")
-        if td.preload > 0.0:
-            done.append(f"thrust shed to {1.0 - td.preload:.2f} at {td.preload_rate:g}/s")
-        if done:
-            self._event(t, "contact", f"first sign of contact, {', '.join(done)}: {ev.describe()}")
+            self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
 
     def _preload_shed(self, t: float) -> float:
         """Advance the preload to ``t`` and return the thrust fraction it sheds [-].
 
-        From the first sign of contact the shed fraction moves at ``preload_rate`` towards
-        min(``preload``, (N + ``preload_lead``) / (m g)), N the estimated surface push: the
-        landers are handed only the load they are measured to take, plus a small lead. On
-        the surface N grows with the shed and the fraction climbs to ``preload``; after a
-        sign that came early (the landers still in the air, N about 0) it stays at the
-        lead's few per cent, and a vehicle that leaves the surface gets the thrust back."""
+        From the start of the preload (:meth:`_lock_on_contact`) the shed fraction moves
+        at ``preload_rate`` towards min(``preload``, (N + ``preload_lead``) / (m g)), N the
+        estimated surface push: the landers are handed only the load they are measured to
+        take, plus a small lead. On the surface N grows with the shed and the fraction
+        climbs to ``preload``; after a start that came early (the landers still in the air,
+        N about 0) it stays at the lead's few per cent, and a vehicle that leaves the
+        surface gets the thrust back."""
         td = self.cfg.touchdown
-        if self._sign_t is None or td.preload == 0.0:
+        if self._press_t is None or td.preload == 0.0:
             return 0.0
         dt = max(t - self._shed_t, 0.0) if self._shed_t is not None else 0.0
         self._shed_t = t
