@@ -168,7 +168,7 @@ def test_the_lateral_release_ends_at_the_first_sign_of_contact():
     assert verdict["success"], verdict["reason"]
     log, truth = result.log, result.plant_scenario
     t, phase = log["t"], log["phase"].astype(int)
-    (sign,) = [e["t"] for e in log.events if e.get("kind") == "contact"]
+    (sign,) = [e["t"] for e in log.events if e.get("message", "").startswith("landers stopped")]
     held = (
         (t > sign + 0.01) & (phase >= int(Phase.TETHERED_LANDING)) & (phase <= int(Phase.TOUCHDOWN))
     )
@@ -191,8 +191,9 @@ def test_the_preload_holds_the_vehicle_against_a_gust_at_the_first_touch():
     """Sweep draw tethered-20-00000 (20 deg, seed 2026): before, a 0.46 N sideways gust from
     t = 33.48 s slid the vehicle 15.9 mm along the surface (condition (5): 1 cm) while the
     landers carried almost nothing, because the contact was confirmed only 1.5 s after its
-    first sign. Now the thrust is shed from that sign at ``mission.touchdown.preload_rate``
-    (following the measured surface push) up to ``preload``: the true thrust just before the
+    first sign. Now the thrust is shed from the moment the landers stopped on the surface
+    (link no longer descending) at ``mission.touchdown.preload_rate`` (following the
+    measured surface push) up to ``preload``: the true thrust just before the
     confirmation is well below the hover thrust before the sign, the true lander point
     moves less than condition (5)'s 1 cm along the surface from the first true touchdown to
     spin-up, every judged contact keeps condition (4), and the mission succeeds with
@@ -206,7 +207,7 @@ def test_the_preload_holds_the_vehicle_against_a_gust_at_the_first_touch():
     log, truth, belief = result.log, result.plant_scenario, result.belief_scenario
     td = belief.mission.touchdown
     t, phase = log["t"], log["phase"].astype(int)
-    (sign,) = [e["t"] for e in log.events if e.get("kind") == "contact"]
+    (sign,) = [e["t"] for e in log.events if e.get("message", "").startswith("landers stopped")]
     (t_L,) = [e["t"] for e in log.events if e.get("kind") == "touchdown"]
     assert t_L - sign > 0.5  # the confirmation still takes its time: the preload acts first
     # the true thrust before the sign against the thrust just before the confirmation
@@ -227,3 +228,33 @@ def test_the_preload_holds_the_vehicle_against_a_gust_at_the_first_touch():
     assert np.linalg.norm(along, axis=1).max() < truth.verdict.rest_slip
     tol = truth.verdict
     assert all(b["touchdown_accel_mps2"] <= tol.touchdown_accel for b in landing["bounces"])
+
+
+@pytest.mark.slow
+def test_the_preload_waits_for_the_landers_to_stop_on_the_surface():
+    """Sweep draw tethered-35-00014 (35 deg, seed 2026): the first sign of contact comes
+    while the landers are still 1.5 cm off the surface, the link descending at 4 deg/s
+    (the approach fakes a 0.44 N push). Shedding thrust from that sign drove the landers
+    into the surface at 0.34 rad/s (condition (3)). The preload now begins only once the
+    estimated link has stopped descending (rate above -``contact.stall_rate_deg_s``): that
+    happens after the first true touchdown (the plant's truth), the thrust before it is the
+    hover's, and the mission succeeds with conditions (1)-(5)."""
+    record, result = run_job(study_run(35.0, runs=20, index=14, extra=PRELOAD))
+    assert record["status"] == "ok", record.get("error")
+    verdict = result.verdict.summary
+    assert verdict["success"], verdict["reason"]
+    landing = verdict["landing"]
+    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    log, belief = result.log, result.belief_scenario
+    events = [e for e in log.events if e.get("kind") == "contact"]
+    (first,) = [e["t"] for e in events if e["message"].startswith("first sign")]
+    (press,) = [e["t"] for e in events if e["message"].startswith("landers stopped")]
+    assert first < landing["t_L"] - 0.1  # the early sign: landers still in the air
+    assert press >= landing["t_L"]  # the shed begins on the surface
+    t = log["t"]
+    thrust = log["rotor_thrusts"].sum(axis=1)
+    m_g = belief.vehicle.mass * GRAVITY
+    airborne = (t > first) & (t < landing["t_L"])
+    # no shed in the air: the rotors carry the weight less the cable's share, as before the sign
+    before = (t > first - 0.3) & (t < first)
+    assert thrust[airborne].min() > thrust[before].mean() - 0.05 * m_g
