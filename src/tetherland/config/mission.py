@@ -142,25 +142,27 @@ class TouchdownConfig(Section):
     ``overhang93``): pressed on a wall the vehicle creeps sideways on its own, the held
     azimuth's pull winds up against it, and when the touchdown hold lifts the landers it
     swings away (wall90 campaign run 375278728: 15 mm, 0.48 rad/s)."""
-    preload: float = Field(0.0, ge=0, lt=1)
-    """Preload (off by default; 0.3 is the value measured in docs/results.md, where it
-    fixes three sweep runs and breaks two: an early first sign makes the vehicle meet the
-    surface rocking, condition (3)): from the first sign of contact (as for
-    ``lateral_lock``) up to this fraction of the commanded total thrust is taken off every
-    rotor equally (as the measured surface push allows, ``preload_lead``), ramped in at
-    ``preload_rate`` (``Reference.thrust_shed``; the torques are kept), so the landers
-    carry part of the weight, and friction holds the vehicle against a sideways gust
-    (condition (5)), through the second or two the contact confirmation takes; the
-    spin-down then scales what is left to zero (0: off) [-]."""
+    preload: float = Field(0.3, ge=0, lt=1)
+    """Preload: once the landers have stopped on the surface (the first sign of contact,
+    as for ``lateral_lock``, and the estimated link no longer descending faster than
+    ``contact.stall_rate_deg_s``), up to this fraction of the commanded total thrust is
+    taken off every rotor equally (as the measured surface push allows, ``preload_lead``),
+    ramped in at ``preload_rate`` (``Reference.thrust_shed``; the torques are kept), so the
+    landers carry part of the weight, and friction holds the vehicle against a sideways
+    gust (condition (5)), through the second or two the contact confirmation takes; the
+    spin-down then scales what is left to zero. A first sign alone may come while the
+    landers are still a centimetre off the surface (an approach fakes the push): shedding
+    from it brought two sweep runs down rocking (condition (3)), hence the stall
+    (docs/results.md) (0: off) [-]."""
     preload_rate: float = Field(0.5, gt=0, le=100)
-    """Preload: the rate at which the thrust fraction is shed from the first sign of
-    contact; slow, because that sign may come a little before the true touch (a 0.1 s early
-    sign at 0.5 /s has shed 5 % at the touch) [1/s]."""
+    """Preload: the rate at which the thrust fraction is shed from its start; slow, so that
+    the landers take the load without a jolt (a fixed shed at 1/s made a sweep run drop
+    onto the surface, condition (4)) [1/s]."""
     preload_lead: float = Field(0.2, ge=0, le=100)
     """Preload: the shed thrust follows the estimated surface push (the contact rule's,
     ``contact.surface_force``) plus this lead, up to ``preload``: only as much load as the
-    landers are measured to take, so a first sign that comes before the true touch sheds
-    just the lead [N]."""
+    landers are measured to take, so a start that comes before the true touch sheds just
+    the lead [N]."""
     spin_down_time: float = Field(1.0, ge=0, le=10)
     """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
     zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or
