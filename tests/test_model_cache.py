@@ -91,9 +91,7 @@ def test_the_cached_model_is_the_fresh_compile_of_its_text_and_never_handed_out(
     assert (cache.stats.compiled, cache.stats.reused) == (1, 1)
 
 
-def test_every_change_that_enters_the_mjcf_compiles_a_new_model(
-    slope50, fresh_cache, monkeypatch
-):
+def test_every_change_that_enters_the_mjcf_compiles_a_new_model(slope50, fresh_cache, monkeypatch):
     """Keyed on the full MJCF text: a heavier vehicle, a longer cable, another slope each
     compile their own model, whose masses and geometry are theirs; the plants of perturbed
     draws (sensor noise, dropouts, a rotor fault: nothing in the MJCF) share one."""
