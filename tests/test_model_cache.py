@@ -162,3 +162,24 @@ def test_a_campaign_with_the_cache_equals_one_without(tmp_path, monkeypatch, fre
             assert names == [n for n in b.files if n != "__metadata__"] and len(names) > 20
             for name in names:
                 np.testing.assert_array_equal(a[name], b[name], err_msg=f"{r['run_id']} {name}")
+
+
+def test_provenance_asks_git_and_the_libraries_once_per_process(slope50, monkeypatch):
+    """The commit and the versions are read once (a subprocess and five metadata reads
+    per run otherwise); a caller's changes to its record never reach the next one."""
+    import subprocess
+
+    from tetherland import provenance as prov
+
+    prov._git_commit.cache_clear()
+    prov._library_versions.cache_clear()
+    calls = []
+    real_run = subprocess.run
+    monkeypatch.setattr(subprocess, "run", lambda *a, **k: calls.append(a) or real_run(*a, **k))
+    first = prov.provenance(slope50, seed=1)
+    first["libraries"]["numpy"] = "changed by a caller"
+    second = prov.provenance(slope50, seed=2)
+    assert [a[0][:2] for a in calls if a[0][0] == "git"] == [["git", "rev-parse"]]
+    assert second["git_commit"] == first["git_commit"]
+    assert second["libraries"]["numpy"] == np.__version__
+    assert second["seed"] == 2 and second["scenario_name"] == "slope50"
