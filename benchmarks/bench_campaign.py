@@ -11,6 +11,12 @@ the runs' own CPU (``cpu_time_s`` of their records, measured in the workers) plu
 share of what the runs do not contain (the workers' start-up: imports, compiled kernels
 loaded, planners built; the main process), which is printed on its own line.
 
+Per method also the simulated time per CPU second of its runs (the closed loop's real-time
+factor in CPU terms): a tethered run flies about 80 s, a contact-free run about 8 s, so the
+closed loop, not the start-up, decides the CPU per run. What each worker pays only once
+(imports, compiled kernels loaded, planners built, each distinct scene's MuJoCo model
+compiled: ``tetherland.sim.model_cache``) is in the start-up line.
+
 Equivalent command line: ``tetherland campaign slope50 --runs 20 --workers 2 --seed 1
 --out out/cpu --overwrite`` under ``/usr/bin/time -f %U+%S``.
 """
@@ -77,10 +83,13 @@ def _per_method(records: list[dict], cpu: float, workers: int) -> None:
     print(f"  outside the runs (worker start-up, main process): {overhead:.1f} s CPU "
           f"({overhead / workers:.1f} s per worker)")  # fmt: skip
     for method in sorted({r["method"] for r in records}):
-        own = [r["cpu_time_s"] for r in records if r["method"] == method]
-        ok = sum(bool(r["verdict"].get("success")) for r in records if r["method"] == method)
+        mine = [r for r in records if r["method"] == method]
+        own = [r["cpu_time_s"] for r in mine]
+        ok = sum(bool(r["verdict"].get("success")) for r in mine)
+        sim = sum(r["verdict"].get("sim_time_s") or 0.0 for r in mine)
         print(f"  {method:12s} {statistics.fmean(own) + overhead / n:5.2f} s CPU per run "
               f"(own {statistics.fmean(own):.2f}, least {min(own):.2f}, most {max(own):.2f}; "
+              f"{sim / len(mine):.1f} s simulated per run, {sim / sum(own):.1f} s per CPU s; "
               f"{ok}/{len(own)} succeeded)")  # fmt: skip
 
 

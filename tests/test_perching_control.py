@@ -150,3 +150,22 @@ def test_reference_cuts_the_motors_on_estimated_contact(traj20):
     r = ref.reference(0.5, touching)
     assert r.mode is ControlMode.MOTORS_OFF and ref.t_motors_off == 0.5
     assert "contact" in ref.events[-1].message
+
+
+def test_the_reference_rows_of_a_tick_are_the_samples_numbers(traj20):
+    """``reference_at`` (once per control tick) gives ``sample``'s rows and thrust bit for
+    bit: before the start, at the nodes, between substeps, at t_L and after it; the
+    continuation past t_L starts from the rows at t_L and is the same on every call."""
+    T = traj20.duration
+    times = np.concatenate(([-0.3, 0.0, T, T + 0.2], traj20.times, np.linspace(0.0, T, 157)))
+    for t in times:
+        rows, thrust = traj20.reference_at(float(t))
+        s = traj20.sample([t])
+        assert rows.shape == (5, 3)
+        np.testing.assert_array_equal(rows, s.p_W[0])
+        assert thrust == s.thrust[0]
+    end = traj20.sample([T]).p_W[0]
+    first = traj20.continuation(0.05)
+    np.testing.assert_array_equal(first[0], end[0] + end[1] * 0.05 + 0.5 * end[2] * 0.05**2)
+    np.testing.assert_array_equal(first[2], end[2])
+    np.testing.assert_array_equal(traj20.continuation(0.05), first)

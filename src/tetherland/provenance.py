@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import platform
 import subprocess
 import sys
@@ -18,7 +19,10 @@ if TYPE_CHECKING:
 _LIBRARIES = ("numpy", "scipy", "casadi", "mujoco", "pydantic")
 
 
+@functools.cache
 def _git_commit() -> str | None:
+    """The commit of this checkout, asked once per process (``git`` is a subprocess: a
+    campaign worker would otherwise pay it for every run)."""
     here = Path(__file__).resolve().parent
     try:
         out = subprocess.run(
@@ -36,6 +40,13 @@ def _git_commit() -> str | None:
 
 def library_versions() -> dict[str, str]:
     """Versions of the numerical libraries the results depend on."""
+    return dict(_library_versions())
+
+
+@functools.cache
+def _library_versions() -> dict[str, str]:
+    """Read once per process: the libraries a process has imported do not change under
+    it (a package installed meanwhile is not the one that computed its results)."""
     versions = {}
     for name in _LIBRARIES:
         try:

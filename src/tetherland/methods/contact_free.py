@@ -175,8 +175,7 @@ class PerchingReference:
             self._switch(t, PerchPhase.MOTORS_OFF, reason)
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase), yaw=self.yaw)
         if tau <= T:
-            s = self.trajectory.sample([tau])
-            rows, thrust = s.p_W[0], float(s.thrust[0])
+            rows, thrust = self.trajectory.reference_at(tau)
         else:
             rows, thrust = self.trajectory.continuation(tau - T), self._thrust_final
         return Reference(

@@ -50,6 +50,7 @@ from tetherland.sim.mjcf import (
     SceneLayout,
     build_mjcf,
 )
+from tetherland.sim.model_cache import compiled_model
 from tetherland.state import LinkState, RigidBodyState, link_state_of
 
 _BAD_STATE_WARNINGS = (
@@ -103,7 +104,8 @@ class Plant:
         self.scenario = scenario
         self.layout = SceneLayout.from_scenario(scenario)
         self.xml = build_mjcf(scenario, self.layout)
-        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        # compiled once per distinct MJCF in this process; this plant's own copy
+        self.model = compiled_model(self.xml)
         self.data = mujoco.MjData(self.model)
         m = self.model
         self._att_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "attachment")

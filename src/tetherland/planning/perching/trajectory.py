@@ -246,6 +246,7 @@ class FreeFlightTrajectory:
         )  # fmt: skip
         self.times, self.X, self.U = self._motion.times, self._motion.X, self._motion.U
         self.duration = self._motion.duration
+        self._touchdown_rows: FloatArray | None = None  # flat outputs at T (continuation)
 
     @classmethod
     def simulate(
@@ -265,16 +266,25 @@ class FreeFlightTrajectory:
         x, u = self._motion.states(times)
         return x.T.copy(), u.T.copy()
 
-    def sample(self, times: ArrayLike) -> FreeFlightSamples:
-        """Everything at ``times`` [s] (see :class:`FreeFlightSamples`)."""
-        meta = self.meta
+    def _masked_states(
+        self, times: ArrayLike
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Times (n,), states (n, 10), inputs (n, 2) and the mask of the times outside
+        [0, T], whose rates and inputs are zero (at rest before and after)."""
         t = np.atleast_1d(np.asarray(times, dtype=float))
         x, u = self.states(t)
         outside = (t < 0.0) | (t > self.duration)
         x[outside, 3:6] = 0.0
         x[outside, 7:10] = 0.0
         u[outside] = 0.0
-        n = len(t)
+        return t, x, u, outside
+
+    def _flat_rows(
+        self, x: FloatArray, u: FloatArray, outside: FloatArray
+    ) -> tuple[FloatArray, dict[str, FloatArray]]:
+        """Flat-output rows (n, 5, 3) [p, v, a, jerk, snap] in F_W of :meth:`_masked_states`,
+        and the planar derivatives they came from."""
+        meta = self.meta
         d = flat_derivatives(x.T, u.T, meta.mass, meta.inertia, meta.gravity)
         plane = np.stack(
             (x[:, 0:2].T, x[:, 3:5].T, d["acc"], d["jerk"], d["snap"]), axis=1
@@ -283,6 +293,23 @@ class FreeFlightTrajectory:
         A = meta.R_WA[:, [0, 2]]
         p_W = np.einsum("ij,jkn->nki", A, plane)
         p_W[:, 0, :] += meta.p_L
+        return p_W, d
+
+    def reference_at(self, t: float) -> tuple[FloatArray, float]:
+        """The (5, 3) flat-output rows in F_W and the collective thrust [N] at one time
+        ``t`` [s]: ``sample([t]).p_W[0]`` and ``sample([t]).thrust[0]``, the same numbers
+        by the same operations, without the rest of the sample (the perching reference
+        asks this every control tick of the maneuver)."""
+        _, x, u, outside = self._masked_states([t])
+        p_W, _ = self._flat_rows(x, u, outside)
+        return p_W[0], float(x[0, 6])
+
+    def sample(self, times: ArrayLike) -> FreeFlightSamples:
+        """Everything at ``times`` [s] (see :class:`FreeFlightSamples`)."""
+        meta = self.meta
+        t, x, u, outside = self._masked_states(times)
+        n = len(t)
+        p_W, d = self._flat_rows(x, u, outside)
         th = x[:, 2]
         c, s = np.cos(th), np.sin(th)
         R_y = np.zeros((n, 3, 3))
@@ -309,13 +336,16 @@ class FreeFlightTrajectory:
 
     def flat_outputs(self, t: float) -> FloatArray:
         """(5, 3) rows [p, v, a, jerk, snap] at ``t`` in F_W: ``Reference.p_W``."""
-        return self.sample([t]).p_W[0]
+        return self.reference_at(t)[0]
 
     def continuation(self, s: float) -> FloatArray:
         """(5, 3) flat-output rows ``s`` seconds after t_L with the touchdown thrust and
         attitude held (constant acceleration): the free flight that goes on towards the
         surface until contact when the vehicle is late [F_W]."""
-        end = self.flat_outputs(self.duration)
+        if self._touchdown_rows is None:
+            self._touchdown_rows = self.flat_outputs(self.duration)
+            self._touchdown_rows.setflags(write=False)
+        end = self._touchdown_rows
         s = max(0.0, float(s))
         rows = np.zeros((5, 3))
         rows[0] = end[0] + end[1] * s + 0.5 * end[2] * s * s
