@@ -64,6 +64,40 @@ class Scenario(Section):
     """The hook and the anchoring mechanism (docs/mechanism.md)."""
 
     @model_validator(mode="after")
+    def _magnet_mechanism(self) -> Scenario:
+        m = self.mechanism
+        if m.kind != "magnet":
+            return self
+        if abs(self.anchor.h_A - m.magnet_eye_height) > 1e-9:
+            raise ValueError(
+                f"anchor.h_A = {self.anchor.h_A:g} m must equal mechanism.plate_thickness + "
+                f"magnet_thickness = {m.magnet_eye_height:g} m for mechanism.kind = "
+                '"magnet" (the anchor is the cable\'s eye on the held magnet; h_A = 0 is '
+                "replaced by it)"
+            )
+        t = self.tether
+        if t.stiffness is None or t.segments > 0:
+            raise ValueError(
+                'mechanism.kind = "magnet" needs the massless elastic cable: a tether.material '
+                "other than ideal (or tether.axial_stiffness) and tether.segments = 0"
+            )
+        if m.boom_length >= t.length:
+            raise ValueError(
+                f"mechanism.boom_length = {m.boom_length:g} m must be < tether.length = "
+                f"{t.length:g} m (the cable from the attachment to the clipped magnet is slack)"
+            )
+        from tetherland.models.hook import magnet_reach_margin
+
+        margin = magnet_reach_margin(self)
+        if margin <= 0.0:
+            raise ValueError(
+                f"mechanism.boom_length = {m.boom_length:g} m at boom_angle_deg = "
+                f"{m.boom_angle_deg:g} reaches {-margin:g} m short of the vehicle's farthest "
+                "part along tether.approach_direction: the magnet must meet the surface first"
+            )
+        return self
+
+    @model_validator(mode="after")
     def _bar_mechanism(self) -> Scenario:
         m = self.mechanism
         if m.kind != "bar":

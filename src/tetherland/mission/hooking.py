@@ -36,7 +36,15 @@ from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.mission.paths import ZVShaper
-from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset, swing_period
+from tetherland.models.hook import (
+    bar_hook_offset,
+    bar_line_length,
+    hook_offset,
+    magnet_boom,
+    magnet_fold,
+    swing_period,
+    swing_period_magnet,
+)
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
@@ -94,8 +102,16 @@ def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) ->
 def scenario_hook_offset(scenario: Scenario, geometry: LandingGeometry) -> FloatArray:
     """Hook point minus attachment point of ``scenario``'s mechanism, level flight [m]:
     ``tether.hook_drop`` along n for the capture disk, the hanging hook beside the bar
-    (:func:`tetherland.models.hook.bar_hook_offset`) for the bar."""
+    (:func:`tetherland.models.hook.bar_hook_offset`) for the bar, the cable's eye on the
+    clipped magnet at the boom's tip (:func:`tetherland.models.hook.magnet_boom`, the
+    geometry the plant builds), folded as at the end of the pass (``press_depth``: the
+    pressed tip rises by :func:`tetherland.models.hook.magnet_fold` along the boom's tilt,
+    so the pass is aimed that much lower and the magnet lands on p_A) for the magnet."""
     t, m = scenario.tether, scenario.mechanism
+    if m.kind == "magnet":  # the eye where the pass ends: the boom folded by press_depth
+        boom = magnet_boom(scenario)
+        _, rise = magnet_fold(boom.length, boom.angle, m.press_depth)
+        return geometry.R_WA @ (boom.offset_B + rise * boom.w_B)
     if m.kind == "bar":
         line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
         return bar_hook_offset(geometry.R_WA[:, 0], line, m.hook_shank, m.pass_offset)
@@ -214,6 +230,8 @@ def shortest_leg(scenario: Scenario) -> float:
     smoothstep) that long leaves the hanging hook almost still, so that it passes beside
     the bar where the plan puts it."""
     m, t = scenario.mechanism, scenario.tether
+    if m.kind == "magnet":
+        return max(0.5, m.swing_periods * swing_period_magnet(t.length, m.magnet_thickness))
     if m.kind != "bar":
         return 0.5
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
@@ -226,6 +244,8 @@ def swing_shaper(scenario: Scenario) -> ZVShaper | None:
     (:func:`tetherland.models.hook.swing_period`), so that no move leaves it swinging;
     None otherwise."""
     m, t = scenario.mechanism, scenario.tether
+    if m.kind == "magnet":  # the released magnet hanging on the cable
+        return ZVShaper(swing_period_magnet(t.length, m.magnet_thickness))
     if m.kind != "bar":
         return None
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
@@ -267,9 +287,13 @@ def pass_overshoot(scenario: Scenario) -> float:
     """Hook-point distance beyond the anchor where the hooking pass ends [m]:
     ``mission.hooking.overshoot``, or ``mechanism.pass_depth`` for the bar (the crown that
     little below the bar's axis, the line meets the bar above the hook's eye as soon as
-    the vehicle flies toward the landing point, and the hook's arm passes under it)."""
+    the vehicle flies toward the landing point, and the hook's arm passes under it), or
+    ``mechanism.press_depth`` for the magnet (its face pressed on the plate, the boom
+    folding by about that much)."""
     if scenario.mechanism.kind == "bar":
         return scenario.mechanism.pass_depth
+    if scenario.mechanism.kind == "magnet":
+        return scenario.mechanism.press_depth
     return scenario.mission.hooking.overshoot
 
 
