@@ -48,6 +48,8 @@ from tetherland.models.hook import (
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
+SHORTEST_LEG = 0.5
+"""Shortest free-flight leg of the mission with nothing swinging under the vehicle [s]."""
 PIPE_SAMPLES = 9
 """Points along the pass at which a pipe's clearance is evaluated (a plane's is linear
 along the straight pass, so its ends suffice)."""
@@ -206,6 +208,24 @@ def unhooking_path(
     return [*corners, entry.copy(), start.copy()]
 
 
+def magnet_unfold_path(scenario: Scenario, hook_end_W: FloatArray,
+                       R_WA: FloatArray) -> list[FloatArray]:  # fmt: skip
+    """Centre-of-mass corners after the magnet's hooking pass, from its end ``hook_end_W``
+    (the boom folded by ``press_depth``, the magnet switched on), F_W [m].
+
+    First back along -n by the press and up along the boom's tilt w by the fold's rise
+    (:func:`tetherland.models.hook.magnet_fold`): the boom unfolds about a tip that stays
+    where the magnet holds (moved back along -n alone, the unfolding tip would drag the
+    clipped magnet down the plate by the rise); then straight back along -n by the press
+    again, which pulls the magnet out of its clip."""
+    m = scenario.mechanism
+    boom = magnet_boom(scenario)
+    _, rise = magnet_fold(boom.length, boom.angle, m.press_depth)
+    n_W, w_W = R_WA @ boom.n_B, R_WA @ boom.w_B
+    unfolded = np.asarray(hook_end_W, dtype=float) - m.press_depth * n_W + rise * w_W
+    return [unfolded, unfolded - m.press_depth * n_W]
+
+
 def check_pass(
     scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass
 ) -> HookingClearance:
@@ -231,11 +251,12 @@ def shortest_leg(scenario: Scenario) -> float:
     the bar where the plan puts it."""
     m, t = scenario.mechanism, scenario.tether
     if m.kind == "magnet":
-        return max(0.5, m.swing_periods * swing_period_magnet(t.length, m.magnet_thickness))
+        return max(SHORTEST_LEG,
+                   m.swing_periods * swing_period_magnet(t.length, m.magnet_thickness))
     if m.kind != "bar":
-        return 0.5
+        return SHORTEST_LEG
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
-    return max(0.5, m.swing_periods * swing_period(line, m.hook_shank))
+    return max(SHORTEST_LEG, m.swing_periods * swing_period(line, m.hook_shank))
 
 
 def swing_shaper(scenario: Scenario) -> ZVShaper | None:

@@ -58,6 +58,8 @@ from tetherland.mission.contact import (
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
+    SHORTEST_LEG,
+    magnet_unfold_path,
     lift_off_band,
     shortest_leg,
     swing_shaper,
@@ -133,8 +135,13 @@ class MissionSupervisor:
         wp = plan.waypoints
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
+        self._magnet = scenario.mechanism.kind == "magnet"
+        self._magnet_on = False
         self._min_leg = shortest_leg(scenario)
         self._shaper = swing_shaper(scenario)
+        if self._magnet:  # clipped on its boom until released: nothing swings before
+            self._hanging = (self._min_leg, self._shaper)
+            self._min_leg, self._shaper = SHORTEST_LEG, None
         self._climb_slack: np.ndarray | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
         self._takeoff_height = takeoff_height(scenario)
@@ -200,6 +207,17 @@ class MissionSupervisor:
         self._event(0.0, "phase", f"start: {self.phase.name.lower()}")
 
     # ------------------------------------------------------------------ helpers
+    @property
+    def magnet_on(self) -> bool:
+        """The EPM command of the magnet mechanism (``MagnetCommander``): on from the end
+        of a hooking pass until the release after the takeoff [-]."""
+        return self._magnet_on
+
+    def _switch_magnet(self, t: float, on: bool, why: str) -> None:
+        if self._magnet and on != self._magnet_on:
+            self._magnet_on = on
+            self._event(t, "magnet", f"EPM {'on' if on else 'off'}: {why}")
+
     def _event(self, t: float, kind: str, message: str) -> None:
         self.events.append(EventRecord(t=t, source="mission", kind=kind, message=message))
 
@@ -429,7 +447,14 @@ class MissionSupervisor:
                 # drop under the bar on pipe60)
                 x = np.array([*self.geo.R_WA[:2, 0], 0.0])
                 self._path.to(wp.hook_end + 2.0 * m.pass_offset * x / np.linalg.norm(x))
+            if self._magnet:
+                # back along -n and up by the fold's rise: the boom unfolds with its tip
+                # (the magnet, held) still, the clip is not dragged along the plate; then
+                # straight back until the clip lets go
+                for corner in magnet_unfold_path(self.scenario, wp.hook_end, self.geo.R_WA):
+                    self._path.to(corner)
             self._path.to(wp.slack_out).to(wp.stretch, speed=cfg.stretch.speed)
+            self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
@@ -453,6 +478,7 @@ class MissionSupervisor:
             if self.hook_attempts >= cfg.hooking.max_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
                 return self._free(t, est)
+            self._switch_magnet(t, False, "no tension: the magnet did not hold, retrying")
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
                 self._new_path(t, est.body.p_W, free_hook=True)
@@ -648,6 +674,8 @@ class MissionSupervisor:
                 self._release_pull.freeze(t, est, slack)
             if self.scenario.mechanism.kind == "bar":
                 return self._climb_away(t, est, slack)
+            if self._magnet:
+                return self._drop_magnet(t, est, slack)
             # the reverse pass, no deeper than mission.hooking.unhook_depth
             *corners, last = unhooking_path(
                 slack, wp.unhook_entry, wp.hook_start, self._unhook_reach,
@@ -658,6 +686,22 @@ class MissionSupervisor:
                 self._path.to(p)
             self._path.to(last, pause=cfg.settle_time)
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
+        return self._free(t, est)
+
+    def _drop_magnet(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
+        """Magnet mechanism, the cable slack: the EPM off, the magnet drops off the plate
+        and hangs on the cable. The vehicle holds one swing period at the slack point
+        (the magnet falls and swings clear of the plate), then flies out to the hooking
+        start on a leg shaped at the hanging magnet's swing period, as every leg after it
+        (:func:`~tetherland.mission.hooking.swing_shaper`): no move adds to its swing."""
+        wp, cfg = self.wp, self.cfg
+        self._switch_magnet(t, False, "cable slack after the takeoff: releasing the magnet")
+        self._min_leg, self._shaper = self._hanging
+        assert self._shaper is not None
+        self._path = self._new_path(t, slack, cfg.hooking.speed, free_hook=True).to(
+            wp.hook_start, pause=cfg.settle_time)
+        self._path.delay(self._shaper.period)
+        self._enter(Phase.UNHOOK, t, "EPM off: the magnet released, hanging on the cable")
         return self._free(t, est)
 
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:

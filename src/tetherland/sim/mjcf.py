@@ -595,6 +595,9 @@ def add_anchoring_cable(scene: SceneXml) -> None:
 MAGNET_SHELL_BIT = 16
 """Contact bit of the magnet's shell: the ground and the surface get it in their
 conaffinity (:func:`add_magnet`); the plate does not."""
+MAGNET_GAP = 0.002
+"""Largest gap between the magnet's face and the plate across which the energised EPM
+still pulls (its force falls steeply with the gap; here it is all or nothing) [m]."""
 BOOM_MASS = 0.01
 """Mass of the folding boom (a 4 mm carbon tube and its hinge) [kg]."""
 BOOM_RADIUS = 0.004
@@ -697,7 +700,12 @@ def add_magnet(scene: SceneXml) -> None:
     _sub(body, "site", name="magnet_eye", pos=_fmt((0.0, 0.0, -h)), size="0.005", group="4")
     _sub(body, "site", name="magnet_face", pos=_fmt((0.0, 0.0, h)), size="0.005", group="4")
     contact = scene.section("contact")
+    # the EPM pulls across a gap (MAGNET_GAP): contacts within it are found (margin) but
+    # push only once the face touches (gap), and MuJoCo's adhesion acts on them; with no
+    # gap a face rocking flat on the plate lost every contact for a step, and with it the
+    # whole holding force, and fell 3.5 cm
     _sub(contact, "pair", name="magnet_plate", geom1="magnet_face", geom2="plate", condim="3",
+         margin=f"{MAGNET_GAP:.12g}", gap=f"{MAGNET_GAP:.12g}",
          friction=f"{m.magnet_friction:.12g} {m.magnet_friction:.12g} 0.005 0.0001 0.0001",
          **magnet_contact(sc))  # fmt: skip
     equality = scene.section("equality")
@@ -832,10 +840,34 @@ def add_vehicle(scene: SceneXml) -> None:
     scene.vehicle = body
     _sub(body, "freejoint", name="vehicle_free")
     mech = scene.scenario.mechanism
-    # with the magnet, vehicle.mass is the whole flying robot: its boom and magnet included
-    carried = BOOM_MASS + mech.magnet_mass if mech.kind == "magnet" else 0.0
-    _sub(body, "inertial", pos="0 0 0", mass=f"{v.mass - carried:.12g}",
-         diaginertia=_fmt(v.inertia))  # fmt: skip
+    com = np.zeros(3)
+    carried = 0.0
+    if mech.kind == "magnet":
+        # vehicle.mass is the whole flying robot, its boom and magnet included; the frame
+        # is balanced (a counterweight) for the boom and half the magnet's moment, so the
+        # centre of mass is off by the same +-half the magnet's moment whether the magnet
+        # is on its clip or left on the plate
+        from tetherland.models.hook import magnet_boom
+
+        boom = magnet_boom(scene.scenario)
+        carried = BOOM_MASS + mech.magnet_mass
+        moment = BOOM_MASS * 0.5 * (boom.hinge_B + boom.eye_B) + 0.5 * mech.magnet_mass * (
+            boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B)
+        com = -moment / (v.mass - carried)
+        # and vehicle.inertia is the whole robot's: the frame's is less the boom's and the
+        # clipped magnet's (points at their centres) and its own offset's
+        inertia = np.diag(np.asarray(v.inertia, dtype=float))
+        for mass, r in ((BOOM_MASS, 0.5 * (boom.hinge_B + boom.eye_B)),
+                        (mech.magnet_mass, boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B),
+                        (v.mass - carried, com)):  # fmt: skip
+            inertia -= mass * (float(r @ r) * np.eye(3) - np.outer(r, r))
+        # (the principal moments only: the frame alone cannot also cancel the boom's
+        # product of inertia and stay a physical body; the whole keeps J_xz of 2e-3)
+        _sub(body, "inertial", pos=_fmt(com), mass=f"{v.mass - carried:.12g}",
+             diaginertia=_fmt(np.diag(inertia)))  # fmt: skip
+    else:
+        _sub(body, "inertial", pos=_fmt(com), mass=f"{v.mass - carried:.12g}",
+             diaginertia=_fmt(v.inertia))  # fmt: skip
     _sub(body, "site", name="imu", pos="0 0 0", size="0.01", group="4")
     _sub(
         body,
