@@ -786,6 +786,9 @@ class MagnetCable(ElasticCable):
         hinge = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, "boom_hinge")
         self._hinge_q, self._hinge_v = int(model.jnt_qposadr[hinge]), int(model.jnt_dofadr[hinge])
         self._tip = mujoco.mj_name2id(model, obj.mjOBJ_SITE, "boom_tip")
+        gimbal = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, "gimbal")
+        self._gimbal_q = int(model.jnt_qposadr[gimbal])
+        self._gimbal_v = int(model.jnt_dofadr[gimbal])
         self._contact = int(model.sensor_adr[mujoco.mj_name2id(model, obj.mjOBJ_SENSOR,
                                                                "magnet_plate")])  # fmt: skip
         self._half = 0.5 * mech.magnet_thickness
@@ -870,6 +873,9 @@ class MagnetCable(ElasticCable):
         m, d = self._model, self._data
         d.qpos[self._hinge_q] = 0.0
         d.qvel[self._hinge_v] = 0.0
+        g = self._gimbal_q
+        d.qpos[g : g + 4] = (1.0, 0.0, 0.0, 0.0)
+        d.qvel[self._gimbal_v : self._gimbal_v + 3] = 0.0
         mujoco.mj_kinematics(m, d)
         if on_plate:
             z = -self._z_S

@@ -602,15 +602,28 @@ BOOM_MASS = 0.01
 """Mass of the folding boom (a 4 mm carbon tube and its hinge) [kg]."""
 BOOM_RADIUS = 0.004
 """Radius of the boom's capsule [m]."""
+SOCKET_MASS = 0.001
+"""Mass of the clip's socket on the boom's tip [kg]."""
+GIMBAL_STIFFNESS = 0.05
+"""Centring spring of the socket's gimbal [N m/rad]: the clipped magnet's weight, 7.5 mm
+ahead of it, tilts it 0.05 rad; the plate's push on one edge of a pressed face (a newton
+2 cm off its centre) turns it flat."""
+GIMBAL_DAMPING = 1e-4
+"""Damping of the socket's gimbal [N m s/rad]."""
+GIMBAL_ARMATURE = 1e-6
+"""Armature of the socket's gimbal (alone after the clip let go, the 1 g socket on a
+0.05 N m/rad spring swings at w dt = 0.2 at 1 ms) [kg m^2]."""
 
 
 def magnet_contact(scenario: Scenario) -> dict[str, str]:
     """``solref``/``solimp`` of the magnet's face on the plate: time constant two physics
-    steps (MuJoCo's floor), impedance 0.99 throughout. Held by a force f, the face sinks
-    r = f (1 - d) A tau^2 (d the impedance, A the magnet's inverse mass, tau the time
-    constant, critical damping): 0.2 mm for 150 N on 30 g at a 1 ms step."""
+    steps (MuJoCo's floor), impedance 0.999 throughout. Held by a force f, the face sinks
+    r = f (1 - d) A tau^2 (d the impedance, A the inverse inertia at the contact, tau the
+    time constant, critical damping): 0.02 mm for 150 N on a 30 g face lying flat; on
+    one edge (A about 120/kg: the magnet turns about it) 0.07 mm, where at d = 0.99 a
+    rocking magnet's edge went 3.6 mm into the plate."""
     tau = 2.0 * scenario.sim.timestep
-    return {"solref": _fmt((tau, 1.0)), "solimp": "0.99 0.99 0.001"}
+    return {"solref": _fmt((tau, 1.0)), "solimp": "0.999 0.999 0.001"}
 
 
 def add_steel_plate(scene: SceneXml) -> None:
@@ -657,8 +670,14 @@ def add_boom(scene: SceneXml) -> None:
     _sub(body, "geom", name="boom", class_="collision", type="capsule",
          size=f"{BOOM_RADIUS:.12g}", fromto=_fmt(np.concatenate((np.zeros(3), tip))),
          material="frame", group="1")  # fmt: skip
-    _sub(body, "site", name="boom_tip", pos=_fmt(tip), quat=_quat_z_to(boom.n_B), size="0.005",
-         group="4")
+    # the socket the magnet is clipped into: on a spring-centred gimbal at the tip (a ball
+    # joint), so a magnet pressed on the plate by a folded boom turns flat on it
+    socket = _sub(body, "body", name="socket", pos=_fmt(tip), quat=_quat_z_to(boom.n_B))
+    _sub(socket, "joint", name="gimbal", type="ball", stiffness=f"{GIMBAL_STIFFNESS:.12g}",
+         damping=f"{GIMBAL_DAMPING:.12g}", armature=f"{GIMBAL_ARMATURE:.12g}")
+    _sub(socket, "inertial", pos="0 0 0", mass=f"{SOCKET_MASS:.12g}",
+         diaginertia=_fmt((1e-8, 1e-8, 1e-8)))  # fmt: skip
+    _sub(socket, "site", name="boom_tip", pos="0 0 0", size="0.005", group="4")
 
 
 def add_magnet(scene: SceneXml) -> None:
@@ -694,9 +713,11 @@ def add_magnet(scene: SceneXml) -> None:
     _sub(body, "geom", name="magnet_face", type="box", size=size, contype="0", conaffinity="0",
          mass="0", rgba=".3 .3 .35 1", group="1")  # fmt: skip
     shell = _sub(body, "body", name="magnet_shell")
+    # (priority over the ground's and the surface's: its contacts as stiff as the plate's,
+    # a released magnet swinging into the rock sank 2 mm into it at their 5 ms)
     _sub(shell, "geom", name="magnet_shell", type="box", size=size,
-         contype=str(MAGNET_SHELL_BIT), conaffinity="0", condim="3", mass="0",
-         friction=friction, rgba=".3 .3 .35 0", group="3")  # fmt: skip
+         contype=str(MAGNET_SHELL_BIT), conaffinity="0", condim="3", mass="0", priority="2",
+         friction=friction, rgba=".3 .3 .35 0", group="3", **magnet_contact(sc))  # fmt: skip
     _sub(body, "site", name="magnet_eye", pos=_fmt((0.0, 0.0, -h)), size="0.005", group="4")
     _sub(body, "site", name="magnet_face", pos=_fmt((0.0, 0.0, h)), size="0.005", group="4")
     contact = scene.section("contact")
@@ -709,7 +730,7 @@ def add_magnet(scene: SceneXml) -> None:
          friction=f"{m.magnet_friction:.12g} {m.magnet_friction:.12g} 0.005 0.0001 0.0001",
          **magnet_contact(sc))  # fmt: skip
     equality = scene.section("equality")
-    _sub(equality, "weld", name="clip", body1="magnet", body2="boom", active="true",
+    _sub(equality, "weld", name="clip", body1="magnet", body2="socket", active="true",
          solref=_fmt((2.0 * sc.sim.timestep, 1.0)), solimp="0.99 0.999 0.001")
     for name in ("ground", "surface"):
         g = scene.world.find(f"geom[@name='{name}']")
