@@ -10,6 +10,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from penetration import assert_nothing_behind_surfaces
 
 from tetherland import GRAVITY
 from tetherland.config import load_scenario
@@ -281,7 +282,6 @@ def test_wall90_mission_with_the_magnet() -> None:
     """Closed loop: the robot presses, switches on, lands, takes off and switches off on
     what it measures only; the judge (truth) rules a success; the plant records the catch
     and the release from the contact and the EPM."""
-    from tests.penetration import assert_nothing_behind_surfaces
     from tetherland.runs import run_mission
 
     s = load_scenario("wall90", ["mechanism.kind=magnet"])

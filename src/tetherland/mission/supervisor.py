@@ -59,8 +59,8 @@ from tetherland.mission.contact import (
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
     SHORTEST_LEG,
-    magnet_unfold_path,
     lift_off_band,
+    magnet_unfold_path,
     shortest_leg,
     swing_shaper,
     takeoff_height,
