@@ -10,8 +10,8 @@ import math
 import mujoco
 import numpy as np
 import pytest
-from penetration import assert_nothing_behind_surfaces
 
+from penetration import assert_nothing_behind_surfaces
 from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
