@@ -4,7 +4,6 @@ here from the configuration."""
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import mujoco
@@ -12,6 +11,7 @@ import numpy as np
 import pytest
 
 from penetration import assert_nothing_behind_surfaces
+from prescribed import drive
 from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
@@ -39,22 +39,9 @@ def _body(plant: Plant, name: str) -> int:
 
 def _drive(plant: Plant, q: np.ndarray, points: list[np.ndarray], speed: float,
            hold: float, each=None) -> None:  # fmt: skip
-    """Prescribed motion of the level vehicle through ``points`` at ``speed``, then held."""
-    d = plant.data
-    for a, b in itertools.pairwise(points):
-        n = max(1, round(float(np.linalg.norm(b - a)) / speed / plant.dt))
-        v = (b - a) / (n * plant.dt)
-        for i in range(n):
-            d.qpos[0:3], d.qpos[3:7] = a + (i + 1) / n * (b - a), q
-            d.qvel[0:3], d.qvel[3:6] = v, 0.0
-            plant.step(1)
-            if each is not None:
-                each()
-    for _ in range(round(hold / plant.dt)):
-        d.qpos[0:3], d.qpos[3:7], d.qvel[0:6] = points[-1], q, 0.0
-        plant.step(1)
-        if each is not None:
-            each()
+    """Prescribed motion of the level vehicle through ``points`` at ``speed``, then held;
+    ``each()`` after every step."""
+    drive(plant, points, speed, hold, None if each is None else lambda _: each(), q)
 
 
 def _magnet_depth(plant: Plant) -> float:
