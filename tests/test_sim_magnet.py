@@ -282,8 +282,9 @@ def test_wall90_mission_with_the_magnet() -> None:
     t = log["t"]
     held = (t >= phases["tethered_landing"]["start"]) & (t < phases["release"]["start"])
     p_A = Plant(s).layout.geometry.p_A
-    # held still where the pass put it (2 cm low at 0.5 m/s of tracking: the robot's
-    # anchor check allows mission.detection.anchor_length_error)
+    # held still where the pass put it: about 2 cm low (the position loop yields about
+    # 1.5 cm to the folding boom's push, the boom folds less and its tip rises less than
+    # planned; docs), within the robot's anchor check
     eye = log["hook_p_W"][held]
     assert float(np.max(np.ptp(eye, axis=0))) < 0.001
     assert float(np.max(np.linalg.norm(eye - p_A, axis=1))) < (
