@@ -129,6 +129,11 @@ class MechanismConfig(Section):
     coefficient is below tan(angle) (at 30 deg and 0.5 it locked: a 126 N impact) [deg]."""
     boom_stiffness: float = Field(1.0, gt=0, le=1000)
     """Stiffness of the boom's hinge spring, unfolded at its stop [N m/rad]."""
+    boom_preload: float = Field(0.2, ge=0, le=100)
+    """Torque with which the hinge spring holds the unfolded boom on its stop: the boom
+    folds only when the push on the magnet turns it harder, and stays rigid in flight
+    (unloaded, its 40 g swung off the stop at a pitch acceleration of about 17 rad/s^2,
+    and the robot's rotor fault monitor stopped the flight) [N m]."""
     boom_damping: float = Field(0.05, ge=0, le=100)
     """Damping of the boom's hinge [N m s/rad]."""
     boom_fold_deg: float = Field(60.0, ge=5, le=120)
@@ -139,7 +144,8 @@ class MechanismConfig(Section):
     the moments) [N]."""
     press_depth: float = Field(0.02, gt=0, le=0.2)
     """Depth of the magnet's eye beyond the anchor where the hooking pass ends (replaces
-    ``mission.hooking.overshoot`` for the magnet): the boom folds by about that much [m]."""
+    ``mission.hooking.overshoot`` for the magnet): the position loop presses the magnet on
+    the plate; the boom folds only if the vehicle pushes harder than its preload [m]."""
     catch_time: float = Field(0.05, gt=0, le=1)
     """The plant records the magnet as caught (log column ``hook``) once it has touched
     the plate energised for this long, and as released as soon as it is off or does not

@@ -41,7 +41,6 @@ from tetherland.models.hook import (
     bar_line_length,
     hook_offset,
     magnet_boom,
-    magnet_fold,
     swing_period,
     swing_period_magnet,
 )
@@ -105,15 +104,13 @@ def scenario_hook_offset(scenario: Scenario, geometry: LandingGeometry) -> Float
     """Hook point minus attachment point of ``scenario``'s mechanism, level flight [m]:
     ``tether.hook_drop`` along n for the capture disk, the hanging hook beside the bar
     (:func:`tetherland.models.hook.bar_hook_offset`) for the bar, the cable's eye on the
-    clipped magnet at the boom's tip (:func:`tetherland.models.hook.magnet_boom`, the
-    geometry the plant builds), folded as at the end of the pass (``press_depth``: the
-    pressed tip rises by :func:`tetherland.models.hook.magnet_fold` along the boom's tilt,
-    so the pass is aimed that much lower and the magnet lands on p_A) for the magnet."""
+    clipped magnet at the unfolded boom's tip (:func:`tetherland.models.hook.magnet_boom`,
+    the geometry the plant builds) for the magnet: the boom stays on its stop in a nominal
+    pass (the position loop yields to the magnet's push on the plate long before the
+    boom's preload does), and folds only when pushed harder."""
     t, m = scenario.tether, scenario.mechanism
-    if m.kind == "magnet":  # the eye where the pass ends: the boom folded by press_depth
-        boom = magnet_boom(scenario)
-        _, rise = magnet_fold(boom.length, boom.angle, m.press_depth)
-        return geometry.R_WA @ (boom.offset_B + rise * boom.w_B)
+    if m.kind == "magnet":  # the eye on the unfolded boom's tip
+        return geometry.R_WA @ magnet_boom(scenario).offset_B
     if m.kind == "bar":
         line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
         return bar_hook_offset(geometry.R_WA[:, 0], line, m.hook_shank, m.pass_offset)
@@ -208,22 +205,21 @@ def unhooking_path(
     return [*corners, entry.copy(), start.copy()]
 
 
-def magnet_unfold_path(scenario: Scenario, hook_end_W: FloatArray,
-                       R_WA: FloatArray) -> list[FloatArray]:  # fmt: skip
+def magnet_pull_out_path(scenario: Scenario, hook_end_W: FloatArray,
+                         R_WA: FloatArray) -> list[FloatArray]:  # fmt: skip
     """Centre-of-mass corners after the magnet's hooking pass, from its end ``hook_end_W``
-    (the boom folded by ``press_depth``, the magnet switched on), F_W [m].
-
-    First back along -n by the press and up along the boom's tilt w by the fold's rise
-    (:func:`tetherland.models.hook.magnet_fold`): the boom unfolds about a tip that stays
-    where the magnet holds (moved back along -n alone, the unfolding tip would drag the
-    clipped magnet down the plate by the rise); then straight back along -n by the press
-    again, which pulls the magnet out of its clip."""
+    (the magnet switched on, held by the plate), F_W [m]: straight back along -n to
+    where the magnet's eye is ``press_depth`` plus half the cable's slack behind the
+    unfolded boom's tip, which pulls the magnet out of its clip along its axis (moved
+    sideways instead, the clip would drag the held magnet along the plate). The slack
+    d_max = sqrt(l^2 - L^2 sin^2 beta) - L cos beta is how far the vehicle can back off
+    along -n from the eye on the tip before the cable (length l) comes taut."""
     m = scenario.mechanism
     boom = magnet_boom(scenario)
-    _, rise = magnet_fold(boom.length, boom.angle, m.press_depth)
-    n_W, w_W = R_WA @ boom.n_B, R_WA @ boom.w_B
-    unfolded = np.asarray(hook_end_W, dtype=float) - m.press_depth * n_W + rise * w_W
-    return [unfolded, unfolded - m.press_depth * n_W]
+    L, beta = boom.length, boom.angle
+    slack = math.sqrt(scenario.tether.length**2 - (L * math.sin(beta)) ** 2) - L * math.cos(beta)
+    n_W = R_WA @ boom.n_B
+    return [np.asarray(hook_end_W, dtype=float) - (m.press_depth + 0.5 * slack) * n_W]
 
 
 def check_pass(

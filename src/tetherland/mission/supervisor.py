@@ -60,7 +60,7 @@ from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
     SHORTEST_LEG,
     lift_off_band,
-    magnet_unfold_path,
+    magnet_pull_out_path,
     shortest_leg,
     swing_shaper,
     takeoff_height,
@@ -447,11 +447,8 @@ class MissionSupervisor:
                 # drop under the bar on pipe60)
                 x = np.array([*self.geo.R_WA[:2, 0], 0.0])
                 self._path.to(wp.hook_end + 2.0 * m.pass_offset * x / np.linalg.norm(x))
-            if self._magnet:
-                # back along -n and up by the fold's rise: the boom unfolds with its tip
-                # (the magnet, held) still, the clip is not dragged along the plate; then
-                # straight back until the clip lets go
-                for corner in magnet_unfold_path(self.scenario, wp.hook_end, self.geo.R_WA):
+            if self._magnet:  # straight back first: out of the clip, not along the plate
+                for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
                     self._path.to(corner)
             self._path.to(wp.slack_out).to(wp.stretch, speed=cfg.stretch.speed)
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")

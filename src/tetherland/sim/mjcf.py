@@ -647,8 +647,9 @@ def add_steel_plate(scene: SceneXml) -> None:
 def add_boom(scene: SceneXml) -> None:
     """The magnet mechanism's folding boom on the vehicle
     (:class:`tetherland.models.hook.MagnetBoom`): the body ``boom`` hinged at the cable
-    attachment point about n x w (joint ``boom_hinge``, the spring ``boom_stiffness`` at
-    rest at its stop 0, ``boom_damping``, folding up to ``boom_fold_deg``), a capsule to
+    attachment point about n x w (joint ``boom_hinge``, the spring ``boom_stiffness``
+    holding it on its stop 0 with ``boom_preload``, ``boom_damping``, folding up to
+    ``boom_fold_deg``), a capsule to
     the site ``boom_tip`` at the cable's eye of the clipped magnet (the vehicle's contact
     class: it touches the environment, not the vehicle)."""
     from tetherland.models.hook import magnet_boom
@@ -661,7 +662,7 @@ def add_boom(scene: SceneXml) -> None:
     _sub(body, "joint", name="boom_hinge", type="hinge", axis=_fmt(boom.axis_B),
          range=_fmt((0.0, math.radians(m.boom_fold_deg))), limited="true",
          stiffness=f"{m.boom_stiffness:.12g}", damping=f"{m.boom_damping:.12g}",
-         springref="0")  # fmt: skip
+         springref=f"{-m.boom_preload / m.boom_stiffness:.12g}")  # fmt: skip
     tip = boom.offset_B
     L = boom.length
     i_t = BOOM_MASS * L * L / 12.0
