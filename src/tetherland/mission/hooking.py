@@ -222,6 +222,30 @@ def magnet_pull_out_path(scenario: Scenario, hook_end_W: FloatArray,
     return [np.asarray(hook_end_W, dtype=float) - (m.press_depth + 0.5 * slack) * n_W]
 
 
+DROP_CLEARANCE = 0.05
+"""Horizontal clearance of the empty boom's tip from the surface at the drop point [m]."""
+
+
+def magnet_drop_point(scenario: Scenario, geometry: LandingGeometry,
+                      p_att_W: FloatArray) -> FloatArray:  # fmt: skip
+    """Attachment point from which the robot lets go of the magnet held at p_A, F_W [m]:
+    out from p_A, horizontally along the slack point ``p_att_W``'s side, by the boom's
+    reach to the magnet's face plus :data:`DROP_CLEARANCE` (at the slack point the empty
+    boom's tip grazed the wall, and every touch folded it and rocked the vehicle), and
+    above p_A with the cable at 95 % of its length (if it reaches), so that the released
+    magnet falls little before the cable takes it into a swing."""
+    m = scenario.mechanism
+    boom = magnet_boom(scenario)
+    p_A = geometry.p_A
+    d = np.asarray(p_att_W, dtype=float) - p_A
+    e = np.array([d[0], d[1], 0.0])
+    e /= max(float(np.linalg.norm(e)), 1e-9)
+    out = boom.length * math.cos(boom.angle) + m.magnet_thickness + DROP_CLEARANCE
+    reach = 0.95 * scenario.tether.length
+    up = math.sqrt(max(reach * reach - out * out, 0.0))
+    return p_A + out * e + np.array([0.0, 0.0, up])
+
+
 def check_pass(
     scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass
 ) -> HookingClearance:

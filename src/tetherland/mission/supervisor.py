@@ -60,6 +60,7 @@ from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
     SHORTEST_LEG,
     lift_off_band,
+    magnet_drop_point,
     magnet_pull_out_path,
     shortest_leg,
     swing_shaper,
@@ -686,20 +687,34 @@ class MissionSupervisor:
         return self._free(t, est)
 
     def _drop_magnet(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
-        """Magnet mechanism, the cable slack: the EPM off, the magnet drops off the plate
-        and hangs on the cable. The vehicle holds one swing period at the slack point
-        (the magnet falls and swings clear of the plate), then flies out to the hooking
-        start on a leg shaped at the hanging magnet's swing period, as every leg after it
-        (:func:`~tetherland.mission.hooking.swing_shaper`): no move adds to its swing."""
+        """Magnet mechanism, the cable slack: climb, the EPM still on, to the drop point
+        (:func:`~tetherland.mission.hooking.magnet_drop_point`: as far out from the
+        surface as the slack point, the cable almost taut above the magnet), so that the
+        magnet, let go, falls a few centimetres before the cable swings it (switched off
+        at the slack point, 0.25 m under it, it fell 0.6 m and the snatch tipped the
+        vehicle: the rotor fault monitor stopped the flight). :meth:`_unhook` then
+        switches it off."""
+        cfg = self.cfg
+        drop = magnet_drop_point(self.scenario, self.geo, slack + self.wp.attachment_W)
+        self._path = self._new_path(t, slack, cfg.hooking.speed).to(
+            drop - self.wp.attachment_W, pause=cfg.settle_time)
+        self._enter(Phase.UNHOOK, t, "cable slack: to the drop point, the magnet still held")
+        return self._free(t, est)
+
+    def _let_go_of_magnet(self, t: float, est: StateEstimate) -> None:
+        """At the drop point: the EPM off, the magnet drops off the plate and hangs on the
+        cable. The vehicle holds one swing period (the magnet swings clear of the plate),
+        then flies out to the hooking start on a leg shaped at the hanging magnet's swing
+        period, as every leg after it (:func:`~tetherland.mission.hooking.swing_shaper`):
+        no move adds to its swing."""
         wp, cfg = self.wp, self.cfg
-        self._switch_magnet(t, False, "cable slack after the takeoff: releasing the magnet")
+        self._switch_magnet(t, False, "at the drop point: releasing the magnet")
         self._min_leg, self._shaper = self._hanging
         assert self._shaper is not None
-        self._path = self._new_path(t, slack, cfg.hooking.speed, free_hook=True).to(
+        here = self._path.end
+        self._path = self._new_path(t, here, cfg.hooking.speed, free_hook=True).to(
             wp.hook_start, pause=cfg.settle_time)
         self._path.delay(self._shaper.period)
-        self._enter(Phase.UNHOOK, t, "EPM off: the magnet released, hanging on the cable")
-        return self._free(t, est)
 
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
         """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
@@ -719,6 +734,9 @@ class MissionSupervisor:
 
     def _unhook(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
+        if self._magnet_on and t >= self._path.t_end:
+            self._let_go_of_magnet(t, est)
+            return self._free(t, est)
         slack = self._climb_slack
         if slack is not None and (est.tension or 0.0) > cfg.stretch.tension_threshold:
             # the hook still sits on the bar: back to slack and the reverse pass under it
