@@ -155,8 +155,12 @@ def test_magnet_caught_held_and_released_through_contact(name: str) -> None:
     assert float(np.linalg.norm(plant.hook_point_W - geo.p_A)) < (
         rise + 0.25 * s.mechanism.magnet_radius)
     pressed = plant.hook_point_W.copy()
+    # on: the EPM takes epm_on_time to switch on, the catch catch_time more to count
+    mech = s.mechanism
     plant.set_magnet(True)
-    _drive(plant, q, [touch, touch], 1.0, 0.2, each)
+    _drive(plant, q, [touch, touch], 1.0, mech.epm_on_time - 0.05, each)
+    assert not plant.hook.engaged and mag.clipped
+    _drive(plant, q, [touch, touch], 1.0, 0.05 + mech.catch_time + 0.05, each)
     assert plant.hook.engaged
     path = [touch, *magnet_pull_out_path(s, hp.p_end_W, geo.R_WA)]
     _drive(plant, q, path, 0.05, 0.3, each)
@@ -179,6 +183,8 @@ def test_magnet_caught_held_and_released_through_contact(name: str) -> None:
     assert float(np.linalg.norm(plant.hook_point_W - eye)) < 0.002  # held where it was
     # off: it lets go and falls (hangs on the cable)
     plant.set_magnet(False)
+    _drive(plant, q, [pull, pull], 1.0, mech.epm_off_time - 0.05, each)
+    assert plant.hook.engaged  # still switching off
     _drive(plant, q, [pull, pull - 0.05 * d_hat], 0.1, 1.0, each)
     assert not plant.hook.engaged
     assert plant.hook_point_W[2] < eye[2] - 0.1
@@ -187,7 +193,6 @@ def test_magnet_caught_held_and_released_through_contact(name: str) -> None:
     # contact depths: the held magnet's at most f (1 - d) A tau^2 (sim.mjcf.magnet_contact),
     # A at most 1/m plus the turn about an edge (a^2 + t^2)/I, times 2 (the pressing
     # transients); nothing behind a surface by more than 2 mm
-    mech = s.mechanism
     f, imp, tau = mech.magnet_force + 10.0, 0.999, 2.0 * s.sim.timestep
     a, h = mech.magnet_radius, 0.5 * mech.magnet_thickness
     inv = 1.0 / mech.magnet_mass + (a * a + 4 * h * h) / (mech.magnet_mass * (a * a + h * h) / 3)

@@ -108,9 +108,16 @@ class MechanismConfig(Section):
     """Thickness of the magnet along its axis, face to the cable's eye on its back [m]."""
     magnet_force: float = Field(150.0, gt=0, le=2000)
     """Holding force of the energised magnet on the plate, the gain of MuJoCo's adhesion
-    actuator on the magnet body [N]. An OpenGrab EPM v3 is rated about 300 N on thick
-    mild steel; a plate thinner than its flux path saturates and holds less (assumed in
-    proportion to the thickness below 1 cm): 150 N for the default 5 mm plate."""
+    actuator on the magnet body [N]. An OpenGrab EPM v3 holds 200 N at least, 300 N
+    typically, on thick mild steel (Zubax's data sheet); a plate thinner than its flux
+    path saturates and holds less (assumed in proportion to the thickness below 1 cm):
+    150 N for the default 5 mm plate."""
+    epm_on_time: float = Field(0.75, ge=0, le=10)
+    """Time the EPM takes to switch on after the command (three charge and discharge
+    cycles; OpenGrab EPM v3: 0.75 s): the plant's holding force comes on then [s]."""
+    epm_off_time: float = Field(1.2, ge=0, le=10)
+    """Time the EPM takes to switch off after the command (a decaying degauss; OpenGrab
+    EPM v3: 1.2 s): the plant's holding force goes off then [s]."""
     magnet_friction: float = Field(0.25, ge=0.0, le=2)
     """Friction coefficient of the magnet's face on the plate and the surface (steel on
     steel, dry, about 0.2-0.3: an EPM holds in shear about a quarter of its normal

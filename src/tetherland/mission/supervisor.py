@@ -451,6 +451,7 @@ class MissionSupervisor:
             if self._magnet:  # straight back first: out of the clip, not along the plate
                 for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
                     self._path.to(corner)
+                self._path.delay(m.epm_on_time)  # pressed on the plate while it switches on
             self._path.to(wp.slack_out).to(wp.stretch, speed=cfg.stretch.speed)
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
             self._taut.reset()
@@ -703,7 +704,8 @@ class MissionSupervisor:
 
     def _let_go_of_magnet(self, t: float, est: StateEstimate) -> None:
         """At the drop point: the EPM off, the magnet drops off the plate and hangs on the
-        cable. The vehicle holds one swing period (the magnet swings clear of the plate),
+        cable. The vehicle holds while the EPM switches off and one swing period more
+        (the magnet swings clear of the plate),
         then flies out to the hooking start on a leg shaped at the hanging magnet's swing
         period, as every leg after it (:func:`~tetherland.mission.hooking.swing_shaper`):
         no move adds to its swing."""
@@ -714,7 +716,7 @@ class MissionSupervisor:
         here = self._path.end
         self._path = self._new_path(t, here, cfg.hooking.speed, free_hook=True).to(
             wp.hook_start, pause=cfg.settle_time)
-        self._path.delay(self._shaper.period)
+        self._path.delay(self.scenario.mechanism.epm_off_time + self._shaper.period)
 
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
         """Bar mechanism, the cable slack: climb on the landing side until a hook hanging

@@ -792,6 +792,11 @@ class MagnetCable(ElasticCable):
         self._contact = int(model.sensor_adr[mujoco.mj_name2id(model, obj.mjOBJ_SENSOR,
                                                                "magnet_plate")])  # fmt: skip
         self._half = 0.5 * mech.magnet_thickness
+        dt = scenario.sim.timestep
+        self._switch_steps = (round(mech.epm_off_time / dt), round(mech.epm_on_time / dt))
+        self._command = False
+        self._pending = 0
+        """Physics steps until the commanded state takes effect (0: none pending)."""
         self.clip_force = mech.clip_force
         self._catch_steps = max(1, round(mech.catch_time / scenario.sim.timestep))
         self._touching = 0
@@ -817,7 +822,19 @@ class MagnetCable(ElasticCable):
 
     def set_epm(self, on: bool) -> None:
         """The robot's command: the EPM on (its holding force on the magnet's contacts with
-        the plate) or off."""
+        the plate) or off, in effect ``mechanism.epm_on_time`` or ``epm_off_time`` later
+        (a command repeated meanwhile changes nothing)."""
+        on = bool(on)
+        if on == self._command:
+            return
+        self._command = on
+        self._pending = self._switch_steps[on]
+        if self._pending == 0:
+            self._data.ctrl[self._epm] = 1.0 if on else 0.0
+
+    def _set_now(self, on: bool) -> None:
+        self._command = bool(on)
+        self._pending = 0
         self._data.ctrl[self._epm] = 1.0 if on else 0.0
 
     def set_anchor(self, p_A: FloatArray, z_S: FloatArray) -> None:
@@ -835,6 +852,10 @@ class MagnetCable(ElasticCable):
     def advance(self) -> None:
         super().advance()
         d = self._data
+        if self._pending:
+            self._pending -= 1
+            if not self._pending:
+                d.ctrl[self._epm] = 1.0 if self._command else 0.0
         if self.clipped:
             f = self.clip_force_W()
             n = d.xmat[self._body].reshape(3, 3)[:, 2]  # the magnet's axis, face-ward
@@ -895,7 +916,7 @@ class MagnetCable(ElasticCable):
         d.eq_active[self._eq] = 0 if on_plate else 1
         self.clipped = not on_plate
         self.clip_pull = 0.0
-        self.set_epm(on_plate)
+        self._set_now(on_plate)
         self.caught = on_plate
         self._touching = self._catch_steps if on_plate else 0
         self.changed = False

@@ -598,6 +598,11 @@ conaffinity (:func:`add_magnet`); the plate does not."""
 MAGNET_GAP = 0.002
 """Largest gap between the magnet's face and the plate across which the energised EPM
 still pulls (its force falls steeply with the gap; here it is all or nothing) [m]."""
+MAGNET_BALANCE = 0.75
+"""Fraction of the clipped magnet's moment about the centre of mass that the frame's
+counterweight balances: the rest is a steady torque on the approach (0.022 N m for the
+defaults), the balanced part one after the magnet has left the boom (0.065 N m), both
+under the robot's rotor fault threshold with room for the manoeuvres [-]."""
 BOOM_MASS = 0.01
 """Mass of the folding boom (a 4 mm carbon tube and its hinge) [kg]."""
 BOOM_RADIUS = 0.004
@@ -873,7 +878,7 @@ def add_vehicle(scene: SceneXml) -> None:
 
         boom = magnet_boom(scene.scenario)
         carried = BOOM_MASS + mech.magnet_mass
-        moment = BOOM_MASS * 0.5 * (boom.hinge_B + boom.eye_B) + 0.5 * mech.magnet_mass * (
+        moment = BOOM_MASS * 0.5 * (boom.hinge_B + boom.eye_B) + MAGNET_BALANCE * mech.magnet_mass * (
             boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B)
         com = -moment / (v.mass - carried)
         # and vehicle.inertia is the whole robot's: the frame's is less the boom's and the
