@@ -871,15 +871,15 @@ def add_vehicle(scene: SceneXml) -> None:
     carried = 0.0
     if mech.kind == "magnet":
         # vehicle.mass is the whole flying robot, its boom and magnet included; the frame
-        # is balanced (a counterweight) for the boom and half the magnet's moment, so the
-        # centre of mass is off by the same +-half the magnet's moment whether the magnet
-        # is on its clip or left on the plate
+        # is balanced (a counterweight) for the boom and MAGNET_BALANCE of the magnet's
+        # moment about the centre of mass
         from tetherland.models.hook import magnet_boom
 
         boom = magnet_boom(scene.scenario)
         carried = BOOM_MASS + mech.magnet_mass
-        moment = BOOM_MASS * 0.5 * (boom.hinge_B + boom.eye_B) + MAGNET_BALANCE * mech.magnet_mass * (
-            boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B)
+        magnet_B = boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B
+        moment = (BOOM_MASS * 0.5 * (boom.hinge_B + boom.eye_B)
+                  + MAGNET_BALANCE * mech.magnet_mass * magnet_B)  # fmt: skip
         com = -moment / (v.mass - carried)
         # and vehicle.inertia is the whole robot's: the frame's is less the boom's and the
         # clipped magnet's (points at their centres) and its own offset's
