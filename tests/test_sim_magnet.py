@@ -74,7 +74,8 @@ def test_magnet_config_and_shared_geometry() -> None:
         np.abs(Plant(s).layout.rotors.positions_B[:, 0])))
     expected = boom.length * math.cos(boom.angle) + m.magnet_thickness - guard
     assert magnet_reach_margin(s) == pytest.approx(expected, abs=1e-9)
-    assert magnet_reach_margin(s) > 0.05
+    # and by enough that the frame keeps the pass's clearance with the face pressed
+    assert magnet_reach_margin(s) > s.mission.hooking.min_clearance + m.press_depth
     # the plant's boom tip is where the geometry puts the eye
     plant = Plant(s)
     q = rotmat_to_quat(plant.layout.geometry.R_WA)

@@ -126,7 +126,7 @@ class MechanismConfig(Section):
     """Side of the square steel plate on the surface at the anchor [m]."""
     plate_thickness: float = Field(0.005, ge=0.001, le=0.05)
     """Thickness of the steel plate [m]."""
-    boom_length: float = Field(0.38, ge=0.05, le=1.5)
+    boom_length: float = Field(0.36, ge=0.05, le=1.5)
     """Length of the folding boom, its hinge at the cable attachment point to the cable's
     eye on the back of the clipped magnet [m]."""
     boom_angle_deg: float = Field(40.0, ge=5, le=75)
@@ -149,7 +149,7 @@ class MechanismConfig(Section):
     """The spring clip that holds the magnet on the boom's tip lets go when the magnet is
     pulled out of it along its axis harder than this (its socket carries the shear and
     the moments) [N]."""
-    press_depth: float = Field(0.02, gt=0, le=0.2)
+    press_depth: float = Field(0.01, gt=0, le=0.2)
     """Depth of the magnet's eye beyond the anchor where the hooking pass ends (replaces
     ``mission.hooking.overshoot`` for the magnet): the position loop presses the magnet on
     the plate; the boom folds only if the vehicle pushes harder than its preload [m]."""

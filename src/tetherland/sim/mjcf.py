@@ -598,7 +598,7 @@ conaffinity (:func:`add_magnet`); the plate does not."""
 MAGNET_GAP = 0.002
 """Largest gap between the magnet's face and the plate across which the energised EPM
 still pulls (its force falls steeply with the gap; here it is all or nothing) [m]."""
-MAGNET_BALANCE = 0.75
+MAGNET_BALANCE = 0.5
 """Fraction of the clipped magnet's moment about the centre of mass that the frame's
 counterweight balances: the rest is a steady torque on the approach (0.022 N m for the
 defaults), the balanced part one after the magnet has left the boom (0.065 N m), both
