@@ -65,7 +65,8 @@ def test_magnet_config_and_shared_geometry() -> None:
     for bad, field in (("mechanism.clip_force=200", "clip_force"),
                        ("mechanism.boom_length=0.2", "boom_length"),
                        ("mechanism.magnet_friction=0.9", "magnet_friction"),
-                       ("mechanism.boom_length=0.45", "boom_length")):  # fmt: skip
+                       ("mechanism.boom_length=0.45", "boom_length"),
+                       ("mechanism.magnet_mass=0.02", "magnet_mass")):  # fmt: skip
         with pytest.raises(ConfigError, match=field):
             load_scenario("wall90", ["mechanism.kind=magnet", bad])
     # the face reaches beyond the farthest part of the airframe along n: the rotor guards

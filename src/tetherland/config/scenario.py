@@ -33,6 +33,12 @@ ON_SURFACE_TOL = 1e-3
 """Tolerance for a point to count as lying on (or at height h_A above) the surface [m]."""
 
 
+MAGNET_CABLE_C_DT = 0.8
+"""Largest c dt / m of the elastic cable's damping c on the magnet of mass m [-]."""
+MAGNET_CABLE_W_DT = 1.5
+"""Largest sqrt(k/m) dt of the elastic cable's stiffness k on the magnet of mass m [-]."""
+
+
 class Scenario(Section):
     """One experiment: vehicle, tether, surface, anchor, sensors, planner, controller,
     mission and simulation settings. Load it with :func:`tetherland.config.load_scenario`."""
@@ -80,6 +86,19 @@ class Scenario(Section):
             raise ValueError(
                 'mechanism.kind = "magnet" needs the massless elastic cable: a tether.material '
                 "other than ideal (or tether.axial_stiffness) and tether.segments = 0"
+            )
+        # the massless elastic cable pulls the magnet explicitly (sim.cable.ElasticCable):
+        # a step must resolve the magnet bouncing on it (a 20 g magnet on the default
+        # line diverged while it hung on it)
+        dt, k = self.sim.timestep, t.stiffness
+        c_dt = t.damping(self.vehicle.mass) * dt / m.magnet_mass
+        w_dt = math.sqrt(k / m.magnet_mass) * dt
+        if c_dt > MAGNET_CABLE_C_DT or w_dt > MAGNET_CABLE_W_DT:
+            raise ValueError(
+                f"mechanism.magnet_mass = {m.magnet_mass:g} kg is too light for the cable at "
+                f"sim.timestep = {dt:g} s: c dt / m = {c_dt:.2f} (at most "
+                f"{MAGNET_CABLE_C_DT:g}) and sqrt(k/m) dt = {w_dt:.2f} (at most "
+                f"{MAGNET_CABLE_W_DT:g}), k and c the tether's stiffness and damping"
             )
         if m.boom_length >= t.length:
             raise ValueError(
