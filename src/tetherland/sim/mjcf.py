@@ -598,7 +598,7 @@ conaffinity (:func:`add_magnet`); the plate does not."""
 MAGNET_GAP = 0.002
 """Largest gap between the magnet's face and the plate across which the energised EPM
 still pulls (its force falls steeply with the gap; here it is all or nothing) [m]."""
-MAGNET_BALANCE = 0.5
+MAGNET_BALANCE = 0.75
 """Fraction of the clipped magnet's moment about the centre of mass that the frame's
 counterweight balances: the rest is a steady torque on the approach (0.022 N m for the
 defaults), the balanced part one after the magnet has left the boom (0.065 N m), both
@@ -609,15 +609,16 @@ BOOM_RADIUS = 0.004
 """Radius of the boom's capsule [m]."""
 SOCKET_MASS = 0.001
 """Mass of the clip's socket on the boom's tip [kg]."""
-GIMBAL_STIFFNESS = 0.05
+GIMBAL_STIFFNESS = 0.2
 """Centring spring of the socket's gimbal [N m/rad]: the clipped magnet's weight, 7.5 mm
-ahead of it, tilts it 0.05 rad; the plate's push on one edge of a pressed face (a newton
-2 cm off its centre) turns it flat."""
+ahead of it, tilts it 0.01 rad; the plate's push on one edge of a pressed face turns it
+flat. At 0.05 N m/rad the magnet pressed on overhang93's plate turned so far that a
+corner went 6 mm into the plate."""
 GIMBAL_DAMPING = 1e-4
 """Damping of the socket's gimbal [N m s/rad]."""
 GIMBAL_ARMATURE = 1e-6
 """Armature of the socket's gimbal (alone after the clip let go, the 1 g socket on a
-0.05 N m/rad spring swings at w dt = 0.2 at 1 ms) [kg m^2]."""
+0.2 N m/rad spring swings at w dt = 0.45 at 1 ms) [kg m^2]."""
 
 
 def magnet_contact(scenario: Scenario) -> dict[str, str]:
