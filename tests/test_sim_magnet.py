@@ -44,6 +44,18 @@ def _drive(plant: Plant, q: np.ndarray, points: list[np.ndarray], speed: float,
     drive(plant, points, speed, hold, None if each is None else lambda _: each(), q)
 
 
+def _at_hooking_start(name: str):
+    """The plant of ``name`` with the magnet, its vehicle level at the hooking start:
+    (plant, scenario, geometry, q_WB, hooking pass)."""
+    plant = _plant(name)
+    s = plant.scenario
+    geo = plant.layout.geometry
+    q = rotmat_to_quat(geo.R_WA)
+    hp = hooking_pass(s, geo)
+    plant.reset(RigidBodyState.at_rest(hp.p_start_W, q))
+    return plant, s, geo, q, hp
+
+
 def _magnet_depth(plant: Plant) -> float:
     """Deepest contact of the magnet's geoms (face or shell) into anything [m]."""
     m, d = plant.model, plant.data
@@ -119,15 +131,10 @@ def test_boom_folds_as_its_spring() -> None:
 
 @pytest.mark.parametrize("name", ["wall90", "overhang93"])
 def test_magnet_caught_held_and_released_through_contact(name: str) -> None:
-    """Scripted: the pass presses the clipped magnet on the plate (the boom folds, nothing
-    of the vehicle touches), the EPM on holds it, the unfold path pulls it off its clip,
-    the cable comes taut and holds the vehicle's pull, the EPM off lets it go."""
-    plant = _plant(name)
-    s = plant.scenario
-    geo = plant.layout.geometry
-    q = rotmat_to_quat(geo.R_WA)
-    hp = hooking_pass(s, geo)
-    plant.reset(RigidBodyState.at_rest(hp.p_start_W, q))
+    """Scripted: the pass presses the clipped magnet on the plate (nothing of the vehicle
+    touches), the EPM on holds it, the pull-out lets it out of its clip, the cable comes
+    taut and holds the vehicle's pull, the EPM off at the drop point lets it go."""
+    plant, s, geo, q, hp = _at_hooking_start(name)
     deepest = [0.0, 0.0, 0.0]  # the magnet's, the vehicle's, the magnet's while held
 
     def each() -> None:
@@ -217,12 +224,7 @@ def test_too_deep_a_pass_folds_the_boom(name: str) -> None:
     """A pass 3 cm deeper than the mission's, the vehicle prescribed (it does not yield):
     the boom folds as its geometry says (:func:`tetherland.models.hook.magnet_fold`) and
     no part of the vehicle touches the wall."""
-    plant = _plant(name)
-    s = plant.scenario
-    geo = plant.layout.geometry
-    q = rotmat_to_quat(geo.R_WA)
-    hp = hooking_pass(s, geo)
-    plant.reset(RigidBodyState.at_rest(hp.p_start_W, q))
+    plant, s, _, q, hp = _at_hooking_start(name)
     frame = [0.0]
     deep = hp.p_end_W + 0.03 * hp.n_W
     _drive(plant, q, [hp.p_start_W, deep], s.mission.hooking.speed, 0.3,
