@@ -3,7 +3,6 @@ and an anchoring cable on posts, in contact (docs/mechanism.md)."""
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import mujoco
@@ -11,6 +10,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from prescribed import drive
 from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
@@ -43,22 +43,9 @@ def _hover_speed(plant: Plant) -> float:
 
 def _drive(plant: Plant, points: list[np.ndarray], speed: float, hold: float, each) -> None:
     """Move the vehicle's centre of mass through ``points`` at ``speed`` (prescribed
-    motion: position and velocity written every physics step), then hold the last point
-    for ``hold`` seconds; ``each(plant)`` after every step."""
-    d = plant.data
-    q0 = d.qpos[3:7].copy()
-    for a, b in itertools.pairwise(points):
-        n = max(1, round(float(np.linalg.norm(b - a)) / speed / plant.dt))
-        v = (b - a) / (n * plant.dt)
-        for i in range(n):
-            d.qpos[0:3], d.qpos[3:7] = a + (i + 1) / n * (b - a), q0
-            d.qvel[0:3], d.qvel[3:6] = v, 0.0
-            plant.step(1)
-            each(plant)
-    for _ in range(round(hold / plant.dt)):
-        d.qpos[0:3], d.qpos[3:7], d.qvel[0:6] = points[-1], q0, 0.0
-        plant.step(1)
-        each(plant)
+    motion), then hold the last point for ``hold`` seconds; ``each(plant)`` after every
+    step."""
+    drive(plant, points, speed, hold, each)
 
 
 def test_bar_config_needs_a_standoff_and_a_vertical_pass() -> None:

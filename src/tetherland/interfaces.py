@@ -333,6 +333,18 @@ class InnerLoop(Protocol):
 
 
 @runtime_checkable
+class MagnetCommander(Protocol):
+    """Optional reference-source capability: the robot's command to an electro-permanent
+    magnet it carries (the magnet mechanism, docs/mechanism.md), read by the runner at
+    every control tick."""
+
+    @property
+    def magnet_on(self) -> bool:
+        """True: the magnet switched on (held), False: off (released)."""
+        ...
+
+
+@runtime_checkable
 class ReferenceSource(Protocol):
     """The supervisor (issue 6): chooses the mode and the reference from the estimate."""
 
@@ -352,6 +364,7 @@ __all__ = [
     "Feedforward",
     "ImuSample",
     "InnerLoop",
+    "MagnetCommander",
     "MocapSample",
     "Reference",
     "ReferenceSource",

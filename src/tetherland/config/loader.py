@@ -204,14 +204,24 @@ def _json_value(value: Any) -> Any:
 def bar_anchor_height(data: dict[str, Any]) -> dict[str, Any]:
     """``data`` with ``anchor.h_A`` = ``mechanism.standoff`` when the mechanism is the bar
     and ``anchor.h_A`` is 0 or absent: the bar's anchor is its axis, so "on the surface"
-    means the mechanism fixed on the surface with its axis at the standoff."""
+    means the mechanism fixed on the surface with its axis at the standoff. For the magnet,
+    ``anchor.h_A`` = ``plate_thickness + magnet_thickness`` (the cable's eye on the magnet
+    held on the plate)."""
     mech, anchor = data.get("mechanism"), data.get("anchor", {})
-    if not isinstance(mech, dict) or mech.get("kind") != "bar" or not isinstance(anchor, dict):
+    if not isinstance(mech, dict) or mech.get("kind") not in ("bar", "magnet") or not isinstance(
+            anchor, dict):  # fmt: skip
         return data
     h_A = anchor.get("h_A", 0.0)
     if isinstance(h_A, bool) or not isinstance(h_A, (int, float)) or h_A != 0.0:
         return data
-    standoff = mech.get("standoff", MechanismConfig.model_fields["standoff"].default)
+    fields = MechanismConfig.model_fields
+    if mech.get("kind") == "magnet":  # the cable's eye on the magnet held on the plate
+        parts = [mech.get(k, fields[k].default) for k in ("plate_thickness", "magnet_thickness")]
+        if not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in parts):
+            return data  # the field's own error names it
+        height = float(parts[0] + parts[1])
+        return {**data, "anchor": {**anchor, "h_A": height}}
+    standoff = mech.get("standoff", fields["standoff"].default)
     return {**data, "anchor": {**anchor, "h_A": standoff}}
 
 

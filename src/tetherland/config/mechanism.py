@@ -24,11 +24,19 @@ class MechanismConfig(Section):
     The hook catches and releases through contact and friction alone; the anchor height
     ``anchor.h_A`` is the bar's ``standoff`` (an ``anchor.h_A`` of 0, "on the surface",
     is replaced by it).
+
+    ``kind = "magnet"``: for walls and overhangs, an electro-permanent magnet (EPM) body
+    clipped to the tip of a folding boom on the vehicle is pressed on a steel plate at the
+    anchor, switched on by the robot (adhesion through the contact only), pulled off its
+    clip, and tied to the vehicle by the elastic cable; switched off, it lets go and hangs
+    on the cable. The anchor height ``anchor.h_A`` is the cable's eye on the held magnet,
+    ``plate_thickness + magnet_thickness`` (0 is replaced by it).
     """
 
-    kind: Literal["disk", "bar"] = "disk"
-    """Mechanism: ``disk`` (a point hook and a capture disk) or ``bar`` (a hook body on a
-    hanging chain, caught by an anchoring cable in contact) [-]."""
+    kind: Literal["disk", "bar", "magnet"] = "disk"
+    """Mechanism: ``disk`` (a point hook and a capture disk), ``bar`` (a hook body on a
+    hanging chain, caught by an anchoring cable in contact) or ``magnet`` (an
+    electro-permanent magnet on a folding boom, held by a steel plate at the anchor) [-]."""
     hook_mass: float = Field(0.02, ge=0.002, le=0.5)
     """Mass of the hook body [kg]."""
     hook_shank: float = Field(0.04, ge=0.01, le=0.3)
@@ -90,6 +98,93 @@ class MechanismConfig(Section):
     bar pushes on it with more than this many times its weight (the line pulls it into
     the bar), and as released once it has not touched the bar for 0.2 s; the robot never
     reads it [-]."""
+
+    magnet_mass: float = Field(0.03, ge=0.005, le=0.5)
+    """Mass of the magnet body (an EPM of the OpenGrab v3 class weighs about 30 g) [kg]."""
+    magnet_radius: float = Field(0.02, ge=0.005, le=0.1)
+    """Half the side of the magnet's square face (the magnet is a short square block, as
+    an OpenGrab EPM v3's 40 mm housing; a box meets the plate in a face, not a point) [m]."""
+    magnet_thickness: float = Field(0.015, ge=0.003, le=0.1)
+    """Thickness of the magnet along its axis, face to the cable's eye on its back [m]."""
+    magnet_force: float = Field(150.0, gt=0, le=2000)
+    """Holding force of the energised magnet on the plate, the gain of MuJoCo's adhesion
+    actuator on the magnet body [N]. An OpenGrab EPM v3 holds 200 N at least, 300 N
+    typically, on thick mild steel (Zubax's data sheet); a plate thinner than its flux
+    path saturates and holds less (assumed in proportion to the thickness below 1 cm):
+    150 N for the default 5 mm plate."""
+    epm_on_time: float = Field(0.75, ge=0, le=10)
+    """Time the EPM takes to switch on after the command (three charge and discharge
+    cycles; OpenGrab EPM v3: 0.75 s): the plant's holding force comes on then [s]."""
+    epm_off_time: float = Field(1.2, ge=0, le=10)
+    """Time the EPM takes to switch off after the command (a decaying degauss; OpenGrab
+    EPM v3: 1.2 s): the plant's holding force goes off then [s]."""
+    magnet_friction: float = Field(0.25, ge=0.0, le=2)
+    """Friction coefficient of the magnet's face on the plate and the surface (steel on
+    steel, dry, about 0.2-0.3: an EPM holds in shear about a quarter of its normal
+    force) [-]."""
+    plate_size: float = Field(0.15, ge=0.04, le=2)
+    """Side of the square steel plate on the surface at the anchor [m]."""
+    plate_thickness: float = Field(0.005, ge=0.001, le=0.05)
+    """Thickness of the steel plate [m]."""
+    boom_length: float = Field(0.36, ge=0.05, le=1.5)
+    """Length of the folding boom, its hinge at the cable attachment point to the cable's
+    eye on the back of the clipped magnet [m]."""
+    boom_angle_deg: float = Field(40.0, ge=5, le=75)
+    """Angle of the unfolded boom from the approach direction, up toward z_B: a push on
+    the magnet along the approach folds it up about its hinge (F L sin(angle) against the
+    spring), the face sliding up the plate; it folds only while the face's friction
+    coefficient is below tan(angle) (at 30 deg and 0.5 it locked: a 126 N impact) [deg]."""
+    boom_stiffness: float = Field(1.0, gt=0, le=1000)
+    """Stiffness of the boom's hinge spring, unfolded at its stop [N m/rad]."""
+    boom_preload: float = Field(0.2, ge=0, le=100)
+    """Torque with which the hinge spring holds the unfolded boom on its stop: the boom
+    folds only when the push on the magnet turns it harder, and stays rigid in flight
+    (unloaded, its 40 g swung off the stop at a pitch acceleration of about 17 rad/s^2,
+    and the robot's rotor fault monitor stopped the flight) [N m]."""
+    boom_damping: float = Field(0.05, ge=0, le=100)
+    """Damping of the boom's hinge [N m s/rad]."""
+    boom_fold_deg: float = Field(60.0, ge=5, le=120)
+    """Largest fold of the boom from its stop [deg]."""
+    clip_force: float = Field(20.0, gt=0, le=1000)
+    """The spring clip that holds the magnet on the boom's tip lets go when the magnet is
+    pulled out of it along its axis harder than this (its socket carries the shear and
+    the moments) [N]."""
+    press_depth: float = Field(0.01, gt=0, le=0.2)
+    """Depth of the magnet's eye beyond the anchor where the hooking pass ends (replaces
+    ``mission.hooking.overshoot`` for the magnet): the position loop presses the magnet on
+    the plate; the boom folds only if the vehicle pushes harder than its preload [m]."""
+    catch_time: float = Field(0.05, gt=0, le=1)
+    """The plant records the magnet as caught (log column ``hook``) once it has touched
+    the plate energised for this long, and as released as soon as it is off or does not
+    touch the plate; the robot never reads it [s]."""
+
+    @model_validator(mode="after")
+    def _magnet_parts(self) -> MechanismConfig:
+        if self.kind != "magnet":
+            return self
+        if self.clip_force >= self.magnet_force:
+            raise ValueError(
+                f"mechanism.clip_force = {self.clip_force:g} N must be < magnet_force = "
+                f"{self.magnet_force:g} N (the energised magnet pulls itself off its clip)"
+            )
+        if self.magnet_friction >= math.tan(math.radians(self.boom_angle_deg)):
+            raise ValueError(
+                f"mechanism.magnet_friction = {self.magnet_friction:g} must be < "
+                f"tan(boom_angle_deg) = {math.tan(math.radians(self.boom_angle_deg)):g}: "
+                "the pressed boom folds only while the face slides up the plate"
+            )
+        if 2.0 * self.magnet_radius >= self.plate_size:
+            raise ValueError(
+                f"mechanism.plate_size = {self.plate_size:g} m must be > the magnet's "
+                f"diameter 2 magnet_radius = {2.0 * self.magnet_radius:g} m"
+            )
+        return self
+
+    @property
+    def magnet_eye_height(self) -> float:
+        """Height of the cable's eye (the back of the magnet) above the surface when the
+        magnet is held on the plate: the anchor height h_A of the magnet [m]."""
+        return self.plate_thickness + self.magnet_thickness
 
     @model_validator(mode="after")
     def _hook_clears_bar(self) -> MechanismConfig:

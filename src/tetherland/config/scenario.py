@@ -33,6 +33,12 @@ ON_SURFACE_TOL = 1e-3
 """Tolerance for a point to count as lying on (or at height h_A above) the surface [m]."""
 
 
+MAGNET_CABLE_C_DT = 0.8
+"""Largest c dt / m of the elastic cable's damping c on the magnet of mass m [-]."""
+MAGNET_CABLE_W_DT = 1.5
+"""Largest sqrt(k/m) dt of the elastic cable's stiffness k on the magnet of mass m [-]."""
+
+
 class Scenario(Section):
     """One experiment: vehicle, tether, surface, anchor, sensors, planner, controller,
     mission and simulation settings. Load it with :func:`tetherland.config.load_scenario`."""
@@ -62,6 +68,53 @@ class Scenario(Section):
     """Rotors near surfaces and rotor drag (the plant's truth)."""
     mechanism: MechanismConfig = MechanismConfig()
     """The hook and the anchoring mechanism (docs/mechanism.md)."""
+
+    @model_validator(mode="after")
+    def _magnet_mechanism(self) -> Scenario:
+        m = self.mechanism
+        if m.kind != "magnet":
+            return self
+        if abs(self.anchor.h_A - m.magnet_eye_height) > 1e-9:
+            raise ValueError(
+                f"anchor.h_A = {self.anchor.h_A:g} m must equal mechanism.plate_thickness + "
+                f"magnet_thickness = {m.magnet_eye_height:g} m for mechanism.kind = "
+                '"magnet" (the anchor is the cable\'s eye on the held magnet; h_A = 0 is '
+                "replaced by it)"
+            )
+        t = self.tether
+        if t.stiffness is None or t.segments > 0:
+            raise ValueError(
+                'mechanism.kind = "magnet" needs the massless elastic cable: a tether.material '
+                "other than ideal (or tether.axial_stiffness) and tether.segments = 0"
+            )
+        # the massless elastic cable pulls the magnet explicitly (sim.cable.ElasticCable):
+        # a step must resolve the magnet bouncing on it (a 20 g magnet on the default
+        # line diverged while it hung on it)
+        dt, k = self.sim.timestep, t.stiffness
+        c_dt = t.damping(self.vehicle.mass) * dt / m.magnet_mass
+        w_dt = math.sqrt(k / m.magnet_mass) * dt
+        if c_dt > MAGNET_CABLE_C_DT or w_dt > MAGNET_CABLE_W_DT:
+            raise ValueError(
+                f"mechanism.magnet_mass = {m.magnet_mass:g} kg is too light for the cable at "
+                f"sim.timestep = {dt:g} s: c dt / m = {c_dt:.2f} (at most "
+                f"{MAGNET_CABLE_C_DT:g}) and sqrt(k/m) dt = {w_dt:.2f} (at most "
+                f"{MAGNET_CABLE_W_DT:g}), k and c the tether's stiffness and damping"
+            )
+        if m.boom_length >= t.length:
+            raise ValueError(
+                f"mechanism.boom_length = {m.boom_length:g} m must be < tether.length = "
+                f"{t.length:g} m (the cable from the attachment to the clipped magnet is slack)"
+            )
+        from tetherland.models.hook import magnet_reach_margin
+
+        margin = magnet_reach_margin(self)
+        if margin <= 0.0:
+            raise ValueError(
+                f"mechanism.boom_length = {m.boom_length:g} m at boom_angle_deg = "
+                f"{m.boom_angle_deg:g} reaches {-margin:g} m short of the vehicle's farthest "
+                "part along tether.approach_direction: the magnet must meet the surface first"
+            )
+        return self
 
     @model_validator(mode="after")
     def _bar_mechanism(self) -> Scenario:

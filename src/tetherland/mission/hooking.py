@@ -36,10 +36,19 @@ from tetherland.analysis.clearance import HookingClearance, hooking_clearance
 from tetherland.config import Scenario
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.mission.paths import ZVShaper
-from tetherland.models.hook import bar_hook_offset, bar_line_length, hook_offset, swing_period
+from tetherland.models.hook import (
+    bar_hook_offset,
+    bar_line_length,
+    hook_offset,
+    magnet_boom,
+    swing_period,
+    swing_period_magnet,
+)
 from tetherland.rotations import rotation_from_z_and_yaw
 
 _Z_W = np.array([0.0, 0.0, 1.0])
+SHORTEST_LEG = 0.5
+"""Shortest free-flight leg of the mission with nothing swinging under the vehicle [s]."""
 PIPE_SAMPLES = 9
 """Points along the pass at which a pipe's clearance is evaluated (a plane's is linear
 along the straight pass, so its ends suffice)."""
@@ -94,8 +103,14 @@ def hooking_pass(scenario: Scenario, geometry: LandingGeometry | None = None) ->
 def scenario_hook_offset(scenario: Scenario, geometry: LandingGeometry) -> FloatArray:
     """Hook point minus attachment point of ``scenario``'s mechanism, level flight [m]:
     ``tether.hook_drop`` along n for the capture disk, the hanging hook beside the bar
-    (:func:`tetherland.models.hook.bar_hook_offset`) for the bar."""
+    (:func:`tetherland.models.hook.bar_hook_offset`) for the bar, the cable's eye on the
+    clipped magnet at the unfolded boom's tip (:func:`tetherland.models.hook.magnet_boom`,
+    the geometry the plant builds) for the magnet: the boom stays on its stop in a nominal
+    pass (the position loop yields to the magnet's push on the plate long before the
+    boom's preload does), and folds only when pushed harder."""
     t, m = scenario.tether, scenario.mechanism
+    if m.kind == "magnet":  # the eye on the unfolded boom's tip
+        return geometry.R_WA @ magnet_boom(scenario).offset_B
     if m.kind == "bar":
         line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
         return bar_hook_offset(geometry.R_WA[:, 0], line, m.hook_shank, m.pass_offset)
@@ -190,6 +205,47 @@ def unhooking_path(
     return [*corners, entry.copy(), start.copy()]
 
 
+def magnet_pull_out_path(scenario: Scenario, hook_end_W: FloatArray,
+                         R_WA: FloatArray) -> list[FloatArray]:  # fmt: skip
+    """Centre-of-mass corners after the magnet's hooking pass, from its end ``hook_end_W``
+    (the magnet switched on, held by the plate), F_W [m]: straight back along -n to
+    where the magnet's eye is ``press_depth`` plus half the cable's slack behind the
+    unfolded boom's tip, which pulls the magnet out of its clip along its axis (moved
+    sideways instead, the clip would drag the held magnet along the plate). The slack
+    d_max = sqrt(l^2 - L^2 sin^2 beta) - L cos beta is how far the vehicle can back off
+    along -n from the eye on the tip before the cable (length l) comes taut."""
+    m = scenario.mechanism
+    boom = magnet_boom(scenario)
+    L, beta = boom.length, boom.angle
+    slack = math.sqrt(scenario.tether.length**2 - (L * math.sin(beta)) ** 2) - L * math.cos(beta)
+    n_W = R_WA @ boom.n_B
+    return [np.asarray(hook_end_W, dtype=float) - (m.press_depth + 0.5 * slack) * n_W]
+
+
+DROP_CLEARANCE = 0.05
+"""Horizontal clearance of the empty boom's tip from the surface at the drop point [m]."""
+
+
+def magnet_drop_point(scenario: Scenario, geometry: LandingGeometry,
+                      p_att_W: FloatArray) -> FloatArray:  # fmt: skip
+    """Attachment point from which the robot lets go of the magnet held at p_A, F_W [m]:
+    out from p_A, horizontally along the slack point ``p_att_W``'s side, by the boom's
+    reach to the magnet's face plus :data:`DROP_CLEARANCE` (at the slack point the empty
+    boom's tip grazed the wall, and every touch folded it and rocked the vehicle), and
+    above p_A with the cable at 95 % of its length (if it reaches), so that the released
+    magnet falls little before the cable takes it into a swing."""
+    m = scenario.mechanism
+    boom = magnet_boom(scenario)
+    p_A = geometry.p_A
+    d = np.asarray(p_att_W, dtype=float) - p_A
+    e = np.array([d[0], d[1], 0.0])
+    e /= max(float(np.linalg.norm(e)), 1e-9)
+    out = boom.length * math.cos(boom.angle) + m.magnet_thickness + DROP_CLEARANCE
+    reach = 0.95 * scenario.tether.length
+    up = math.sqrt(max(reach * reach - out * out, 0.0))
+    return p_A + out * e + np.array([0.0, 0.0, up])
+
+
 def check_pass(
     scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass
 ) -> HookingClearance:
@@ -214,10 +270,13 @@ def shortest_leg(scenario: Scenario) -> float:
     smoothstep) that long leaves the hanging hook almost still, so that it passes beside
     the bar where the plan puts it."""
     m, t = scenario.mechanism, scenario.tether
+    if m.kind == "magnet":
+        return max(SHORTEST_LEG,
+                   m.swing_periods * swing_period_magnet(t.length, m.magnet_thickness))
     if m.kind != "bar":
-        return 0.5
+        return SHORTEST_LEG
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
-    return max(0.5, m.swing_periods * swing_period(line, m.hook_shank))
+    return max(SHORTEST_LEG, m.swing_periods * swing_period(line, m.hook_shank))
 
 
 def swing_shaper(scenario: Scenario) -> ZVShaper | None:
@@ -226,6 +285,8 @@ def swing_shaper(scenario: Scenario) -> ZVShaper | None:
     (:func:`tetherland.models.hook.swing_period`), so that no move leaves it swinging;
     None otherwise."""
     m, t = scenario.mechanism, scenario.tether
+    if m.kind == "magnet":  # the released magnet hanging on the cable
+        return ZVShaper(swing_period_magnet(t.length, m.magnet_thickness))
     if m.kind != "bar":
         return None
     line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
@@ -267,9 +328,13 @@ def pass_overshoot(scenario: Scenario) -> float:
     """Hook-point distance beyond the anchor where the hooking pass ends [m]:
     ``mission.hooking.overshoot``, or ``mechanism.pass_depth`` for the bar (the crown that
     little below the bar's axis, the line meets the bar above the hook's eye as soon as
-    the vehicle flies toward the landing point, and the hook's arm passes under it)."""
+    the vehicle flies toward the landing point, and the hook's arm passes under it), or
+    ``mechanism.press_depth`` for the magnet (its face pressed on the plate, the boom
+    folding by about that much)."""
     if scenario.mechanism.kind == "bar":
         return scenario.mechanism.pass_depth
+    if scenario.mechanism.kind == "magnet":
+        return scenario.mechanism.press_depth
     return scenario.mission.hooking.overshoot
 
 

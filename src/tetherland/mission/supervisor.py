@@ -58,7 +58,10 @@ from tetherland.mission.contact import (
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
+    SHORTEST_LEG,
     lift_off_band,
+    magnet_drop_point,
+    magnet_pull_out_path,
     shortest_leg,
     swing_shaper,
     takeoff_height,
@@ -133,8 +136,13 @@ class MissionSupervisor:
         wp = plan.waypoints
         self.wp = wp
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
+        self._magnet = scenario.mechanism.kind == "magnet"
+        self._magnet_on = False
         self._min_leg = shortest_leg(scenario)
         self._shaper = swing_shaper(scenario)
+        if self._magnet:  # clipped on its boom until released: nothing swings before
+            self._hanging = (self._min_leg, self._shaper)
+            self._min_leg, self._shaper = SHORTEST_LEG, None
         self._climb_slack: np.ndarray | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
         self._takeoff_height = takeoff_height(scenario)
@@ -201,6 +209,17 @@ class MissionSupervisor:
         self._event(0.0, "phase", f"start: {self.phase.name.lower()}")
 
     # ------------------------------------------------------------------ helpers
+    @property
+    def magnet_on(self) -> bool:
+        """The EPM command of the magnet mechanism (``MagnetCommander``): on from the end
+        of a hooking pass until the release after the takeoff [-]."""
+        return self._magnet_on
+
+    def _switch_magnet(self, t: float, on: bool, why: str) -> None:
+        if self._magnet and on != self._magnet_on:
+            self._magnet_on = on
+            self._event(t, "magnet", f"EPM {'on' if on else 'off'}: {why}")
+
     def _event(self, t: float, kind: str, message: str) -> None:
         self.events.append(EventRecord(t=t, source="mission", kind=kind, message=message))
 
@@ -430,7 +449,12 @@ class MissionSupervisor:
                 # drop under the bar on pipe60)
                 x = np.array([*self.geo.R_WA[:2, 0], 0.0])
                 self._path.to(wp.hook_end + 2.0 * m.pass_offset * x / np.linalg.norm(x))
+            if self._magnet:  # straight back first: out of the clip, not along the plate
+                for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
+                    self._path.to(corner)
+                self._path.delay(m.epm_on_time)  # pressed on the plate while it switches on
             self._path.to(wp.slack_out).to(wp.stretch, speed=cfg.stretch.speed)
+            self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
@@ -454,6 +478,7 @@ class MissionSupervisor:
             if self.hook_attempts >= cfg.hooking.max_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
                 return self._free(t, est)
+            self._switch_magnet(t, False, "no tension: the magnet did not hold, retrying")
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
                 self._new_path(t, est.body.p_W, free_hook=True)
@@ -666,6 +691,8 @@ class MissionSupervisor:
                 self._release_pull.freeze(t, est, slack)
             if self.scenario.mechanism.kind == "bar":
                 return self._climb_away(t, est, slack)
+            if self._magnet:
+                return self._drop_magnet(t, est, slack)
             # the reverse pass, no deeper than mission.hooking.unhook_depth
             *corners, last = unhooking_path(
                 slack, wp.unhook_entry, wp.hook_start, self._unhook_reach,
@@ -677,6 +704,37 @@ class MissionSupervisor:
             self._path.to(last, pause=cfg.settle_time)
             self._enter(Phase.UNHOOK, t, "cable slack: reverse hooking pass")
         return self._free(t, est)
+
+    def _drop_magnet(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
+        """Magnet mechanism, the cable slack: climb, the EPM still on, to the drop point
+        (:func:`~tetherland.mission.hooking.magnet_drop_point`: as far out from the
+        surface as the slack point, the cable almost taut above the magnet), so that the
+        magnet, let go, falls a few centimetres before the cable swings it (switched off
+        at the slack point, 0.25 m under it, it fell 0.6 m and the snatch tipped the
+        vehicle: the rotor fault monitor stopped the flight). :meth:`_unhook` then
+        switches it off."""
+        cfg = self.cfg
+        drop = magnet_drop_point(self.scenario, self.geo, slack + self.wp.attachment_W)
+        self._path = self._new_path(t, slack, cfg.hooking.speed).to(
+            drop - self.wp.attachment_W, pause=cfg.settle_time)
+        self._enter(Phase.UNHOOK, t, "cable slack: to the drop point, the magnet still held")
+        return self._free(t, est)
+
+    def _let_go_of_magnet(self, t: float, est: StateEstimate) -> None:
+        """At the drop point: the EPM off, the magnet drops off the plate and hangs on the
+        cable. The vehicle holds while the EPM switches off and one swing period more
+        (the magnet swings clear of the plate),
+        then flies out to the hooking start on a leg shaped at the hanging magnet's swing
+        period, as every leg after it (:func:`~tetherland.mission.hooking.swing_shaper`):
+        no move adds to its swing."""
+        wp, cfg = self.wp, self.cfg
+        self._switch_magnet(t, False, "at the drop point: releasing the magnet")
+        self._min_leg, self._shaper = self._hanging
+        assert self._shaper is not None
+        here = self._path.end
+        self._path = self._new_path(t, here, cfg.hooking.speed, free_hook=True).to(
+            wp.hook_start, pause=cfg.settle_time)
+        self._path.delay(self.scenario.mechanism.epm_off_time + self._shaper.period)
 
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
         """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
@@ -696,6 +754,9 @@ class MissionSupervisor:
 
     def _unhook(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
+        if self._magnet_on and t >= self._path.t_end:
+            self._let_go_of_magnet(t, est)
+            return self._free(t, est)
         slack = self._climb_slack
         if slack is not None and (est.tension or 0.0) > cfg.stretch.tension_threshold:
             # the hook still sits on the bar: back to slack and the reverse pass under it

@@ -14,11 +14,16 @@ and the robot's hooking pass, clearance check and design search
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tetherland import GRAVITY
 from tetherland.geometry import FloatArray
+
+if TYPE_CHECKING:
+    from tetherland.config import Scenario
 
 
 def hook_offset(n_W: FloatArray, hook_drop: float) -> FloatArray:
@@ -58,3 +63,109 @@ def swing_period(line_length: float, hook_shank: float) -> float:
     """Swing period 2 pi sqrt(L/g) of a hook hanging on a line, L the line plus half the
     shank (the hook's mass dominates the line's) [s]."""
     return 2.0 * math.pi * math.sqrt((line_length + 0.5 * hook_shank) / GRAVITY)
+
+
+@dataclass(frozen=True)
+class MagnetBoom:
+    """The magnet mechanism's folding boom and its magnet, unfolded, in F_B [m]: the one
+    statement of its geometry, which the plant's bodies (:mod:`tetherland.sim.mjcf`), the
+    hooking pass (:func:`tetherland.mission.hooking.scenario_hook_offset`) and the
+    configuration's reach check (:func:`magnet_reach_margin`) all use.
+
+    The hinge sits at the cable attachment point r_att; the boom runs ``boom_length`` at
+    ``boom_angle_deg`` from the approach direction n_B, up toward z_B (unit w_B), to the
+    cable's eye on the back of the magnet; the magnet's axis is n_B, its face
+    ``magnet_thickness`` beyond the eye. A push along -n on the face turns the boom about
+    ``axis_B`` = n_B x w_B (it folds up, the face moving back along -n).
+
+    Attributes
+    ----------
+    hinge_B, eye_B, face_B : (3,) array
+        Hinge, the cable's eye (the back of the magnet, the hook point) and the face's
+        centre [m].
+    n_B, w_B, axis_B : (3,) array
+        Approach direction, the boom's tilt direction and the hinge axis (unit) [-].
+    length : float
+        Boom length [m].
+    angle : float
+        Boom angle from n_B [rad].
+    """
+
+    hinge_B: FloatArray
+    eye_B: FloatArray
+    face_B: FloatArray
+    n_B: FloatArray
+    w_B: FloatArray
+    axis_B: FloatArray
+    length: float
+    angle: float
+
+    @classmethod
+    def of(cls, r_att_B: FloatArray, n_B: FloatArray, boom_length: float,
+           boom_angle_deg: float, magnet_thickness: float) -> MagnetBoom:  # fmt: skip
+        """The boom for the attachment point ``r_att_B``, the approach direction ``n_B``
+        (F_B, any length) and the mechanism's sizes [m, -, m, deg, m]."""
+        n = np.asarray(n_B, dtype=float)
+        n = n / np.linalg.norm(n)
+        z = np.array([0.0, 0.0, 1.0])
+        w = z - (z @ n) * n
+        if float(np.linalg.norm(w)) < 1e-6:  # approach along z_B: tilt toward x_B
+            w = np.array([1.0, 0.0, 0.0]) - n[0] * n
+        w /= np.linalg.norm(w)
+        a = math.radians(boom_angle_deg)
+        hinge = np.asarray(r_att_B, dtype=float)
+        eye = hinge + boom_length * (math.cos(a) * n + math.sin(a) * w)
+        return cls(hinge, eye, eye + magnet_thickness * n, n, w, np.cross(n, w),
+                   float(boom_length), a)  # fmt: skip
+
+    @property
+    def offset_B(self) -> FloatArray:
+        """The hook point (the eye) minus the attachment point, F_B [m]."""
+        return self.eye_B - self.hinge_B
+
+
+def magnet_fold(boom_length: float, boom_angle: float, press: float) -> tuple[float, float]:
+    """The boom's fold theta and the tip's rise delta along w when its tip is pushed back
+    by ``press`` along -n: L cos(beta) - L cos(beta + theta) = press, delta =
+    L (sin(beta + theta) - sin(beta)) [m, rad, m -> rad, m]."""
+    c = math.cos(boom_angle) - press / boom_length
+    theta = math.acos(max(-1.0, min(1.0, c))) - boom_angle
+    return theta, boom_length * (math.sin(boom_angle + theta) - math.sin(boom_angle))
+
+
+def magnet_boom(scenario: Scenario) -> MagnetBoom:
+    """The boom of ``scenario``'s magnet mechanism, built for the hooking pass's level
+    attitude with x_B along x_A (so n_B is ``tether.approach_direction`` in F_A)."""
+    m = scenario.mechanism
+    return MagnetBoom.of(np.asarray(scenario.vehicle.cable_attachment, dtype=float),
+                         np.asarray(scenario.tether.approach_direction, dtype=float),
+                         m.boom_length, m.boom_angle_deg, m.magnet_thickness)  # fmt: skip
+
+
+def magnet_reach_margin(scenario: Scenario) -> float:
+    """How far the unfolded magnet's face reaches beyond the farthest part of the vehicle
+    along the approach direction (the airframe of :mod:`tetherland.models.airframe`, the
+    plant's collision shapes), from the centre of mass [m]: > 0 means the magnet meets a
+    surface ahead of the vehicle before any part of it does."""
+    from tetherland.models.airframe import Airframe
+
+    boom = magnet_boom(scenario)
+    n = boom.n_B
+    f = Airframe.of(scenario.vehicle)
+    reach = [float(np.max(f.lander_centres_B @ n)) + f.lander_radius]
+    for c in f.capsules:
+        reach.append(max(float(c.a_B @ n), float(c.b_B @ n)) + c.radius)
+    # a guard disk (axis z_B): its rim's support along n plus its half thickness
+    n_xy = math.hypot(n[0], n[1])
+    reach.append(float(np.max(f.guard_centres_B @ n)) + f.guard_radius * n_xy
+                 + f.guard_half_thickness * abs(n[2]))  # fmt: skip
+    reach.append(float(np.abs(n) @ np.asarray(f.hub_half_size)))
+    reach.append(float(f.mount_B @ n) + f.mount_radius)
+    # the magnet's face is flat across n: its centre is as far along n as it reaches
+    return float(boom.face_B @ n) - max(reach)
+
+
+def swing_period_magnet(cable_length: float, magnet_thickness: float) -> float:
+    """Swing period 2 pi sqrt(L/g) of the released magnet hanging on the cable, L the
+    cable to the eye plus half the magnet's thickness (its centre of mass) [s]."""
+    return 2.0 * math.pi * math.sqrt((cable_length + 0.5 * magnet_thickness) / GRAVITY)

@@ -739,6 +739,8 @@ def make_cable(
     :class:`HangingLine` for the bar mechanism)."""
     if scenario.mechanism.kind == "bar":
         return HangingLine(model, data, scenario, side_W)
+    if scenario.mechanism.kind == "magnet":
+        return MagnetCable(model, data, scenario)
     t = scenario.tether
     kind = t.cable_model
     if kind == CableModel.IDEAL:
@@ -748,3 +750,173 @@ def make_cable(
         assert k is not None
         return ElasticCable(model, data, k, t.damping(scenario.vehicle.mass), t.length)
     return ChainCable(model, data, scenario, p_A, side_W)
+
+
+class MagnetCable(ElasticCable):
+    """The magnet mechanism's cable and magnet (docs/mechanism.md): the massless elastic
+    cable of :class:`ElasticCable` from the magnet's eye to the vehicle's attachment, always
+    tied (its force acts on the magnet body and the vehicle), the magnet clipped to the
+    boom's tip, and the EPM the robot switches (:meth:`set_epm`).
+
+    Plant behaviour, after every step:
+
+    - the clip (the weld ``clip``) lets go for good once the force with which it holds
+      the magnet back along the magnet's axis (the magnet pulled out of its socket)
+      exceeds ``mechanism.clip_force`` (a spring clip pulled apart; the socket carries the
+      shear and the moments); :meth:`lay_out` clips it again;
+    - :attr:`caught` (the plant's truth for the log and the judge, never the robot's):
+      set once the magnet's face has touched the plate with the EPM on for
+      ``mechanism.catch_time``, cleared at once when the EPM is off or the face leaves the
+      plate. Only the contact and MuJoCo's adhesion decide what the bodies do.
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, scenario: Scenario) -> None:
+        t = scenario.tether
+        k = t.stiffness
+        assert k is not None
+        super().__init__(model, data, k, t.damping(scenario.vehicle.mass), t.length)
+        mech = scenario.mechanism
+        obj = mujoco.mjtObj
+        self._eq = mujoco.mj_name2id(model, obj.mjOBJ_EQUALITY, "clip")
+        self._epm = int(mujoco.mj_name2id(model, obj.mjOBJ_ACTUATOR, "epm"))
+        body = mujoco.mj_name2id(model, obj.mjOBJ_BODY, "magnet")
+        self._body = body
+        j = model.body_jntadr[body]
+        self._qadr, self._vadr = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
+        hinge = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, "boom_hinge")
+        self._hinge_q, self._hinge_v = int(model.jnt_qposadr[hinge]), int(model.jnt_dofadr[hinge])
+        self._tip = mujoco.mj_name2id(model, obj.mjOBJ_SITE, "boom_tip")
+        gimbal = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, "gimbal")
+        self._gimbal_q = int(model.jnt_qposadr[gimbal])
+        self._gimbal_v = int(model.jnt_dofadr[gimbal])
+        self._contact = int(model.sensor_adr[mujoco.mj_name2id(model, obj.mjOBJ_SENSOR,
+                                                               "magnet_plate")])  # fmt: skip
+        self._half = 0.5 * mech.magnet_thickness
+        dt = scenario.sim.timestep
+        self._switch_steps = (round(mech.epm_off_time / dt), round(mech.epm_on_time / dt))
+        self._command = False
+        self._pending = 0
+        """Physics steps until the commanded state takes effect (0: none pending)."""
+        self.clip_force = mech.clip_force
+        self._catch_steps = max(1, round(mech.catch_time / scenario.sim.timestep))
+        self._touching = 0
+        self._p_A = np.zeros(3)
+        self._z_S = np.array([0.0, 0.0, 1.0])
+        self.caught = False
+        self.changed = False
+        """True after a step in which :attr:`caught` changed."""
+        self.clipped = True
+        """True while the clip holds the magnet on the boom's tip."""
+        self.clip_pull = 0.0
+        """The clip's pull on the magnet at the last step (0 once it let go) [N]."""
+        self._engaged = True
+
+    @property
+    def engaged(self) -> bool:
+        return self.caught
+
+    @property
+    def epm_on(self) -> bool:
+        """Whether the EPM is switched on [-]."""
+        return bool(self._data.ctrl[self._epm] > 0.5)
+
+    def set_epm(self, on: bool) -> None:
+        """The robot's command: the EPM on (its holding force on the magnet's contacts with
+        the plate) or off, in effect ``mechanism.epm_on_time`` or ``epm_off_time`` later
+        (a command repeated meanwhile changes nothing)."""
+        on = bool(on)
+        if on == self._command:
+            return
+        self._command = on
+        self._pending = self._switch_steps[on]
+        if self._pending == 0:
+            self._data.ctrl[self._epm] = 1.0 if on else 0.0
+
+    def _set_now(self, on: bool) -> None:
+        self._command = bool(on)
+        self._pending = 0
+        self._data.ctrl[self._epm] = 1.0 if on else 0.0
+
+    def set_anchor(self, p_A: FloatArray, z_S: FloatArray) -> None:
+        """The anchor (the eye of the held magnet) and the surface normal there [m, -]."""
+        self._p_A = np.asarray(p_A, dtype=float)
+        self._z_S = np.asarray(z_S, dtype=float)
+
+    def clip_force_W(self) -> FloatArray:
+        """Force of the clip on the magnet at the last step, F_W (0 when open) [N]."""
+        d = self._data
+        if not d.eq_active[self._eq]:
+            return np.zeros(3)
+        return np.array(d.efc_force[0:3])  # the weld's rows come first (the only equality)
+
+    def advance(self) -> None:
+        super().advance()
+        d = self._data
+        if self._pending:
+            self._pending -= 1
+            if not self._pending:
+                d.ctrl[self._epm] = 1.0 if self._command else 0.0
+        if self.clipped:
+            f = self.clip_force_W()
+            n = d.xmat[self._body].reshape(3, 3)[:, 2]  # the magnet's axis, face-ward
+            pull = -float(f @ n)  # pulled out of its socket (the tip holds it back)
+            self.clip_pull = pull
+            if pull > self.clip_force:
+                d.eq_active[self._eq] = 0
+                self.clipped = False
+                self.clip_pull = 0.0
+        s = d.sensordata
+        if s[self._contact] > 0.0 and d.ctrl[self._epm] > 0.5:
+            self._touching += 1
+        else:
+            self._touching = 0
+        was = self.caught
+        self.caught = self._touching >= self._catch_steps if not was else self._touching > 0
+        self.changed = was != self.caught
+
+    @property
+    def plate_force(self) -> float:
+        """Net contact force of the plate on the magnet's face at the last step [N]."""
+        s, c = self._data.sensordata, self._contact
+        return math.sqrt(s[c + 1] ** 2 + s[c + 2] ** 2 + s[c + 3] ** 2) if s[c] > 0.0 else 0.0
+
+    def set_engaged(self, engaged: bool) -> None:
+        """Lay the magnet out: on the plate at the anchor with the EPM on (``engaged``), else
+        clipped on the boom's tip with the EPM off."""
+        self.lay_out(on_plate=engaged)
+
+    def follow_vehicle(self) -> None:
+        if self.clipped:
+            self.lay_out(on_plate=False)
+
+    def lay_out(self, on_plate: bool = False) -> None:
+        """Put the magnet at rest on the boom's tip (unfolded, clipped) or on the plate."""
+        m, d = self._model, self._data
+        d.qpos[self._hinge_q] = 0.0
+        d.qvel[self._hinge_v] = 0.0
+        g = self._gimbal_q
+        d.qpos[g : g + 4] = (1.0, 0.0, 0.0, 0.0)
+        d.qvel[self._gimbal_v : self._gimbal_v + 3] = 0.0
+        mujoco.mj_kinematics(m, d)
+        if on_plate:
+            z = -self._z_S
+            centre = self._p_A + self._half * z
+            helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+            x = np.cross(helper, z)
+            x /= np.linalg.norm(x)
+            quat = rotmat_to_quat(np.column_stack((x, np.cross(z, x), z)))
+        else:
+            R = d.site_xmat[self._tip].reshape(3, 3)
+            centre = d.site_xpos[self._tip] + self._half * R[:, 2]
+            quat = rotmat_to_quat(R)
+        a, v = self._qadr, self._vadr
+        d.qpos[a : a + 3] = centre
+        d.qpos[a + 3 : a + 7] = quat
+        d.qvel[v : v + 6] = 0.0
+        d.eq_active[self._eq] = 0 if on_plate else 1
+        self.clipped = not on_plate
+        self.clip_pull = 0.0
+        self._set_now(on_plate)
+        self.caught = on_plate
+        self._touching = self._catch_steps if on_plate else 0
+        self.changed = False

@@ -527,6 +527,9 @@ def add_anchor(scene: SceneXml) -> None:
     if scene.scenario.mechanism.kind == "bar":
         add_anchoring_cable(scene)
         return
+    if scene.scenario.mechanism.kind == "magnet":
+        add_steel_plate(scene)
+        return
     _sub(
         world,
         "geom",
@@ -587,6 +590,159 @@ def add_anchoring_cable(scene: SceneXml) -> None:
         foot = top - m.standoff * z_S
         _sub(scene.world, "geom", name=f"post{i}", type="capsule", size=f"{post_r:.12g}",
              fromto=_fmt(np.concatenate((top, foot))), **env)  # fmt: skip
+
+
+MAGNET_SHELL_BIT = 16
+"""Contact bit of the magnet's shell: the ground and the surface get it in their
+conaffinity (:func:`add_magnet`); the plate does not."""
+MAGNET_GAP = 0.002
+"""Largest gap between the magnet's face and the plate across which the energised EPM
+still pulls (its force falls steeply with the gap; here it is all or nothing) [m]."""
+MAGNET_BALANCE = 0.75
+"""Fraction of the clipped magnet's moment about the centre of mass that the frame's
+counterweight balances: the rest is a steady torque on the approach (0.022 N m for the
+defaults), the balanced part one after the magnet has left the boom (0.065 N m), both
+under the robot's rotor fault threshold with room for the manoeuvres [-]."""
+BOOM_MASS = 0.01
+"""Mass of the folding boom (a 4 mm carbon tube and its hinge) [kg]."""
+BOOM_RADIUS = 0.004
+"""Radius of the boom's capsule [m]."""
+SOCKET_MASS = 0.001
+"""Mass of the clip's socket on the boom's tip [kg]."""
+GIMBAL_STIFFNESS = 0.2
+"""Centring spring of the socket's gimbal [N m/rad]: the clipped magnet's weight, 7.5 mm
+ahead of it, tilts it 0.01 rad; the plate's push on one edge of a pressed face turns it
+flat. At 0.05 N m/rad the magnet pressed on overhang93's plate turned so far that a
+corner went 6 mm into the plate."""
+GIMBAL_DAMPING = 1e-4
+"""Damping of the socket's gimbal [N m s/rad]."""
+GIMBAL_ARMATURE = 1e-6
+"""Armature of the socket's gimbal (alone after the clip let go, the 1 g socket on a
+0.2 N m/rad spring swings at w dt = 0.45 at 1 ms) [kg m^2]."""
+
+
+def magnet_contact(scenario: Scenario) -> dict[str, str]:
+    """``solref``/``solimp`` of the magnet's face on the plate: time constant two physics
+    steps (MuJoCo's floor), impedance 0.999 throughout. Held by a force f, the face sinks
+    r = f (1 - d) A tau^2 (d the impedance, A the inverse inertia at the contact, tau the
+    time constant, critical damping): 0.02 mm for 150 N on a 30 g face lying flat; on
+    one edge (A about 120/kg: the magnet turns about it) 0.07 mm, where at d = 0.99 a
+    rocking magnet's edge went 3.6 mm into the plate."""
+    tau = 2.0 * scenario.sim.timestep
+    return {"solref": _fmt((tau, 1.0)), "solimp": "0.999 0.999 0.001"}
+
+
+def add_steel_plate(scene: SceneXml) -> None:
+    """The magnet mechanism's anchor: the steel plate ``plate``, a square box of
+    ``mechanism.plate_size`` and ``plate_thickness`` on the surface under p_A (its top face
+    ``magnet_thickness`` below p_A, the cable's eye on the held magnet). It collides with
+    the vehicle as the surface does; the magnet's face touches only it (the explicit
+    contact pair of :func:`add_magnet`)."""
+    m = scene.scenario.mechanism
+    geo = scene.layout.geometry
+    R_WS = geo.surface.R_WS
+    centre = geo.p_A - (m.magnet_thickness + 0.5 * m.plate_thickness) * R_WS[:, 2]
+    half = 0.5 * m.plate_size
+    _sub(scene.world, "geom", name="plate", type="box",
+         size=_fmt((half, half, 0.5 * m.plate_thickness)), pos=_fmt(centre),
+         quat=_quat_of_columns(R_WS[:, 0], R_WS[:, 1], R_WS[:, 2]), priority="1", condim="3",
+         solref=scene.contact_solref, friction=f"{m.magnet_friction:.12g} 0.005 0.0001",
+         rgba=".55 .58 .62 1", group="1")  # fmt: skip
+
+
+def add_boom(scene: SceneXml) -> None:
+    """The magnet mechanism's folding boom on the vehicle
+    (:class:`tetherland.models.hook.MagnetBoom`): the body ``boom`` hinged at the cable
+    attachment point about n x w (joint ``boom_hinge``, the spring ``boom_stiffness``
+    holding it on its stop 0 with ``boom_preload``, ``boom_damping``, folding up to
+    ``boom_fold_deg``), a capsule to
+    the site ``boom_tip`` at the cable's eye of the clipped magnet (the vehicle's contact
+    class: it touches the environment, not the vehicle)."""
+    from tetherland.models.hook import magnet_boom
+
+    sc = scene.scenario
+    m = sc.mechanism
+    boom = magnet_boom(sc)
+    assert scene.vehicle is not None
+    body = _sub(scene.vehicle, "body", name="boom", pos=_fmt(boom.hinge_B))
+    _sub(body, "joint", name="boom_hinge", type="hinge", axis=_fmt(boom.axis_B),
+         range=_fmt((0.0, math.radians(m.boom_fold_deg))), limited="true",
+         stiffness=f"{m.boom_stiffness:.12g}", damping=f"{m.boom_damping:.12g}",
+         springref=f"{-m.boom_preload / m.boom_stiffness:.12g}")  # fmt: skip
+    tip = boom.offset_B
+    L = boom.length
+    i_t = BOOM_MASS * L * L / 12.0
+    _sub(body, "inertial", pos=_fmt(0.5 * tip), mass=f"{BOOM_MASS:.12g}",
+         diaginertia=_fmt((i_t, i_t, i_t)))  # fmt: skip
+    _sub(body, "geom", name="boom", class_="collision", type="capsule",
+         size=f"{BOOM_RADIUS:.12g}", fromto=_fmt(np.concatenate((np.zeros(3), tip))),
+         material="frame", group="1")  # fmt: skip
+    # the socket the magnet is clipped into: on a spring-centred gimbal at the tip (a ball
+    # joint), so a magnet pressed on the plate by a folded boom turns flat on it
+    socket = _sub(body, "body", name="socket", pos=_fmt(tip), quat=_quat_z_to(boom.n_B))
+    _sub(socket, "joint", name="gimbal", type="ball", stiffness=f"{GIMBAL_STIFFNESS:.12g}",
+         damping=f"{GIMBAL_DAMPING:.12g}", armature=f"{GIMBAL_ARMATURE:.12g}")
+    _sub(socket, "inertial", pos="0 0 0", mass=f"{SOCKET_MASS:.12g}",
+         diaginertia=_fmt((1e-8, 1e-8, 1e-8)))  # fmt: skip
+    _sub(socket, "site", name="boom_tip", pos="0 0 0", size="0.005", group="4")
+
+
+def add_magnet(scene: SceneXml) -> None:
+    """The magnet: the free body ``magnet`` (a box of half side ``magnet_radius`` and
+    ``magnet_thickness`` along its local z, the approach direction when clipped; mass
+    ``magnet_mass``) placed on the boom's tip at qpos0, the weld ``clip`` holding it there
+    (the plant lets it go when pulled harder than ``clip_force``), the site ``magnet_eye``
+    on its back (the cable's end, the hook point) and ``magnet_face``.
+
+    Two geoms of one shape: ``magnet_face`` on the body ``magnet`` touches only the plate
+    (an explicit contact pair, stiff: :func:`magnet_contact`), ``magnet_shell`` on the
+    jointless child body ``magnet_shell`` touches the ground and the surface (contact bit
+    :data:`MAGNET_SHELL_BIT`), not the plate or the vehicle. MuJoCo's adhesion actuator
+    ``epm`` on the body ``magnet`` (:func:`add_actuators`) acts on the contacts of that
+    body's own geoms only: the plate's, never the wall's."""
+    from tetherland.models.hook import magnet_boom
+
+    sc = scene.scenario
+    m = sc.mechanism
+    boom = magnet_boom(sc)
+    start_com = scene.layout.start_position + np.array([0.0, 0.0, sc.vehicle.h_R])
+    # qpos0: the vehicle at its XML pose (F_B = F_W), the magnet on the boom's tip
+    centre = start_com + boom.eye_B + 0.5 * m.magnet_thickness * boom.n_B
+    body = _sub(scene.world, "body", name="magnet", pos=_fmt(centre), quat=_quat_z_to(boom.n_B))
+    _sub(body, "freejoint", name="magnet_free")
+    a, h = m.magnet_radius, 0.5 * m.magnet_thickness
+    mass = m.magnet_mass
+    _sub(body, "inertial", pos="0 0 0", mass=f"{mass:.12g}",
+         diaginertia=_fmt((mass * (a * a + h * h) / 3.0, mass * (a * a + h * h) / 3.0,
+                           2.0 * mass * a * a / 3.0)))  # fmt: skip
+    size = _fmt((a, a, h))
+    friction = f"{m.magnet_friction:.12g} 0.005 0.0001"
+    _sub(body, "geom", name="magnet_face", type="box", size=size, contype="0", conaffinity="0",
+         mass="0", rgba=".3 .3 .35 1", group="1")  # fmt: skip
+    shell = _sub(body, "body", name="magnet_shell")
+    # (priority over the ground's and the surface's: its contacts as stiff as the plate's,
+    # a released magnet swinging into the rock sank 2 mm into it at their 5 ms)
+    _sub(shell, "geom", name="magnet_shell", type="box", size=size,
+         contype=str(MAGNET_SHELL_BIT), conaffinity="0", condim="3", mass="0", priority="2",
+         friction=friction, rgba=".3 .3 .35 0", group="3", **magnet_contact(sc))  # fmt: skip
+    _sub(body, "site", name="magnet_eye", pos=_fmt((0.0, 0.0, -h)), size="0.005", group="4")
+    _sub(body, "site", name="magnet_face", pos=_fmt((0.0, 0.0, h)), size="0.005", group="4")
+    contact = scene.section("contact")
+    # the EPM pulls across a gap (MAGNET_GAP): contacts within it are found (margin) but
+    # push only once the face touches (gap), and MuJoCo's adhesion acts on them; with no
+    # gap a face rocking flat on the plate lost every contact for a step, and with it the
+    # whole holding force, and fell 3.5 cm
+    _sub(contact, "pair", name="magnet_plate", geom1="magnet_face", geom2="plate", condim="3",
+         margin=f"{MAGNET_GAP:.12g}", gap=f"{MAGNET_GAP:.12g}",
+         friction=f"{m.magnet_friction:.12g} {m.magnet_friction:.12g} 0.005 0.0001 0.0001",
+         **magnet_contact(sc))  # fmt: skip
+    equality = scene.section("equality")
+    _sub(equality, "weld", name="clip", body1="magnet", body2="socket", active="true",
+         solref=_fmt((2.0 * sc.sim.timestep, 1.0)), solimp="0.99 0.999 0.001")
+    for name in ("ground", "surface"):
+        g = scene.world.find(f"geom[@name='{name}']")
+        if g is not None:
+            g.set("conaffinity", str(1 | MAGNET_SHELL_BIT))
 
 
 @dataclass(frozen=True)
@@ -711,7 +867,35 @@ def add_vehicle(scene: SceneXml) -> None:
     body = _sub(scene.world, "body", name="vehicle", pos=_fmt(start_com))
     scene.vehicle = body
     _sub(body, "freejoint", name="vehicle_free")
-    _sub(body, "inertial", pos="0 0 0", mass=f"{v.mass:.12g}", diaginertia=_fmt(v.inertia))
+    mech = scene.scenario.mechanism
+    com = np.zeros(3)
+    carried = 0.0
+    if mech.kind == "magnet":
+        # vehicle.mass is the whole flying robot, its boom and magnet included; the frame
+        # is balanced (a counterweight) for the boom and MAGNET_BALANCE of the magnet's
+        # moment about the centre of mass
+        from tetherland.models.hook import magnet_boom
+
+        boom = magnet_boom(scene.scenario)
+        carried = BOOM_MASS + mech.magnet_mass
+        magnet_B = boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B
+        moment = (BOOM_MASS * 0.5 * (boom.hinge_B + boom.eye_B)
+                  + MAGNET_BALANCE * mech.magnet_mass * magnet_B)  # fmt: skip
+        com = -moment / (v.mass - carried)
+        # and vehicle.inertia is the whole robot's: the frame's is less the boom's and the
+        # clipped magnet's (points at their centres) and its own offset's
+        inertia = np.diag(np.asarray(v.inertia, dtype=float))
+        for mass, r in ((BOOM_MASS, 0.5 * (boom.hinge_B + boom.eye_B)),
+                        (mech.magnet_mass, boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B),
+                        (v.mass - carried, com)):  # fmt: skip
+            inertia -= mass * (float(r @ r) * np.eye(3) - np.outer(r, r))
+        # (the principal moments only: the frame alone cannot also cancel the boom's
+        # product of inertia and stay a physical body; the whole keeps J_xz of 2e-3)
+        _sub(body, "inertial", pos=_fmt(com), mass=f"{v.mass - carried:.12g}",
+             diaginertia=_fmt(np.diag(inertia)))  # fmt: skip
+    else:
+        _sub(body, "inertial", pos=_fmt(com), mass=f"{v.mass - carried:.12g}",
+             diaginertia=_fmt(v.inertia))  # fmt: skip
     _sub(body, "site", name="imu", pos="0 0 0", size="0.01", group="4")
     _sub(
         body,
@@ -744,6 +928,8 @@ def add_vehicle(scene: SceneXml) -> None:
     )
     add_landers(scene, body)
     add_rotors(scene, body)
+    if scene.scenario.mechanism.kind == "magnet":
+        add_boom(scene)
 
 
 def add_landers(scene: SceneXml, body: ET.Element) -> None:
@@ -838,6 +1024,14 @@ def add_cable(scene: SceneXml) -> None:
         _sub(cable, "site", site="anchor")
         _sub(cable, "site", site="attachment")
         return
+    if scenario.mechanism.kind == "magnet":
+        add_magnet(scene)
+        # the elastic cable from the magnet's eye to the attachment (always tied)
+        cable = _sub(scene.section("tendon"), "spatial", name="cable", width="0.002",
+                     rgba=".95 .85 .2 1")  # fmt: skip
+        _sub(cable, "site", site="magnet_eye")
+        _sub(cable, "site", site="attachment")
+        return
     cable_model = tether.cable_model
     if cable_model == CableModel.CHAIN:
         add_chain(
@@ -882,6 +1076,10 @@ def add_actuators(scene: SceneXml) -> None:
     if scene.scenario.tether.cable_model == CableModel.ELASTIC and not bar:
         # ctrl = cable tension f_L >= 0 [N], set by the plant each step; gear -1 shortens.
         _sub(act, "general", name="cable", tendon="cable", gear="-1", ctrllimited="false")
+    m = scene.scenario.mechanism
+    if m.kind == "magnet":  # ctrl 1: the EPM on, its holding force on its contacts
+        _sub(act, "adhesion", name="epm", body="magnet", ctrlrange="0 1",
+             gain=f"{m.magnet_force:.12g}")  # fmt: skip
 
 
 def add_sensors(scene: SceneXml) -> None:
@@ -916,7 +1114,13 @@ def add_sensors(scene: SceneXml) -> None:
 def add_mechanism_sensors(scene: SceneXml) -> None:
     """After :data:`SENSOR_LAYOUT`, for the bar mechanism: ``line_force`` (force sensor at
     ``line_root``: the line's pull on the vehicle, 3) and ``hook_bar`` (contacts of the line
-    and the hook with the anchoring cable: number found, net force in F_W, 4)."""
+    and the hook with the anchoring cable: number found, net force in F_W, 4); for the
+    magnet: ``magnet_plate`` (contacts of the magnet's face with the plate: number found,
+    net force in F_W, 4), the plant's truth of the catch."""
+    if scene.scenario.mechanism.kind == "magnet":
+        _sub(scene.section("sensor"), "contact", name="magnet_plate", geom1="magnet_face",
+             geom2="plate", data="found force", reduce="netforce")  # fmt: skip
+        return
     if scene.scenario.mechanism.kind != "bar":
         return
     sensor = scene.section("sensor")

@@ -41,7 +41,7 @@ from tetherland.interfaces import StateEstimate
 from tetherland.models.aero import aero_into
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.aero import aero_model
-from tetherland.sim.cable import Cable, HangingLine, make_cable
+from tetherland.sim.cable import Cable, HangingLine, MagnetCable, make_cable
 from tetherland.sim.hook import Hook, HookState
 from tetherland.sim.mjcf import (
     CONTACT_PARTNERS,
@@ -167,6 +167,13 @@ class Plant:
         if self._line is not None:
             self._line.set_anchor(geo.p_A, self.layout.ground_z, geo.R_WA[:, 1])
             self._crown_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "hook_crown")
+        self._magnet = self.cable if isinstance(self.cable, MagnetCable) else None
+        """The magnet mechanism's cable and magnet (None: another mechanism)."""
+        if self._magnet is not None:
+            self._magnet.set_anchor(geo.p_A, geo.surface.R_WS[:, 2])
+            self._crown_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "magnet_eye")
+        self._contact_hook: HangingLine | MagnetCable | None = self._line or self._magnet
+        """The mechanism whose contact decides the catch (None: the capture disk)."""
         self.hook = Hook(
             geo.p_A,
             self.layout.approach_W,
@@ -257,14 +264,15 @@ class Plant:
     @property
     def hook_point_W(self) -> FloatArray:
         """The hook's true position at :attr:`time` [m]: the crown of the bar mechanism's
-        hook body, else the capture-disk model's hook point."""
+        hook body, the cable's eye on the magnet, else the capture-disk model's hook
+        point."""
         out = np.empty(3)
         self.hook_point_into(out)
         return out
 
     def hook_point_into(self, out: FloatArray) -> None:
         """Write :attr:`hook_point_W` into ``out[:3]`` [m]."""
-        if self._line is not None:
+        if self._contact_hook is not None:
             out[:3] = self.data.site_xpos[self._crown_site]
         else:
             out[:3] = self._p_att_view
@@ -398,6 +406,17 @@ class Plant:
         """Current thrust factor of each rotor [-]."""
         return self.model.actuator_gear[0:4, 2] / self._gear0[:, 2]
 
+    @property
+    def has_magnet(self) -> bool:
+        """True with the magnet mechanism (the robot commands its EPM)."""
+        return self._magnet is not None
+
+    def set_magnet(self, on: bool) -> None:
+        """The robot's EPM command: on (its holding force on the plate through the contact)
+        or off. Ignored without the magnet mechanism."""
+        if self._magnet is not None:
+            self._magnet.set_epm(on)
+
     def snap_cable(self) -> None:
         """The cable breaks now: detached, and the hook can never engage it again."""
         self.hook.sever(self.time, self.attachment_point())
@@ -487,7 +506,7 @@ class Plant:
         """Start tracking the hook point from the attachment site's current position."""
         x, y, z = self._p_att_view.tolist()
         self._prev_att = (x, y, z)
-        self._hook_side = self._line is None and self.hook.side(x, y, z) >= 0.0
+        self._hook_side = self._contact_hook is None and self.hook.side(x, y, z) >= 0.0
 
     def _set_cable(self, engaged: bool) -> None:
         # Disengaged, the cable exerts no force and is not drawn (sim/cable.py).
@@ -618,8 +637,8 @@ class Plant:
         lander_normals, lander_peak = self._lander_normals, self._lander_peak
         frame_found, depth, depth_min = self._frame_found, self._depth_view, self._depth_min
         maximum = np.maximum
-        line = self._line
-        if line is not None:  # no capture plane: the contact decides (HangingLine)
+        line = self._contact_hook
+        if line is not None:  # no capture plane: the contact decides (line or magnet)
             n_dot_p0 = math.inf
             nx = ny = nz = 0.0
         data = self.data

@@ -38,6 +38,7 @@ from tetherland.interfaces import (
     Estimator,
     EventSource,
     InnerLoop,
+    MagnetCommander,
     MocapSample,
     Reference,
     ReferenceSource,
@@ -315,6 +316,8 @@ class Runner:
         estimator, controller = self.estimator, self.controller
         command_aware = isinstance(estimator, CommandAware)
         reference_aware = isinstance(reference, CommandAware)  # e.g. a fault monitor
+        # the robot's EPM command (the magnet mechanism), passed on at every control tick
+        magnet = reference if plant.has_magnet and isinstance(reference, MagnetCommander) else None
 
         n_ctrl = sched.control_every
         n_ticks = round(duration * sched.steps_per_second) // n_ctrl * n_ctrl
@@ -409,6 +412,8 @@ class Runner:
                 t_k = k * dt
                 est = estimate()
                 ref = get_reference(t_k, est)
+                if magnet is not None:
+                    plant.set_magnet(magnet.magnet_on)
                 cmd = (yield ControlTick(t_k, est, ref)) if external else control(t_k, est, ref)
                 if inner is None:
                     command(cmd.rotor_speeds)
