@@ -305,9 +305,10 @@ def test_hook_passing_beside_the_bar_is_not_caught(bar_plant: Plant, gap: float 
 def test_hook_is_caught_and_released_through_contact(bar_plant: Plant, scenario: str) -> None:
     """slope50 and pipe60 (the bar above the pipe): the hook lowered beside the bar, the
     vehicle flown over the bar to the landing side and pulling until the line's tension
-    passes 3 N: the line slides on the bar, the hook comes up to it and the bar ends in its crook (caught: the plant's contact
-    truth, and the tension held); flown back over the bar (the reverse motion) the hook is
-    released and hangs free. No contact anywhere goes more than 2 mm deep."""
+    passes 3 N: the line slides on the bar, the hook comes up to it and the bar ends in its
+    crook (caught: the plant's contact truth, and the tension held); flown back over the bar
+    (the reverse motion) the hook is released and hangs free. No contact anywhere goes more
+    than 2 mm deep."""
     if scenario == "slope50":
         plant = bar_plant
     else:
