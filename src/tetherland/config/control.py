@@ -89,9 +89,10 @@ class ControllerConfig(Section):
     rotor_drag: tuple[DragCoefficient, DragCoefficient] = (0.0, 0.0)
     """Believed rotor drag (d_x, d_y) of the vehicle (the same published fit as the
     plant's default, ``aero.rotor_drag``, which the robot never reads): the position
-    references' acceleration gets the drag of the reference velocity as a feed-forward;
-    [0, 0] (the default, as the plant's) leaves the drag to the feedback and the
-    integrals [N s/m]."""
+    references' acceleration gets the drag of the reference velocity as a feed-forward
+    (and the tethered references', ``rotor_drag_tethered``), and the perching planner
+    models it (``perching.model_rotor_drag``); [0, 0] (the default, as the plant's) leaves
+    the drag to the feedback and the integrals [N s/m]."""
     rotor_drag_tethered: bool = True
     """The believed rotor drag's feed-forward also on tethered references (as link
     accelerations, :func:`tetherland.control.rotor_drag.link_drag_acceleration`); false:
