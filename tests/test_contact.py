@@ -396,3 +396,36 @@ def test_the_motors_go_off_on_the_surface_not_above_it():
     assert np.all(loaded[log["t"][held] > log["t"][off] - 0.05])  # loaded when motors go off
     R_WB = quat_to_rotmat(log["q_WB"][off])
     assert ContactGeometry.from_scenario(plant).clearance(log["p_W"][off], R_WB) < 1e-3
+
+
+def _tared_run(scenario, geo, *, bias, push, tare):
+    """1 s of ticks with the landers 3 cm above the surface (free flight, the estimate
+    reading only its ``bias``), then 2 s landed and stalled with ``bias + push``; the time
+    after landing at which the rule confirms (None: never), with the tare on or off."""
+    sc = with_overrides(scenario, [f"mission.contact.tare_time_constant={0.2 if tare else 0}"])
+    rule = ContactRule(sc)
+    assert feed(rule, geo, sc, 1.0, lag_deg=1.0, rate_deg=0.0, normal=bias, height=0.03) is None
+    if tare:
+        assert rule.tare == pytest.approx(bias, abs=1e-9)  # the free-flight reading
+    return feed(rule, geo, sc, 2.0, lag_deg=1.0, rate_deg=0.0, normal=bias + push,
+                t0=1.0 + 1.0 / RATE)  # fmt: skip
+
+
+def test_the_tare_removes_the_estimates_own_bias(scenario, geo):
+    """A thrust or mass belief a few per cent off reads as a surface force b in free
+    flight. A light true push N (above the threshold, N + b below it) is missed without
+    the tare and confirmed with it once the filtered N - 0 crosses the threshold:
+    t = tau ln(N / (N - threshold)) + dwell after landing. A positive bias alone (no push)
+    is a false contact without the tare and none with it."""
+    cfg = scenario.mission.contact
+    b, push = -0.2, 0.25
+    assert push > cfg.surface_force > push + b  # the premise: missed only for the bias
+    assert _tared_run(scenario, geo, bias=b, push=push, tare=False) is None
+    t = _tared_run(scenario, geo, bias=b, push=push, tare=True)
+    tau = cfg.surface_force_time_constant
+    expected = tau * math.log(push / (push - cfg.surface_force)) + cfg.dwell
+    assert t == pytest.approx(expected, abs=2.0 / RATE)
+    # a positive bias of the same size fakes the surface force on a stalled link ...
+    assert _tared_run(scenario, geo, bias=-b, push=0.0, tare=False) is not None
+    # ... which the tare reads as what it is
+    assert _tared_run(scenario, geo, bias=-b, push=0.0, tare=True) is None

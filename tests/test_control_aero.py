@@ -12,10 +12,14 @@ import pytest
 from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.control.ground_effect import GroundEffectCompensation
-from tetherland.control.rotor_drag import RotorDragCompensation, drag_acceleration
+from tetherland.control.rotor_drag import (
+    RotorDragCompensation,
+    drag_acceleration,
+    link_drag_acceleration,
+)
 from tetherland.estimation.ground_effect import BelievedGroundEffect
 from tetherland.geometry import LandingGeometry
-from tetherland.interfaces import Command, Reference, StateEstimate
+from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.state import RigidBodyState
 
@@ -153,3 +157,49 @@ def test_the_reach_distance_is_the_distance_to_the_slab_or_the_pipe_axis(name):
         else:
             expected = abs(d @ surf.z_S) - 2.0 * PATCH_HALF_THICKNESS
         assert belief._distance(p) == pytest.approx(expected, abs=1e-12)
+
+
+def test_link_drag_acceleration_cancels_the_drag_across_the_link():
+    """Link vertical above the anchor (phi = 90 deg, delta = 0, F_A = F_W), level vehicle:
+    phi' = w moves the link end along z_L = -x_W at l w, delta' = u along -y_L = -y_W at
+    l u, both in the rotor plane. The drag D = (d_x l w, d_y l u, 0) decelerates them by
+    phi'' = -d_x w / m and delta'' = -d_y u / m (m l phi'' = F.z_L, m l delta'' = -F.y_L),
+    so the feed-forward is (+d_x w / m, +d_y u / m); at 4 m g of thrust the rotors spin
+    twice as fast and the drag doubles."""
+    d = np.array([0.45, 0.3])
+    m, l, w, u = 1.3, 1.1, 0.7, -0.4
+    Y = np.zeros((3, 4))
+    Y[0, 0] = math.pi / 2
+    Y[1, 0], Y[1, 1] = w, u
+    a = link_drag_acceleration(np.eye(3), np.eye(3), Y, m * GRAVITY, d, m, l)
+    assert a == pytest.approx((d[0] * w / m, d[1] * u / m), rel=1e-12, abs=1e-15)
+    a4 = link_drag_acceleration(np.eye(3), np.eye(3), Y, 4 * m * GRAVITY, d, m, l)
+    assert a4 == pytest.approx((2 * d[0] * w / m, 2 * d[1] * u / m), rel=1e-12, abs=1e-15)
+    # link horizontal (phi = 0): phi' moves the end along z_W = z_B, no drag in the plane
+    Y[0, 0], Y[1, 1] = 0.0, 0.0
+    assert link_drag_acceleration(np.eye(3), np.eye(3), Y, m * GRAVITY, d, m, l) == (
+        pytest.approx(0.0, abs=1e-15), pytest.approx(0.0, abs=1e-15))  # fmt: skip
+
+
+def test_tethered_references_get_the_drag_on_their_acceleration_row():
+    sc = load_scenario("slope50", ["controller.rotor_drag=[0.4, 0.4]"])
+    geo = LandingGeometry.from_scenario(sc)
+    inner = Recorder(np.full(4, 500.0))
+    ctrl = RotorDragCompensation(inner, sc)
+    Y = np.zeros((5, 4))
+    Y[0] = [geo.phi_star + 0.3, 0.02, geo.theta_A_star, 0.0]
+    Y[1, 0], Y[1, 1] = -0.4, 0.05
+    est = estimate_at(geo.p_L + 0.5 * geo.surface.z_S, geo.R_WA)
+    ref = Reference(t=0.0, mode=ControlMode.TETHERED, output=Y, thrust_ff=9.0)
+    ctrl.update(0.0, est, ref)
+    got = inner.seen[-1].output
+    a_phi, a_delta = link_drag_acceleration(geo.R_WA, geo.R_WA, Y, 9.0, np.array([0.4, 0.4]),
+                                            sc.vehicle.mass, geo.link_length)  # fmt: skip
+    np.testing.assert_array_equal(got[[0, 1, 3, 4]], Y[[0, 1, 3, 4]])
+    assert got[2, 0] == a_phi and got[2, 1] == a_delta and a_phi != 0.0
+    assert np.all(Y[2] == 0.0)  # the caller's rows are not changed
+    # switched off: the tethered reference passes through
+    off = RotorDragCompensation(inner, load_scenario(
+        "slope50", ["controller.rotor_drag=[0.4, 0.4]", "controller.rotor_drag_tethered=false"]))
+    off.update(0.0, est, ref)
+    assert inner.seen[-1] is ref

@@ -37,10 +37,14 @@ def _scenario(slope: float, *extra: str):
     return load_scenario("slope50", [f"surface.slope_deg={slope}", *extra])
 
 
-def resimulate(traj: FreeFlightTrajectory, scenario) -> tuple[np.ndarray, np.ndarray]:
+def resimulate(
+    traj: FreeFlightTrajectory, scenario, drag: tuple[float, float] = (0.0, 0.0)
+) -> tuple[np.ndarray, np.ndarray]:
     """Integrate the 3D rigid body (6.1)-(6.2) with DOP853 from the hover start, driven by
     the thrust and torque of the extension [f_R, tau, f_R', tau'] under the planned inputs
     U (held per interval) -- independent of the planner's RK4 and of the trajectory class.
+    ``drag``: (d_x, d_y), the plant's rotor drag F = -R diag(d_x, d_y, 0) R^T v (3D, in
+    F_W), at the rotor speed sqrt(f_R / (m g)) times the hover speed.
 
     Returns the times and the states (n, 13 + 4)."""
     params = RigidBodyParams.from_config(scenario.vehicle)
@@ -49,9 +53,14 @@ def resimulate(traj: FreeFlightTrajectory, scenario) -> tuple[np.ndarray, np.nda
     R0 = rotation_from_z_and_yaw([0.0, 0.0, 1.0], traj.meta.heading)
     x = np.concatenate((p0, np.zeros(3), rotmat_to_quat(R0), np.zeros(3), x0_plane[6:10]))
 
+    D = np.diag([drag[0], drag[1], 0.0])
+    mg = scenario.vehicle.mass * g
+
     def rhs(_t, z, u):
         f_R, tau, df, dtau = z[13:]
-        body = rigid_body_rhs(z[:13], f_R, np.array([0.0, tau, 0.0]), params)
+        R = quat_to_rotmat(z[6:10] / np.linalg.norm(z[6:10]))
+        f_drag = -R @ D @ R.T @ z[3:6] * math.sqrt(max(f_R, 0.0) / mg)
+        body = rigid_body_rhs(z[:13], f_R, np.array([0.0, tau, 0.0]), params, f_drag)
         return np.concatenate((body, [df, dtau, u[0], u[1]]))
 
     ts, xs = [0.0], [x]
@@ -218,3 +227,105 @@ def test_explicit_start_point(planner):
     bad = _scenario(30.0, f"perching.hover_position=[{off[0]}, {off[1]}, {off[2]}]")
     with pytest.raises(ConfigError, match="off the vertical plane"):
         planner.plan(bad)
+
+
+# -- rotor drag in the plan's model (issue 23) ------------------------------------------
+DRAG = 0.45
+"""The published small-quadrotor fit of docs/aero.md [N s/m]."""
+
+
+def test_steady_flight_through_the_drag_is_the_derived_equilibrium():
+    """Level flight at V through the drag d: F z_B + D = m g z_W with D = -d s (v.x_B) x_B,
+    s = sqrt(F / (m g)). Along z_B (D is across it): F = m g cos(theta); along x_B:
+    m g sin(theta) = d s V cos(theta), i.e. tan(theta) = d V sqrt(cos(theta)) / (m g)."""
+    from scipy.optimize import brentq
+
+    from tetherland.planning.perching.model import NUMPY, flat_derivatives, rhs
+
+    m, J, V = 1.1, 0.01, 1.5
+    th = brentq(lambda a: math.tan(a) - DRAG * V * math.sqrt(math.cos(a)) / (m * g), 0.0, 1.0)
+    F = m * g * math.cos(th)
+    x = np.array([0.3, 1.0, th, V, 0.0, 0.0, F, 0.0, 0.0, 0.0])
+    u = np.zeros(2)
+    xdot = rhs(x, u, m, J, g, NUMPY, DRAG)
+    np.testing.assert_allclose(xdot[3:6], 0.0, atol=1e-12)  # steady: no acceleration
+    d = flat_derivatives(x[:, None], u[:, None], m, J, g, DRAG)
+    for key in ("acc", "jerk", "snap"):
+        np.testing.assert_allclose(d[key][:, 0], 0.0, atol=1e-12)
+    # without the drag in the model the same state accelerates backwards by exactly D / m
+    free = rhs(x, u, m, J, g, NUMPY)
+    D = DRAG * math.sqrt(math.cos(th)) * V * math.cos(th)  # d s (v . x_B)
+    np.testing.assert_allclose(free[3:5], D / m * np.array([math.cos(th), -math.sin(th)]),
+                               rtol=1e-12)  # fmt: skip
+    # a level vertical descent has no velocity in the rotor plane: no drag, hover thrust
+    x_down = np.array([0.0, 1.0, 0.0, 0.0, -0.8, 0.0, m * g, 0.0, 0.0, 0.0])
+    np.testing.assert_allclose(rhs(x_down, u, m, J, g, NUMPY, DRAG)[3:5], 0.0, atol=1e-12)
+
+
+def test_flat_outputs_with_drag_are_consistent_derivatives(planner):
+    traj = planner.plan(_scenario(50.0, f"controller.rotor_drag=[{DRAG}, {DRAG}]")).require()
+    assert traj.meta.rotor_drag == DRAG
+    t = np.linspace(0.05, traj.duration - 0.05, 40)
+    h = 1e-4
+    mid, lo, hi = traj.sample(t), traj.sample(t - h), traj.sample(t + h)
+    for k in range(1, 4):  # velocity, acceleration, jerk from the row above (central diff)
+        numeric = (hi.p_W[:, k - 1] - lo.p_W[:, k - 1]) / (2 * h)
+        scale = np.abs(mid.p_W[:, k]).max()
+        assert np.abs(numeric - mid.p_W[:, k]).max() < 1e-4 * max(scale, 1.0)
+
+
+def test_the_drag_plan_flies_the_rigid_body_through_the_plant_drag(planner):
+    """The plan's thrust and attitude cancel the drag: (i) along the plan the thrust vector
+    F z_B is m (a + g z_W) plus the drag d s (v.x_B) x_B, with a from the planned
+    positions by finite differences; (ii) the 3D rigid body with the plant's drag law,
+    driven by the planned thrust and torque, meets the landing conditions, where the
+    drag-free plan misses them."""
+    on = _scenario(50.0, f"controller.rotor_drag=[{DRAG}, {DRAG}]")
+    traj = planner.plan(on).require()
+    m = on.vehicle.mass
+    h = 1e-4
+    t = np.linspace(0.05, traj.duration - 0.05, 60)
+    s = traj.sample(t)
+    p = [traj.sample(t + k * h).p_W[:, 0] for k in (-1, 0, 1)]
+    a = (p[2] - 2 * p[1] + p[0]) / h**2
+    v = (p[2] - p[0]) / (2 * h)
+    x_B, z_B = s.R_WB[:, :, 0], s.R_WB[:, :, 2]
+    scale = np.sqrt(s.thrust / (m * g))
+    drag = DRAG * scale * np.einsum("ni,ni->n", v, x_B)
+    wanted = m * (a + np.array([0.0, 0.0, g])) + drag[:, None] * x_B
+    np.testing.assert_allclose(s.thrust[:, None] * z_B, wanted, atol=2e-3 * m * g)
+    assert np.abs(drag).max() > 0.3  # the drag the plan carries is not small
+    geo = LandingGeometry.from_scenario(on)
+
+    def landing_error(tr):
+        _, xs = resimulate(tr, on, drag=(DRAG, DRAG))
+        end = xs[-1]
+        R_end = quat_to_rotmat(end[6:10])
+        miss = np.linalg.norm(end[0:3] - geo.h_R * R_end[:, 2] - geo.p_L)
+        return miss, np.linalg.norm(end[3:6] + on.perching.approach_speed * geo.surface.z_S)
+
+    miss, speed_error = landing_error(traj)
+    # the planner's model is the plant's drag law in the plane: the same motion (RK4 vs
+    # DOP853), to the millimetre; the drag-free plan through the same drag misses by cm
+    assert miss < 1e-3 and speed_error < 1e-2
+    free = planner.plan(_scenario(50.0, f"controller.rotor_drag=[{DRAG}, {DRAG}]",
+                                  "perching.model_rotor_drag=false")).require()  # fmt: skip
+    assert free.meta.rotor_drag == 0.0
+    miss_free, speed_free = landing_error(free)
+    assert miss_free > 0.05 and speed_free > 0.2
+
+
+def test_drag_option_off_gives_the_drag_free_plan_bit_for_bit(planner):
+    base = planner.plan(_scenario(50.0)).require()
+    off = planner.plan(_scenario(50.0, f"controller.rotor_drag=[{DRAG}, {DRAG}]",
+                                 "perching.model_rotor_drag=false")).require()  # fmt: skip
+    for name in ("times", "X", "U"):
+        assert np.array_equal(getattr(base, name), getattr(off, name))
+    assert base.to_csv() == off.to_csv() and "rotor_drag" not in base.to_csv()
+    on = planner.plan(_scenario(50.0, f"controller.rotor_drag=[{DRAG}, {DRAG}]")).require()
+    assert on.duration != base.duration  # (the drag plan is another plan)
+    # the drag plan round-trips through its CSV with its coefficient
+    back = free_flight_trajectory_from_csv(on.to_csv())
+    assert back.meta.rotor_drag == DRAG
+    t = np.linspace(0.0, on.duration, 30)
+    np.testing.assert_allclose(back.sample(t).p_W, on.sample(t).p_W, atol=1e-9)

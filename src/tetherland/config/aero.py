@@ -39,9 +39,8 @@ class AeroConfig(Section):
     rotor_drag: tuple[DragCoefficient, DragCoefficient] = (0.0, 0.0)
     """(d_x, d_y) of the rotor drag F = -R_WB diag(d_x, d_y, 0) R_WB^T v at the hover
     rotor speed, scaled with the mean rotor speed; [0, 0] switches it off. Off by default
-    for now (the published fit is 0.45, ``ROTOR_DRAG_DEFAULT``): with it on, the perching
-    planner, which has no drag in its model, clips the 50 deg slope, and the contact rule
-    misses some tethered touchdowns (docs/aero.md) [N s/m]."""
+    (the published fit is 0.45, ``ROTOR_DRAG_DEFAULT``; docs/aero.md measures it on and
+    off) [N s/m]."""
     rotor_radius: float | None = Field(None, gt=0, le=1)
     """Rotor radius R; by default the rotor-guard radius, 0.4 arm_length [m]."""
     disk_rings: int = Field(3, ge=1, le=8)

@@ -89,9 +89,15 @@ class ControllerConfig(Section):
     rotor_drag: tuple[DragCoefficient, DragCoefficient] = (0.0, 0.0)
     """Believed rotor drag (d_x, d_y) of the vehicle (the same published fit as the
     plant's default, ``aero.rotor_drag``, which the robot never reads): the position
-    references' acceleration gets the drag of the reference velocity as a feed-forward;
-    [0, 0] (the default, as the plant's) leaves the drag to the feedback and the
-    integrals [N s/m]."""
+    references' acceleration gets the drag of the reference velocity as a feed-forward
+    (and the tethered references', ``rotor_drag_tethered``), and the perching planner
+    models it (``perching.model_rotor_drag``); [0, 0] (the default, as the plant's) leaves
+    the drag to the feedback and the integrals [N s/m]."""
+    rotor_drag_tethered: bool = True
+    """The believed rotor drag's feed-forward also on tethered references (as link
+    accelerations, :func:`tetherland.control.rotor_drag.link_drag_acceleration`); false:
+    free-flight references only, the link integral absorbs the drag of the tethered
+    swing [-]."""
     rate_hz: float = Field(500.0, gt=0, le=5000)
     """Control rate (rotor-speed commands to the ESCs, section 6.6.4) [Hz]."""
     free_flight: FreeFlightGains = FreeFlightGains()

@@ -209,6 +209,14 @@ class ContactConfig(Section):
     surface's push; the judge's truth is ``verdict.touchdown_force``) [N]."""
     surface_force_time_constant: float = Field(0.05, ge=0, le=5)
     """Time constant of the low-pass of the estimated surface force [s]."""
+    tare_time_constant: float = Field(0.0, ge=0, le=5)
+    """Tare of the estimated surface force: while the lowest lander tip is estimated more
+    than ``clearance`` above the believed surface (no contact is possible), the estimate is
+    low-passed with this time constant, and from the first tick within ``clearance`` that
+    baseline (the estimate's own bias: thrust coefficient, mass and ground-effect belief
+    errors, about -0.2 N on perturbed 50 deg landings) is held and subtracted from the
+    estimate the rule and the preload read (0, the default: no tare; 0.2 is the value
+    measured in docs/aero.md) [s]."""
     impact_force: float = Field(1.5, gt=0, le=1000)
     """Signal "surface force": ... or one unfiltered sample of it exceeded this within
     twice the dwell (an impact) [N]."""

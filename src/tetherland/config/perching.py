@@ -74,6 +74,11 @@ class PerchingConfig(Section):
     attitude, while waiting for (estimated) contact; then the motors go off anyway [s]."""
     lag_compensation: bool = True
     """Lead the rotor-speed commands by the motor lag along the planned thrust profile."""
+    model_rotor_drag: bool = True
+    """Put the believed rotor drag (``controller.rotor_drag``, d_x: the plan's motion is in
+    the x_B-z_B plane) into the plan's dynamics, so that the planned attitude and thrust
+    fly the path through the drag; no effect while the believed drag is zero (the plan is
+    then the drag-free plan, bit for bit) [-]."""
     weights: PerchingWeights = PerchingWeights()
 
     @model_validator(mode="after")

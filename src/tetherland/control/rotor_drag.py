@@ -14,6 +14,14 @@ drag at 0.9 m/s, still touched down 8 mm off its plan).
 The reference velocity, not the estimated one, keeps estimation noise out of the
 feed-forward (and out of the motor-lag lead, which differentiates it). The coefficients
 are the belief's ``controller.rotor_drag``; the plant's ``[aero]`` is never read.
+
+Tethered references (link outputs y = [phi, delta, theta_A, psi], no position rows) get
+the same force as link accelerations (:func:`link_drag_acceleration`): the tethered laws
+set the thrust's components across the link from phi'' and delta'' (the cable takes the
+rest), so the drag D of the reference velocity l (cos(delta) phi' z_L - delta' y_L) is
+cancelled by phi_d'' += -D.z_L / (m l cos(delta)) and delta_d'' += D.y_L / (m l).
+Without it the link integral absorbs the drag of the swing and carries that state into
+the touchdown (docs/aero.md).
 """
 
 from __future__ import annotations
@@ -27,8 +35,8 @@ import numpy as np
 from tetherland import GRAVITY
 from tetherland.config import Scenario
 from tetherland.control.ground_effect import GroundEffectCompensation
-from tetherland.geometry import FloatArray
-from tetherland.interfaces import Command, Controller, Reference, StateEstimate
+from tetherland.geometry import FloatArray, LandingGeometry, link_frame
+from tetherland.interfaces import Command, Controller, ControlMode, Reference, StateEstimate
 from tetherland.rotations import quat_to_rotmat
 
 
@@ -50,6 +58,32 @@ def drag_acceleration(
     return R_WB @ f_B * (scale / mass)
 
 
+def link_drag_acceleration(
+    R_WB: FloatArray, R_WA: FloatArray, Y: FloatArray, thrust: float, d_xy: FloatArray,
+    mass: float, length: float,
+) -> tuple[float, float]:  # fmt: skip
+    """(phi'', delta'') [rad/s^2] the tethered laws must add to fly the link reference
+    ``Y`` (rows y, y' of [phi, delta, ...]) through the rotor drag diag(d_x, d_y, 0)
+    [N s/m] at attitude ``R_WB``, for a vehicle of ``mass`` [kg] on a link of ``length``
+    [m] whose thrust is ``thrust`` [N] (the rotor-speed scale sqrt(thrust / (m g)); 0 or
+    less: the hover speed).
+
+    The centre of mass moves with the link end, v_A = l (cos(delta) phi' z_L - delta' y_L)
+    (the attachment offset's own motion is left out); the drag D = -R_WB diag(d) R_WB^T v
+    is cancelled across the link by phi'' += -D.z_L / (m l cos(delta)) and
+    delta'' += D.y_L / (m l).
+    """
+    phi, delta = float(Y[0, 0]), float(Y[0, 1])
+    R_AL = link_frame(phi, delta)
+    cd = math.cos(delta)
+    v_W = R_WA @ (length * (cd * float(Y[1, 0]) * R_AL[:, 2] - float(Y[1, 1]) * R_AL[:, 1]))
+    scale = math.sqrt(thrust / (mass * GRAVITY)) if thrust > 0.0 else 1.0
+    v_B = R_WB.T @ v_W
+    D_W = -(R_WB @ np.array([d_xy[0] * v_B[0], d_xy[1] * v_B[1], 0.0])) * scale
+    D_L = R_AL.T @ (R_WA.T @ D_W)
+    return -float(D_L[2]) / (mass * length * cd), float(D_L[1]) / (mass * length)
+
+
 class RotorDragCompensation:
     """Wraps ``controller``: position references carry the believed drag as feed-forward.
 
@@ -65,10 +99,28 @@ class RotorDragCompensation:
         self.inner = controller
         self.d_xy = np.asarray(belief.controller.rotor_drag, dtype=float)
         self.mass = float(belief.vehicle.mass)
+        self.tethered = belief.controller.rotor_drag_tethered
+        """Also the tethered references (``controller.rotor_drag_tethered``)."""
+        geo = LandingGeometry.from_scenario(belief)
+        self.R_WA, self.length = geo.R_WA, float(geo.link_length)
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         rows = reference.p_W
         if rows is None or len(rows) < 2:
+            Y = reference.output
+            if (
+                self.tethered and Y is not None and len(Y) > 2
+                and reference.mode is ControlMode.TETHERED
+            ):  # fmt: skip
+                Y = np.array(Y, dtype=float)
+                thrust = reference.thrust_ff if reference.thrust_ff is not None else 0.0
+                a_phi, a_delta = link_drag_acceleration(
+                    quat_to_rotmat(estimate.body.q_WB), self.R_WA, Y, float(thrust), self.d_xy,
+                    self.mass, self.length,
+                )  # fmt: skip
+                Y[2, 0] += a_phi
+                Y[2, 1] += a_delta
+                return self.inner.update(t, estimate, replace(reference, output=Y))
             return self.inner.update(t, estimate, reference)
         rows = np.asarray(rows, dtype=float)
         R_WB = quat_to_rotmat(estimate.body.q_WB)

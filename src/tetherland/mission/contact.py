@@ -18,7 +18,12 @@ contact with the surface is believed only when every signal agrees for
    specific force and the rotors' thrust): the external force on the vehicle without its
    component along the cable, projected on the believed surface normal, low-passed, is
    above ``surface_force``, or an impact above ``impact_force`` was seen within twice the
-   dwell.
+   dwell. Both are read against the *tare*: the estimate's own value in the last
+   ``tare_time_constant`` before the landers came within ``clearance`` (where nothing
+   pushes), so that a biased estimate (a thrust coefficient or a mass a few per cent off
+   the belief reads as a surface force of a few tenths of a newton: about -0.2 N on
+   perturbed 50 deg landings, more than the threshold) neither hides a light contact nor
+   fakes one.
 
 A gust pushes the vehicle away from the surface only while it lasts and gives no
 clearance; an anchor belief error shifts the link angles but not the surface force. A
@@ -67,8 +72,8 @@ class ContactEvidence:
     link_rate : float
         Estimated link elevation rate [rad/s].
     normal_force : float or None
-        Low-passed estimated surface force along the believed normal (None: the estimate
-        carries no external force) [N].
+        Low-passed estimated surface force along the believed normal, less the tare
+        (None: the estimate carries no external force) [N].
     near, stalled, pressed : bool
         Signals 1-3 of the module docstring (``pressed`` is True without a force signal).
     """
@@ -197,11 +202,24 @@ class ContactRule:
         self.reset()
 
     def reset(self) -> None:
-        """Forget the dwell, the filtered force and the last impact."""
+        """Forget the dwell, the filtered force, the tare and the last impact."""
         self._since: float | None = None
         self._force: float | None = None
         self._t_force: float | None = None
         self._impact_at = -math.inf
+        self.tare = 0.0
+        """Baseline of the estimated surface force, subtracted from it (see the module
+        docstring) [N]."""
+        self._t_tare: float | None = None
+
+    def _update_tare(self, t: float, raw: float) -> None:
+        """Low-pass the unfiltered estimate ``raw`` [N] into the tare (clear of the surface)."""
+        tau = self.cfg.tare_time_constant
+        if self._t_tare is None:
+            self.tare = raw
+        else:
+            self.tare += (1.0 - math.exp(-max(t - self._t_tare, 0.0) / tau)) * (raw - self.tare)
+        self._t_tare = t
 
     def _filtered_force(self, t: float, raw: float) -> float:
         tau = self.cfg.surface_force_time_constant
@@ -230,6 +248,10 @@ class ContactRule:
         pressed = True
         if est.external_force_B is not None:
             raw = geo.normal_force(p_W, R_WB, est.external_force_B)
+            if cfg.tare_time_constant > 0.0:
+                if clearance >= cfg.clearance:
+                    self._update_tare(t, raw)
+                raw -= self.tare
             force = self._filtered_force(t, raw)
             if raw > cfg.impact_force:
                 self._impact_at = t

@@ -9,6 +9,15 @@ exists without a cable too). Coordinates relative to p*_L in (x_A, z_W):
 
   px'' = f_R sin(theta)/m,  pz'' = f_R cos(theta)/m - g,  theta'' = tau/J_y
 
+With the believed rotor drag d_x (``controller.rotor_drag``, switched by
+``perching.model_rotor_drag``) the rotors are pushed back in their plane, as the plant's
+F = -R_WB diag(d_x, d_y, 0) R_WB^T v (:mod:`tetherland.models.aero`) restricted to the plane
+(y_B is normal to it, so d_y never acts): the acceleration gets
+-(d_x s / m) (v . x_B) x_B, x_B = [cos theta, -sin theta], with the rotor-speed scale
+s = w / w_h = sqrt(f_R / (m g)) (the controllers' feed-forward's,
+:func:`tetherland.control.rotor_drag.drag_acceleration`). The drag acts at the centre of
+mass: no torque.
+
 theta is the pitch of the thrust axis from vertical towards x_A (z_B = [sin theta, 0,
 cos theta] in F_A, as theta_A of the tethered model), omega = theta' the body rate about
 y_A = y_B, tau the torque about y_B. This is the 3D rigid body (6.1)-(6.2) restricted to
@@ -30,6 +39,7 @@ outer rims of the rotor guards (+-r_g, 0) must stay above the surface before t_L
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -55,13 +65,47 @@ GUARD_RADIUS_FRACTION = 0.4
 PLANE_TOL = 1e-3
 """Largest distance of a start point from the fall-line plane [m]."""
 
-NUMPY = SimpleNamespace(sin=np.sin, cos=np.cos, stack=np.stack)
-CASADI = SimpleNamespace(sin=ca.sin, cos=ca.cos, stack=lambda items: ca.vertcat(*items))
+NUMPY = SimpleNamespace(sin=np.sin, cos=np.cos, sqrt=np.sqrt, stack=np.stack)
+CASADI = SimpleNamespace(
+    sin=ca.sin, cos=ca.cos, sqrt=ca.sqrt, stack=lambda items: ca.vertcat(*items)
+)
 
 
-def rhs(x: Any, u: Any, mass: Any, inertia: Any, gravity: Any, ops: SimpleNamespace) -> Any:
-    """x' of the extended planar model for any backend (numbers, arrays, CasADi)."""
+def drag_terms(x: Any, mass: Any, gravity: Any, drag: Any, ops: SimpleNamespace) -> Any:
+    """(a_x, a_z): the rotor drag's acceleration in (x_A, z_W) of states ``x`` for the
+    drag coefficient ``drag`` = d_x at the hover rotor speed [N s/m] (see the module
+    docstring) [m/s^2]."""
     th, F = x[2], x[6]
+    c, s = ops.cos(th), ops.sin(th)
+    scale = ops.sqrt(F / (mass * gravity))
+    k = -drag * scale * (x[3] * c - x[4] * s) / mass  # -(d s / m) (v . x_B)
+    return k * c, -k * s
+
+
+def rhs(
+    x: Any, u: Any, mass: Any, inertia: Any, gravity: Any, ops: SimpleNamespace,
+    drag: Any = None,
+) -> Any:  # fmt: skip
+    """x' of the extended planar model for any backend (numbers, arrays, CasADi); with
+    ``drag`` (d_x [N s/m], a number or a symbol) the rotor drag of :func:`drag_terms`
+    (None: the drag-free model, expression for expression)."""
+    th, F = x[2], x[6]
+    if drag is not None:
+        ax, az = drag_terms(x, mass, gravity, drag, ops)
+        return ops.stack(
+            [
+                x[3],
+                x[4],
+                x[5],
+                F * ops.sin(th) / mass + ax,
+                F * ops.cos(th) / mass - gravity + az,
+                x[7] / inertia,
+                x[8],
+                x[9],
+                u[0],
+                u[1],
+            ]
+        )
     return ops.stack(
         [
             x[3],
@@ -79,14 +123,17 @@ def rhs(x: Any, u: Any, mass: Any, inertia: Any, gravity: Any, ops: SimpleNamesp
 
 
 def flat_derivatives(
-    x: FloatArray, u: FloatArray, mass: float, inertia: float, gravity: float
-) -> dict[str, FloatArray]:
+    x: FloatArray, u: FloatArray, mass: float, inertia: float, gravity: float,
+    drag: float = 0.0,
+) -> dict[str, FloatArray]:  # fmt: skip
     """Acceleration, jerk and snap of the centre of mass in (x_A, z_W) coordinates.
 
     Parameters
     ----------
     x : (10, n) array
     u : (2, n) array
+    drag : float
+        Rotor drag d_x of the model [N s/m] (0: the drag-free model's closed forms).
 
     Returns
     -------
@@ -95,14 +142,33 @@ def flat_derivatives(
         [rad/s^2].
     """
     th, om, F, tau, dF = x[2], x[5], x[6], x[7], x[8]
+    om_dot = tau / inertia
+    if drag != 0.0:
+        c = np.array([mass, inertia, gravity, drag])
+        acc, jerk, snap = _drag_flat_function()(x, u, c)
+        return {"acc": np.asarray(acc), "jerk": np.asarray(jerk), "snap": np.asarray(snap),
+                "omega_dot": om_dot}  # fmt: skip
     z_B = np.stack((np.sin(th), np.cos(th)))
     x_B = np.stack((np.cos(th), -np.sin(th)))
-    om_dot = tau / inertia
     acc = F / mass * z_B
     acc[1] -= gravity
     jerk = dF / mass * z_B + F * om / mass * x_B
     snap = (u[0] - F * om * om) / mass * z_B + (2.0 * dF * om + F * om_dot) / mass * x_B
     return {"acc": acc, "jerk": jerk, "snap": snap, "omega_dot": om_dot}
+
+
+@functools.cache
+def _drag_flat_function() -> ca.Function:
+    """``f(x[10], u[2], c[4]) -> (acc, jerk, snap)`` (2 each) of the model with rotor drag,
+    c = [m, J_y, g, d_x]: the acceleration of :func:`rhs` and its time derivatives along
+    the motion, d/dt = (d/dx) x' (the input is held, and the acceleration and the jerk do
+    not depend on it)."""
+    x, u, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("c", 4)
+    xdot = rhs(x, u, c[0], c[1], c[2], CASADI, c[3])
+    acc = xdot[3:5]
+    jerk = ca.jacobian(acc, x) @ xdot
+    snap = ca.jacobian(jerk, x) @ xdot
+    return ca.Function("perch_drag_flat", [x, u, c], [acc, jerk, snap])
 
 
 def guard_reach(scenario: Scenario) -> float:
@@ -150,6 +216,9 @@ class PerchSpec:
     clearance_margin : float
         [m].
     weights : PerchingWeights
+    rotor_drag : float
+        Believed rotor drag d_x in the model [N s/m] (0: drag-free, see
+        ``perching.model_rotor_drag``).
     heading : float
         Yaw of x_A in F_W, atan2(x_A.y_W, x_A.x_W): the reference yaw psi [rad].
     """
@@ -176,6 +245,7 @@ class PerchSpec:
     max_pitch: float
     clearance_margin: float
     weights: PerchingWeights
+    rotor_drag: float = 0.0
 
     @classmethod
     def from_scenario(
@@ -220,6 +290,7 @@ class PerchSpec:
             max_pitch=math.radians(cfg.max_pitch_deg),
             clearance_margin=cfg.clearance_margin,
             weights=cfg.weights,
+            rotor_drag=float(scenario.controller.rotor_drag[0]) if cfg.model_rotor_drag else 0.0,
         )
         if start is None:
             if cfg.hover_position is not None:

@@ -270,16 +270,19 @@ class PerchingPlanner:
     def __init__(self, tolerances: PerchTolerances | None = None) -> None:
         self.tolerances = tolerances or PerchTolerances()
         self.driver = OcpDriver()
-        self._template: OcpProblem | None = None
+        self._templates: dict[bool, OcpProblem] = {}
+        """The statements built so far, drag-free (False) and with rotor drag (True)."""
 
     def ocp_solver(self, transcription: MultipleShooting, settings: SolverSettings) -> OcpSolver:
         """The cached :class:`OcpSolver` for these settings."""
         return self.driver.ocp_solver(transcription, settings)
 
     def problem(self, spec: PerchSpec, duration: float) -> OcpProblem:
-        """The perching OCP of ``spec`` over ``duration`` (statement built once)."""
-        self._template = build_perching_ocp(spec, duration, self._template)
-        return self._template
+        """The perching OCP of ``spec`` over ``duration`` (each statement built once)."""
+        drag = spec.rotor_drag > 0.0
+        problem = build_perching_ocp(spec, duration, self._templates.get(drag))
+        self._templates[drag] = problem
+        return problem
 
     def plan(
         self,

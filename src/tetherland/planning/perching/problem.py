@@ -18,6 +18,10 @@ Every number (vehicle, slope, target, weights) is a parameter of the statement, 
 compiled solver serves every slope and vehicle; the duration T is a number too, which
 the free-final-time search of :mod:`.planner` varies.
 
+With the believed rotor drag (``PerchSpec.rotor_drag`` > 0) the dynamics carry it
+(:func:`.model.rhs`), its coefficient one more parameter; a drag-free request keeps the
+drag-free statement (the same expressions, the same compiled solver, the same plan).
+
 The approach funnel keeps the plan from grazing the surface: without it the optimum
 skims along the slope for the last ~0.1 s (the tips within a millimetre of the surface
 while moving tangentially), so a millimetre of tracking error brings contact that much
@@ -53,6 +57,13 @@ _PARAMS = (
 )  # fmt: skip
 
 
+_DRAG_PARAMS = (*_PARAMS, ("drag", 1))
+
+
+def _params(drag: bool) -> tuple[tuple[str, int], ...]:
+    return _DRAG_PARAMS if drag else _PARAMS
+
+
 def _param_values(spec: PerchSpec) -> np.ndarray:
     w = spec.weights
     values = {
@@ -62,9 +73,10 @@ def _param_values(spec: PerchSpec) -> np.ndarray:
         "v_final": spec.v_final, "k_jerk": w.k_jerk, "k_omega": w.k_omega,
         "k_u": w.k_thrust_accel, "f_R_final": spec.f_R_final,
         "funnel_height": spec.approach_height,
-        "funnel_speed": FUNNEL_FRACTION * spec.approach_speed,
+        "funnel_speed": FUNNEL_FRACTION * spec.approach_speed, "drag": spec.rotor_drag,
     }  # fmt: skip
-    return np.concatenate([np.atleast_1d(np.asarray(values[n], dtype=float)) for n, _ in _PARAMS])
+    names = _params(spec.rotor_drag > 0.0)
+    return np.concatenate([np.atleast_1d(np.asarray(values[n], dtype=float)) for n, _ in names])
 
 
 def _numbers(spec: PerchSpec, duration: float) -> dict[str, object]:
@@ -89,24 +101,24 @@ def build_perching_ocp(
 ) -> OcpProblem:
     """The perching OCP of ``spec`` over ``duration`` seconds.
 
-    ``template``: a problem built before by this function; its symbolic statement is
-    reused (only the numbers change), which keeps the structure key and the compiled
-    solver.
+    ``template``: a problem built before by this function for a request of the same
+    kind (drag-free, or with rotor drag); its symbolic statement is reused (only the
+    numbers change), which keeps the structure key and the compiled solver.
     """
     numbers = _numbers(spec, duration)
     if template is not None:
         return template.with_numbers(**numbers)
-    return OcpProblem(**_statement(), **numbers)
+    return OcpProblem(**_statement(spec.rotor_drag > 0.0), **numbers)
 
 
-def _statement() -> dict[str, object]:
-    s = {name: ca.SX.sym(name, n) for name, n in _PARAMS}
+def _statement(drag: bool = False) -> dict[str, object]:
+    s = {name: ca.SX.sym(name, n) for name, n in _params(drag)}
     P = ca.vertcat(*s.values())
     x, u = ca.SX.sym("x", NX), ca.SX.sym("u", NU)
     t, T, h = ca.SX.sym("t"), ca.SX.sym("T"), ca.SX.sym("h")
     G = ca.reshape(s["G"], 2, 4).T  # (4, 2) from row-major values
     m = s["mass"]
-    ode = rhs(x, u, m, s["inertia"], s["gravity"], CASADI)
+    ode = rhs(x, u, m, s["inertia"], s["gravity"], CASADI, s["drag"] if drag else None)
     F, om, dF = x[6], x[5], x[8]
     wrench, wrench_dot = x[6:8], x[8:10]
     jerk_sq = (dF / m) ** 2 + (F * om / m) ** 2

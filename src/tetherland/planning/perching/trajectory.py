@@ -86,6 +86,9 @@ class FreeFlightMeta:
         Centre of mass to landers plane [m].
     approach_speed : float
         Planned touchdown speed along -z_S [m/s].
+    rotor_drag : float
+        Rotor drag d_x of the model [N s/m] (0: drag-free; the key is then left out of
+        the CSV header, as before the drag was modelled).
     version : str
     """
 
@@ -100,6 +103,7 @@ class FreeFlightMeta:
     approach_speed: float = 0.0
     gravity: float = GRAVITY
     version: str = field(default=__version__)
+    rotor_drag: float = 0.0
 
     @classmethod
     def from_spec(cls, spec: PerchSpec) -> FreeFlightMeta:
@@ -107,6 +111,7 @@ class FreeFlightMeta:
             scenario=spec.scenario_name, mass=spec.mass, inertia=spec.inertia, G=spec.G,
             R_WA=spec.R_WA, p_L=spec.p_L, beta=spec.beta, h_R=spec.h_R,
             approach_speed=spec.approach_speed, gravity=spec.gravity,
+            rotor_drag=spec.rotor_drag,
         )  # fmt: skip
 
     @property
@@ -125,8 +130,17 @@ class FreeFlightMeta:
         """Landed centre of mass p*_L + h_R z_S in F_W [m]."""
         return self.p_L + self.h_R * self.z_S
 
+    @property
+    def constants(self) -> list[float]:
+        """The model constants c of the RK4 step: [m, J_y, g], and d_x with rotor drag."""
+        c = [self.mass, self.inertia, self.gravity]
+        return [*c, self.rotor_drag] if self.rotor_drag > 0.0 else c
+
     def to_json(self) -> dict[str, Any]:
-        return codec.meta_to_json(self)
+        d = codec.meta_to_json(self)
+        if self.rotor_drag == 0.0:
+            del d["rotor_drag"]
+        return d
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> FreeFlightMeta:
@@ -178,30 +192,35 @@ class FreeFlightSamples:
         return self.R_WB[:, :, 2]
 
 
-def free_flight_rk4_step() -> ca.Function:
+def free_flight_rk4_step(drag: bool = False) -> ca.Function:
     """``step(x[10], u[2], h, c[3]) -> x(t + h)``: one RK4 step of the free-flight model
-    with the input held, for the constants c = [m, J_y, g]."""
-    x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", 3)
+    with the input held, for the constants c = [m, J_y, g] (``drag``: the model with rotor
+    drag, c[4] = [m, J_y, g, d_x])."""
+    n = 4 if drag else 3
+    x, u, h, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("h"), ca.SX.sym("c", n)
 
     def f(z: ca.SX, v: ca.SX) -> ca.SX:
-        return rhs(z, v, c[0], c[1], c[2], CASADI)
+        return rhs(z, v, c[0], c[1], c[2], CASADI, c[3] if drag else None)
 
-    return ca.Function("perch_rk4", [x, u, h, c], [rk4(f, x, u, h)])
-
-
-_SIMULATOR: list[HeldInputSimulator] = []
+    return ca.Function("perch_drag_rk4" if drag else "perch_rk4", [x, u, h, c], [rk4(f, x, u, h)])
 
 
-def _simulator() -> HeldInputSimulator:
-    """The module's simulator (built on first use; its compiled chains are shared)."""
-    if not _SIMULATOR:
-        _SIMULATOR.append(HeldInputSimulator(free_flight_rk4_step()))
-    return _SIMULATOR[0]
+_SIMULATOR: dict[bool, HeldInputSimulator] = {}
+
+
+def _simulator(drag: bool = False) -> HeldInputSimulator:
+    """The module's simulator of the drag-free model or the one with rotor drag (built on
+    first use; its compiled chains are shared)."""
+    if drag not in _SIMULATOR:
+        _SIMULATOR[drag] = HeldInputSimulator(free_flight_rk4_step(drag))
+    return _SIMULATOR[drag]
 
 
 def _numpy_rhs(meta: FreeFlightMeta) -> Any:
+    drag = meta.rotor_drag if meta.rotor_drag > 0.0 else None
+
     def f(x: FloatArray, u: FloatArray) -> FloatArray:
-        return rhs(x, u, meta.mass, meta.inertia, meta.gravity, NUMPY)  # type: ignore[no-any-return]
+        return rhs(x, u, meta.mass, meta.inertia, meta.gravity, NUMPY, drag)  # type: ignore[no-any-return]
 
     return f
 
@@ -241,7 +260,7 @@ class FreeFlightTrajectory:
             )
         self.meta = meta
         self._motion = _motion or HeldInputMotion(
-            _simulator(), [meta.mass, meta.inertia, meta.gravity], _numpy_rhs(meta),
+            _simulator(meta.rotor_drag > 0.0), meta.constants, _numpy_rhs(meta),
             times, X, U, substeps,
         )  # fmt: skip
         self.times, self.X, self.U = self._motion.times, self._motion.X, self._motion.U
@@ -255,7 +274,7 @@ class FreeFlightTrajectory:
         """Integrate the model from ``x0`` with ``U`` held on each interval (RK4 steps of
         at most :data:`DENSE_STEP`) through all intervals; keep the continuous nodes."""
         motion = HeldInputMotion.simulate(
-            _simulator(), [meta.mass, meta.inertia, meta.gravity], _numpy_rhs(meta),
+            _simulator(meta.rotor_drag > 0.0), meta.constants, _numpy_rhs(meta),
             times, x0, U,
         )  # fmt: skip
         return cls(meta, motion.times, motion.X, motion.U, _motion=motion)
@@ -285,7 +304,7 @@ class FreeFlightTrajectory:
         """Flat-output rows (n, 5, 3) [p, v, a, jerk, snap] in F_W of :meth:`_masked_states`,
         and the planar derivatives they came from."""
         meta = self.meta
-        d = flat_derivatives(x.T, u.T, meta.mass, meta.inertia, meta.gravity)
+        d = flat_derivatives(x.T, u.T, meta.mass, meta.inertia, meta.gravity, meta.rotor_drag)
         plane = np.stack(
             (x[:, 0:2].T, x[:, 3:5].T, d["acc"], d["jerk"], d["snap"]), axis=1
         )  # (2, 5, n)
