@@ -25,8 +25,8 @@ import numpy as np
 
 from tetherland.config import Scenario
 from tetherland.estimation.ground_effect import BelievedGroundEffect
-from tetherland.interfaces import Command, Controller, Reference, StateEstimate
 from tetherland.geometry import FloatArray
+from tetherland.interfaces import Command, Controller, Reference, StateEstimate
 from tetherland.rotations import SMALL_ANGLE, quat_multiply, rotvec_to_quat
 
 
