@@ -280,7 +280,6 @@ def test_mocap_jam_and_snap_rules(slope50):
                 nominal=plan, d_len=l, tension=1.1 * limit) is None  # fmt: skip
 
 
-
 def test_a_phase_without_the_dwell_rules_resets_them_and_they_start_over(slope50):
     """In a phase where the snap, anchor, jam and landed rules do not watch, they are reset
     (once: the monitor skips them while that phase lasts); back in a watched phase, a jam
@@ -308,6 +307,7 @@ def test_a_phase_without_the_dwell_rules_resets_them_and_they_start_over(slope50
     jam = feed(Phase.RETURN, 2.0)
     assert jam is not None and jam.kind is FaultKind.JAM
     assert jam.t - t_back == pytest.approx(cfg.jam_dwell, abs=0.003)
+
 
 # ---------------------------------------------------------------------- campaign
 def test_fault_campaign_draws_each_kind_across_the_window(slope50):
