@@ -280,6 +280,35 @@ def test_mocap_jam_and_snap_rules(slope50):
                 nominal=plan, d_len=l, tension=1.1 * limit) is None  # fmt: skip
 
 
+def test_a_phase_without_the_dwell_rules_resets_them_and_they_start_over(slope50):
+    """In a phase where the snap, anchor, jam and landed rules do not watch, they are reset
+    (once: the monitor skips them while that phase lasts); back in a watched phase, a jam
+    needs its whole dwell again, not what was left of it before."""
+    geo = LandingGeometry.from_scenario(slope50)
+    l, cfg = slope50.tether.length, slope50.mission.detection
+    dt = 1.0 / slope50.controller.rate_hz
+    mon, balanced = FaultMonitor(slope50, geo), _balanced(slope50)
+    clock = [10.0]
+
+    def feed(phase, seconds):
+        for _ in range(round(seconds / dt)):
+            t = clock[0]
+            est = _hover_estimate(slope50, t, d_len=l, tension=2.0 * cfg.jam_tension)
+            mon.command_sent(t, Command(np.zeros(4), torque_B=balanced(est)))
+            found = mon.check(t, est, phase, airborne=True)
+            if found is not None:
+                return found
+            clock[0] = t + dt
+        return None
+
+    assert feed(Phase.RETURN, 0.6 * cfg.jam_dwell) is None
+    assert feed(Phase.APPROACH, 0.1) is None  # (the torque is balanced: no rotor fault)
+    t_back = clock[0]
+    jam = feed(Phase.RETURN, 2.0)
+    assert jam is not None and jam.kind is FaultKind.JAM
+    assert jam.t - t_back == pytest.approx(cfg.jam_dwell, abs=0.003)
+
+
 # ---------------------------------------------------------------------- campaign
 def test_fault_campaign_draws_each_kind_across_the_window(slope50):
     spec = CampaignSpec(scenario=slope50.model_dump(mode="json"), runs=20,

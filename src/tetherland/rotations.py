@@ -19,7 +19,9 @@ from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
 
-_SMALL = 1e-8
+SMALL_ANGLE = 1e-8
+"""Below this rotation angle [rad] the rotation helpers use their small-angle forms."""
+_SMALL = SMALL_ANGLE
 
 
 def _floats(v: ArrayLike) -> list[float]:

@@ -18,14 +18,47 @@ thrust (:mod:`tetherland.control.tracking`).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from tetherland.config import Scenario
 from tetherland.estimation.ground_effect import BelievedGroundEffect
+from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command, Controller, Reference, StateEstimate
-from tetherland.rotations import quat_multiply, rotvec_to_quat
+from tetherland.rotations import SMALL_ANGLE, quat_multiply, rotvec_to_quat
+
+
+def predicted_attitude(q_WB: FloatArray, omega_B: FloatArray, tau: float) -> list[float]:
+    """q_WB exp(tau omega_B / 2), normalised, as four floats [-] (scalar form, the same bits
+    as :func:`predicted_attitude_reference`).
+
+    ``omega_B`` in [rad/s], ``tau`` in [s].
+    """
+    w, x, y, z = np.asarray(q_WB, dtype=float).tolist()
+    ox, oy, oz = np.asarray(omega_B, dtype=float).tolist()
+    ax, ay, az = tau * ox, tau * oy, tau * oz
+    angle = math.sqrt(ax * ax + ay * ay + az * az)  # (np.linalg.norm's bits: a test checks)
+    if angle < SMALL_ANGLE:
+        bw, bx, by, bz = 1.0, 0.5 * ax, 0.5 * ay, 0.5 * az
+        n = math.sqrt(bw * bw + bx * bx + by * by + bz * bz)
+        bw, bx, by, bz = bw / n, bx / n, by / n, bz / n
+    else:
+        s = math.sin(0.5 * angle)
+        bw, bx, by, bz = math.cos(0.5 * angle), s * (ax / angle), s * (ay / angle), s * (az / angle)
+    qw = w * bw - x * bx - y * by - z * bz
+    qx = w * bx + x * bw + y * bz - z * by
+    qy = w * by - x * bz + y * bw + z * bx
+    qz = w * bz + x * by - y * bx + z * bw
+    n = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    return [qw / n, qx / n, qy / n, qz / n]
+
+
+def predicted_attitude_reference(q_WB: FloatArray, omega_B: FloatArray, tau: float) -> FloatArray:
+    """:func:`predicted_attitude` written plainly with the rotation helpers [-]."""
+    q = quat_multiply(q_WB, rotvec_to_quat(tau * np.asarray(omega_B, dtype=float)))
+    return q / np.linalg.norm(q)
 
 
 class GroundEffectCompensation:
@@ -52,11 +85,15 @@ class GroundEffectCompensation:
             return cmd
         b = estimate.body
         tau = self.lead
-        p_W = np.asarray(b.p_W, dtype=float) + tau * np.asarray(b.v_W, dtype=float)
-        if self.ground_effect.beyond_reach(p_W):
+        # scalar form of the numpy reference below (a test checks the same bits):
+        # p = p_W + tau v_W, q = q_WB exp(tau omega_B / 2) normalised
+        px, py, pz = np.asarray(b.p_W, dtype=float).tolist()
+        vx, vy, vz = np.asarray(b.v_W, dtype=float).tolist()
+        px, py, pz = px + tau * vx, py + tau * vy, pz + tau * vz
+        ge = self.ground_effect
+        if ge._distance3(px, py, pz) > ge._far:
             return cmd  # every believed factor is 1: the command as it is
-        q_WB = quat_multiply(b.q_WB, rotvec_to_quat(tau * np.asarray(b.omega_B, dtype=float)))
-        k = self.ground_effect.factors_at(p_W, q_WB / np.linalg.norm(q_WB), near=True)
+        k = ge.factors_at_pose([px, py, pz, *predicted_attitude(b.q_WB, b.omega_B, tau)])
         # (the fields as dataclasses.replace would copy them, without its generic walk)
         return Command(w / np.sqrt(k), cmd.thrust, cmd.torque_B, cmd.diagnostics)
 

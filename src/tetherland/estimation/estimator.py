@@ -150,9 +150,10 @@ class UkfEstimator:
         out = np.empty(kernels.WIDTH)  # fresh: the record's arrays are views into it
         thrust = self._thrust_at(t)
         if self.ground_effect is not None:
-            x = ukf.x_view
-            thrust = self.ground_effect.total_thrust(
-                x[0:3], x[6:10], self.motors.c_f * np.square(self.motors.w)
+            c_f = self.motors.c_f
+            w0, w1, w2, w3 = self.motors.speeds
+            thrust = self.ground_effect.total_thrust_of(
+                ukf.x_view, [c_f * (w0 * w0), c_f * (w1 * w1), c_f * (w2 * w2), c_f * (w3 * w3)]
             )
         kernels.estimate_into(ukf.x_view, ukf.imu_view, thrust, self.mass, self._geo, out)
         phi, delta, phi_dot, delta_dot = out[kernels.LINK].tolist()

@@ -82,6 +82,7 @@ class BelievedGroundEffect:
         self._pipe_radius = surf.pipe_radius if surf.kind == "pipe" else None
         self._args = (m.rotor_centres_B, m.samples, m.shapes, m.params)
         self._qpos = np.empty(7)
+        self._thrusts = np.empty(4)
         self._zero3 = np.zeros(3)
         self._ones = np.ones(4)
         self._factors, self._acting, self._wrench = np.empty(4), np.empty(4), np.empty(6)
@@ -94,10 +95,28 @@ class BelievedGroundEffect:
         rotors' reach) the factors are taken as 1 (they differ from it by less than
         2e-4) and the model is not evaluated.
         """
-        if self.beyond_reach(p_W):
+        px, py, pz = np.asarray(p_W, dtype=float).tolist()
+        if self._distance3(px, py, pz) > self._far:
             self._factors[:] = 1.0
             return float(np.sum(thrusts))
         return self._evaluate(p_W, q_WB, thrusts)
+
+    def total_thrust_of(self, x: FloatArray, thrusts: list[float]) -> float:
+        """:meth:`total_thrust` at the pose ``x[0:3]``, ``x[6:10]`` of a navigation state
+        [p_W, v_W, q_WB, ...], for four rotor ``thrusts`` as floats [N] (the estimator's
+        control-rate path: one list conversion, no temporary arrays; the same bits)."""
+        px, py, pz = x[0:3].tolist()
+        t0, t1, t2, t3 = thrusts
+        if self._distance3(px, py, pz) > self._far:
+            self._factors[:] = 1.0
+            return ((t0 + t1) + t2) + t3  # (numpy's order for 4 terms: the same bits)
+        q, f = self._qpos, self._thrusts
+        q[0:3] = x[0:3]
+        q[3:7] = x[6:10]
+        f[:] = thrusts
+        aero_into(q, self._zero3, f, *self._args, self._factors, self._acting,
+                  self._wrench)  # fmt: skip
+        return float(self._acting.sum())
 
     def _evaluate(self, p_W: FloatArray, q_WB: FloatArray, thrusts: FloatArray) -> float:
         """The believed model at the pose, whatever the distance: the sum of the acting
@@ -113,12 +132,18 @@ class BelievedGroundEffect:
         """True when the pose's centre of mass ``p_W`` [m] is farther than
         :data:`FAR_RATIO` rotor radii (plus the rotors' reach) from the believed surface,
         where every believed factor is taken as exactly 1."""
-        return self._distance(p_W) > self._far
+        px, py, pz = np.asarray(p_W, dtype=float).tolist()
+        return self._distance3(px, py, pz) > self._far
 
     def _distance(self, p_W: FloatArray) -> float:
         """A lower bound of the distance from ``p_W`` to the believed surface patch: to its
-        slab, or to the pipe's infinite cylinder [m] (scalar form: a control-rate path)."""
+        slab, or to the pipe's infinite cylinder [m]."""
         px, py, pz = np.asarray(p_W, dtype=float).tolist()
+        return self._distance3(px, py, pz)
+
+    def _distance3(self, px: float, py: float, pz: float) -> float:
+        """:meth:`_distance` of the point (px, py, pz) [m] (scalar form: a control-rate
+        path)."""
         ox, oy, oz = self._origin_f
         dx, dy, dz = px - ox, py - oy, pz - oz
         zx, zy, zz = self._z_S_f
@@ -139,6 +164,15 @@ class BelievedGroundEffect:
             self._evaluate(p_W, q_WB, self._ones)
         else:
             self.total_thrust(p_W, q_WB, self._ones)
+        return self._factors
+
+    def factors_at_pose(self, pose: list[float]) -> FloatArray:
+        """:meth:`factors_at` of a pose given as seven floats [p_W (3), q_WB (4)], known
+        not :meth:`beyond_reach` [-] (a view, valid until the next call)."""
+        q = self._qpos
+        q[:] = pose
+        aero_into(q, self._zero3, self._ones, *self._args, self._factors, self._acting,
+                  self._wrench)  # fmt: skip
         return self._factors
 
     @property

@@ -214,6 +214,12 @@ class MotorLagThrust:
         return np.array(self._w)
 
     @property
+    def speeds(self) -> list[float]:
+        """Current rotor speeds as four floats [rad/s] (the live list: read, never keep or
+        write)."""
+        return self._w
+
+    @property
     def total_thrust(self) -> float:
         """f_R = sum c_f w_i^2 at the current speeds [N]."""
         w0, w1, w2, w3 = self._w

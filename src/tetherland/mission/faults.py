@@ -52,6 +52,9 @@ SNAP_PLAN_FACTOR = 3.0
 """The snap rule watches where the planned tension is at least this many snap_tension."""
 JAM_PHASES = frozenset({Phase.RETURN, Phase.LAND})
 """Phases after the unhooking pass: any tension means the hook is still engaged."""
+_DWELL_RULE_PHASES = SNAP_PHASES | ANCHOR_PHASES | LANDED_PHASES | JAM_PHASES
+"""Phases in which the snap, anchor, landed or jam rule watches; in any other phase each of
+them only stays reset."""
 
 
 @dataclass(frozen=True)
@@ -103,6 +106,9 @@ class FaultMonitor:
         self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
         self._snap = ThresholdDwell(0.0, cfg.snap_dwell)  # fed limit - tension
         self._landed_p: tuple[float, float, float] | None = None  # where the motors went off
+        # a phase in which the snap, anchor, jam and landed rules were last found idle (all
+        # reset): while it lasts, their resets are not repeated every tick
+        self._idle_phase: Phase | None = None
         self.torque_residual = 0.0
         """Last low-passed roll/pitch torque residual [N m]."""
         self.length_error = math.nan
@@ -184,20 +190,22 @@ class FaultMonitor:
                     f"> {100 * cfg.position_std:g} cm)",
                 )  # fmt: skip
         found = self._rotor_rule(t, est, phase, airborne)
-        if found is None:
-            needs = nominal_tension is None or (
-                nominal_tension >= SNAP_PLAN_FACTOR * self.cfg.snap_tension
-            )
-            limit = self.cfg.snap_tension
-            if nominal_tension is not None:
-                limit = max(limit, self.cfg.snap_fraction * nominal_tension)
-            found = self._snap_rule(t, est, phase, needs, limit)
+        if found is not None or phase == self._idle_phase:
+            return found  # (idle: the other rules are reset and would only reset again)
+        needs = nominal_tension is None or (
+            nominal_tension >= SNAP_PLAN_FACTOR * self.cfg.snap_tension
+        )
+        limit = self.cfg.snap_tension
+        if nominal_tension is not None:
+            limit = max(limit, self.cfg.snap_fraction * nominal_tension)
+        found = self._snap_rule(t, est, phase, needs, limit)
         if found is None:
             found = self._anchor_rule(t, est, phase)
         if found is None:
             found = self._jam_rule(t, est, phase)
         if found is None:
             found = self._landed_rule(t, est, phase)
+        self._idle_phase = None if phase in _DWELL_RULE_PHASES else phase
         return found
 
     def _rotor_rule(

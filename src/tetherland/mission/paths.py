@@ -114,6 +114,8 @@ class Path:
         # per segment, for sample(): p1 - p0, and the held rows of a pause (read-only)
         self._delta: list[FloatArray] = []
         self._rest: list[FloatArray | None] = []
+        # p0 and p1 - p0 of each segment as floats (the scalar form of sample())
+        self._floats: list[tuple[tuple[float, ...], tuple[float, ...]]] = []
         self._cursor = 0
         self._start_rows = _rest_rows(self.start)
 
@@ -145,6 +147,7 @@ class Path:
         self.segments.append(seg)
         delta = seg.p1 - seg.p0
         self._delta.append(delta)
+        self._floats.append((tuple(seg.p0.tolist()), tuple(delta.tolist())))
         self._rest.append(_rest_rows(seg.p1) if not delta.any() else None)
 
     def sample(self, t: float) -> FloatArray:
@@ -175,12 +178,11 @@ class Path:
             for ti, ai in zip(self.shaper.times, self.shaper.amplitudes, strict=True):
                 r0, r1, r2 = smoothstep9_scalar((t - seg.t0 - ti) / T, 2)
                 s0, s1, s2 = s0 + ai * r0, s1 + ai * r1, s2 + ai * r2
-        delta = self._delta[i]
-        rows = np.empty((3, 3))
-        rows[0] = seg.p0 + s0 * delta
-        rows[1] = (s1 / T) * delta
-        rows[2] = (s2 / (T * T)) * delta
-        return rows
+        (x0, y0, z0), (dx, dy, dz) = self._floats[i]
+        a, b = s1 / T, s2 / (T * T)
+        # element-wise as p0 + s0 delta, a delta, b delta with numpy: the same bits
+        return np.array([[x0 + s0 * dx, y0 + s0 * dy, z0 + s0 * dz],
+                         [a * dx, a * dy, a * dz], [b * dx, b * dy, b * dz]])  # fmt: skip
 
 
 def _rest_rows(p: FloatArray) -> FloatArray:

@@ -280,7 +280,10 @@ class MissionSupervisor:
         return est.body.p_W + tension / (self.mass * self.k_x) * d
 
     def _close(self, est: StateEstimate, p: np.ndarray, tol: float) -> bool:
-        return float(np.linalg.norm(est.body.p_W - p)) <= tol
+        x, y, z = est.body.p_W.tolist()
+        px, py, pz = np.asarray(p, dtype=float).tolist()
+        dx, dy, dz = x - px, y - py, z - pz
+        return math.sqrt(dx * dx + dy * dy + dz * dz) <= tol  # (np.linalg.norm's bits)
 
     # ------------------------------------------------------------------ abort and faults
     def abort(
