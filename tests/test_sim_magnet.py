@@ -16,6 +16,7 @@ from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
 from tetherland.mission.hooking import hooking_pass, magnet_drop_point, magnet_pull_out_path
+from tetherland.mission.plan import MissionError, plan_mission
 from tetherland.models.hook import magnet_boom, magnet_fold, magnet_reach_margin
 from tetherland.rotations import rotmat_to_quat
 from tetherland.sim.plant import Plant
@@ -75,12 +76,16 @@ def test_magnet_config_and_shared_geometry() -> None:
     assert s.anchor.h_A == pytest.approx(m.plate_thickness + m.magnet_thickness)
     assert load_scenario("wall90").mechanism.kind == "disk"
     for bad, field in (("mechanism.clip_force=200", "clip_force"),
-                       ("mechanism.boom_length=0.2", "boom_length"),
                        ("mechanism.magnet_friction=0.9", "magnet_friction"),
                        ("mechanism.boom_length=0.45", "boom_length"),
                        ("mechanism.magnet_mass=0.02", "magnet_mass")):  # fmt: skip
         with pytest.raises(ConfigError, match=field):
             load_scenario("wall90", ["mechanism.kind=magnet", bad])
+    # a boom too short to reach beyond the airframe: the plan stage refuses, naming it
+    short = load_scenario("wall90", ["mechanism.kind=magnet", "mechanism.boom_length=0.2"])
+    assert magnet_reach_margin(short) <= 0.0
+    with pytest.raises(MissionError, match="boom_length"):
+        plan_mission(short, Plant(short).start_state())
     # the face reaches beyond the farthest part of the airframe along n: the rotor guards
     boom = magnet_boom(s)
     guard = 0.4 * s.vehicle.arm_length + float(np.max(

@@ -108,10 +108,10 @@ class MechanismConfig(Section):
     """Thickness of the magnet along its axis, face to the cable's eye on its back [m]."""
     magnet_force: float = Field(150.0, gt=0, le=2000)
     """Holding force of the energised magnet on the plate, the gain of MuJoCo's adhesion
-    actuator on the magnet body [N]. An OpenGrab EPM v3 holds 200 N at least, 300 N
+    actuator on the magnet body. An OpenGrab EPM v3 holds 200 N at least, 300 N
     typically, on thick mild steel (Zubax's data sheet); a plate thinner than its flux
     path saturates and holds less (assumed in proportion to the thickness below 1 cm):
-    150 N for the default 5 mm plate."""
+    150 N for the default 5 mm plate [N]."""
     epm_on_time: float = Field(0.75, ge=0, le=10)
     """Time the EPM takes to switch on after the command (three charge and discharge
     cycles; OpenGrab EPM v3: 0.75 s): the plant's holding force comes on then [s]."""

@@ -29,6 +29,7 @@ from tetherland.mission.hooking import (
     unhooking_path,
 )
 from tetherland.mission.paths import segment_duration
+from tetherland.models.hook import magnet_reach_margin
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import rotation_from_z_and_yaw
@@ -217,6 +218,22 @@ def working_hook_drop(scenario: Scenario, geo: LandingGeometry, first: float) ->
     return None
 
 
+def _check_magnet_reach(scenario: Scenario) -> None:
+    """The magnet's unfolded face must reach beyond every part of the airframe along the
+    approach direction (:func:`tetherland.models.hook.magnet_reach_margin`, the plant's
+    collision shapes), or the frame meets the wall first: :class:`MissionError`."""
+    m = scenario.mechanism
+    if m.kind != "magnet":
+        return
+    margin = magnet_reach_margin(scenario)
+    if margin <= 0.0:
+        raise MissionError(
+            f"mechanism.boom_length = {m.boom_length:g} m at boom_angle_deg = "
+            f"{m.boom_angle_deg:g} reaches {-margin:g} m short of the vehicle's farthest "
+            "part along tether.approach_direction: the magnet must meet the surface first"
+        )
+
+
 def plan_mission(
     scenario: Scenario, start: RigidBodyState, planner: Planner | None = None
 ) -> MissionPlan:
@@ -232,6 +249,7 @@ def plan_mission(
     """
     cfg = scenario.mission
     v = scenario.vehicle
+    _check_magnet_reach(scenario)
     geo = LandingGeometry.from_scenario(scenario)
     planner = planner or Planner()
     landing = planner.plan(scenario, Maneuver.LANDING)
