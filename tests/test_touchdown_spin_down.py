@@ -187,6 +187,18 @@ def test_the_lateral_release_ends_at_the_first_sign_of_contact():
     assert sign <= t[k_L] + truth.mission.contact.dwell  # sensed before the contact rule's dwell
 
 
+def _lands_with_the_preload(slope: float, index: int):
+    """Fly draw ``index`` of the 20-per-slope sweep at ``slope`` with :data:`PRELOAD`; it
+    must land with conditions (1)-(5). Returns the run's result and its landing summary."""
+    record, result = run_job(study_run(slope, runs=20, index=index, extra=PRELOAD))
+    assert record["status"] == "ok", record.get("error")
+    verdict = result.verdict.summary
+    assert verdict["success"], verdict["reason"]
+    landing = verdict["landing"]
+    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    return result, landing
+
+
 @pytest.mark.slow
 def test_the_preload_holds_the_vehicle_against_a_gust_at_the_first_touch():
     """Sweep draw tethered-20-00000 (20 deg, seed 2026): before, a 0.46 N sideways gust from
@@ -199,12 +211,7 @@ def test_the_preload_holds_the_vehicle_against_a_gust_at_the_first_touch():
     moves less than condition (5)'s 1 cm along the surface from the first true touchdown to
     spin-up, every judged contact keeps condition (4), and the mission succeeds with
     conditions (1)-(5)."""
-    record, result = run_job(study_run(20.0, runs=20, index=0, extra=PRELOAD))
-    assert record["status"] == "ok", record.get("error")
-    verdict = result.verdict.summary
-    assert verdict["success"], verdict["reason"]
-    landing = verdict["landing"]
-    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    result, landing = _lands_with_the_preload(20.0, 0)
     log, truth, belief = result.log, result.plant_scenario, result.belief_scenario
     td = belief.mission.touchdown
     t, phase = log["t"], log["phase"].astype(int)
@@ -240,12 +247,7 @@ def test_the_preload_waits_for_the_landers_to_stop_on_the_surface():
     estimated link has stopped descending (rate above -``contact.stall_rate_deg_s``): that
     happens after the first true touchdown (the plant's truth), the thrust before it is the
     hover's, and the mission succeeds with conditions (1)-(5)."""
-    record, result = run_job(study_run(35.0, runs=20, index=14, extra=PRELOAD))
-    assert record["status"] == "ok", record.get("error")
-    verdict = result.verdict.summary
-    assert verdict["success"], verdict["reason"]
-    landing = verdict["landing"]
-    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    result, landing = _lands_with_the_preload(35.0, 14)
     log, belief = result.log, result.belief_scenario
     events = [e for e in log.events if e.get("kind") == "contact"]
     (first,) = [e["t"] for e in events if e["message"].startswith("first sign")]
