@@ -36,11 +36,11 @@ class AeroConfig(Section):
     wall_effect: bool = False
     """A wall across a rotor's disk plane draws the rotor toward it (a documented simple
     model, see ``wall_coefficient``)."""
-    rotor_drag: tuple[DragCoefficient, DragCoefficient] = (0.0, 0.0)
+    rotor_drag: tuple[DragCoefficient, DragCoefficient] = (ROTOR_DRAG_DEFAULT, ROTOR_DRAG_DEFAULT)
     """(d_x, d_y) of the rotor drag F = -R_WB diag(d_x, d_y, 0) R_WB^T v at the hover
-    rotor speed, scaled with the mean rotor speed; [0, 0] switches it off. Off by default
-    (the published fit is 0.45, ``ROTOR_DRAG_DEFAULT``; docs/aero.md measures it on and
-    off) [N s/m]."""
+    rotor speed, scaled with the mean rotor speed; [0, 0] switches it off. On by default
+    at the published fit, ``ROTOR_DRAG_DEFAULT`` (docs/aero.md measures it on and off)
+    [N s/m]."""
     rotor_radius: float | None = Field(None, gt=0, le=1)
     """Rotor radius R; by default the rotor-guard radius, 0.4 arm_length [m]."""
     disk_rings: int = Field(3, ge=1, le=8)

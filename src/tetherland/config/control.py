@@ -11,7 +11,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from tetherland.config.aero import DragCoefficient
+from tetherland.config.aero import ROTOR_DRAG_DEFAULT, DragCoefficient
 from tetherland.config.base import Section
 
 
@@ -86,12 +86,12 @@ class ControllerConfig(Section):
     """Divide each rotor's commanded speed by the square root of its ground-effect factor
     over the believed surface at the estimated pose, so that the thrust believed acting is
     the thrust wanted (false: the integrals absorb the ground effect)."""
-    rotor_drag: tuple[DragCoefficient, DragCoefficient] = (0.0, 0.0)
+    rotor_drag: tuple[DragCoefficient, DragCoefficient] = (ROTOR_DRAG_DEFAULT, ROTOR_DRAG_DEFAULT)
     """Believed rotor drag (d_x, d_y) of the vehicle (the same published fit as the
     plant's default, ``aero.rotor_drag``, which the robot never reads): the position
     references' acceleration gets the drag of the reference velocity as a feed-forward
     (and the tethered references', ``rotor_drag_tethered``), and the perching planner
-    models it (``perching.model_rotor_drag``); [0, 0] (the default, as the plant's) leaves
+    models it (``perching.model_rotor_drag``); the default is the plant's; [0, 0] leaves
     the drag to the feedback and the integrals [N s/m]."""
     rotor_drag_tethered: bool = True
     """The believed rotor drag's feed-forward also on tethered references (as link
