@@ -185,6 +185,12 @@ class Reference:
         equally before ``thrust_scale`` applies, the torques kept [-]: the supervisor's
         preload from the first sign of contact (``mission.touchdown.preload``); 0 in
         flight.
+    drag_in_rows : bool
+        Free flight: the ``p_W`` rows from the acceleration on are the thrust's,
+        f_R z_B / m - g z_W, and its derivatives, from a plan whose model has the believed
+        rotor drag (the drag of the planned motion and its rates are already in them), so
+        the rotor-drag feed-forward (:mod:`tetherland.control.rotor_drag`) leaves them as
+        they are; False: the rows are the flat outputs' (p and its derivatives).
     """
 
     t: float
@@ -199,6 +205,7 @@ class Reference:
     lateral_free: bool = False
     thrust_scale: float = 1.0
     thrust_shed: float = 0.0
+    drag_in_rows: bool = False
 
 
 @dataclass(frozen=True, slots=True)

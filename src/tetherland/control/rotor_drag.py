@@ -15,6 +15,14 @@ The reference velocity, not the estimated one, keeps estimation noise out of the
 feed-forward (and out of the motor-lag lead, which differentiates it). The coefficients
 are the belief's ``controller.rotor_drag``; the plant's ``[aero]`` is never read.
 
+The jerk term holds the attitude: the drag's rate also has the rotation of the rotor
+plane (omega x x_B, with v) and the rate of the rotor speed, and the snap row gets none of
+its second derivative. On slow references that is small; through a perching flip at 2 m/s
+and 8 rad/s it is not, and the perching planner, which models the same drag, hands its
+rows with the drag and all its derivatives already in (``Reference.drag_in_rows``: the
+thrust's acceleration, jerk and snap, :meth:`FreeFlightTrajectory.reference_at`); such
+rows are passed on unchanged.
+
 Tethered references (link outputs y = [phi, delta, theta_A, psi], no position rows) get
 the same force as link accelerations (:func:`link_drag_acceleration`): the tethered laws
 set the thrust's components across the link from phi'' and delta'' (the cable takes the
@@ -105,6 +113,8 @@ class RotorDragCompensation:
         self.R_WA, self.length = geo.R_WA, float(geo.link_length)
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
+        if reference.drag_in_rows:  # a plan with the believed drag: its rows carry it
+            return self.inner.update(t, estimate, reference)
         rows = reference.p_W
         if rows is None or len(rows) < 2:
             Y = reference.output

@@ -130,6 +130,9 @@ class PerchingReference:
         self._hover_rows = rows
         self._hover_rows.setflags(write=False)
         self._thrust_final = float(trajectory.sample([trajectory.duration]).thrust[0])
+        self._drag_in_rows = trajectory.meta.rotor_drag > 0.0
+        """The maneuver's rows are the thrust's (:meth:`FreeFlightTrajectory.reference_at`),
+        the plan's rotor drag in them (``Reference.drag_in_rows``)."""
         self._events: list[EventRecord] = []
         self.phase = PerchPhase.HOVER
         self.t_motors_off: float | None = None
@@ -174,10 +177,12 @@ class PerchingReference:
             self.t_motors_off = t
             self._switch(t, PerchPhase.MOTORS_OFF, reason)
             return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase), yaw=self.yaw)
-        if tau <= T:
+        if tau <= T:  # the plan's rows (its modelled drag in them, when it has one)
             rows, thrust = self.trajectory.reference_at(tau)
+            drag_in_rows = self._drag_in_rows
         else:
             rows, thrust = self.trajectory.continuation(tau - T), self._thrust_final
+            drag_in_rows = False
         return Reference(
             t=t,
             mode=ControlMode.FREE_FLIGHT,
@@ -185,6 +190,7 @@ class PerchingReference:
             p_W=rows,
             yaw=self.yaw,
             thrust_ff=thrust,
+            drag_in_rows=drag_in_rows,
         )
 
 

@@ -157,6 +157,12 @@ class FreeFlightSamples:
     p_W : (n, 5, 3) array
         Centre of mass position and derivatives 1..4 (velocity, acceleration, jerk,
         snap) [m, m/s, m/s^2, m/s^3, m/s^4].
+    reference_W : (n, 5, 3) array
+        The rows the tracker flies: position and velocity as ``p_W``, then the thrust's
+        acceleration f_R z_B / m - g z_W and its jerk and snap [m/s^2, m/s^3, m/s^4]:
+        the planned motion with the model's rotor drag taken out, so that the flatness
+        feed-forward of these rows is the planned attitude, body rate and angular
+        acceleration. Without drag in the model, ``p_W`` bit for bit.
     yaw : (n,) array
         Reference heading psi [rad] (x_B in the fall-line plane).
     R_WB : (n, 3, 3) array
@@ -175,6 +181,7 @@ class FreeFlightSamples:
 
     t: FloatArray
     p_W: FloatArray
+    reference_W: FloatArray
     yaw: FloatArray
     R_WB: FloatArray
     omega_B: FloatArray
@@ -300,11 +307,24 @@ class FreeFlightTrajectory:
 
     def _flat_rows(
         self, x: FloatArray, u: FloatArray, outside: FloatArray
-    ) -> tuple[FloatArray, dict[str, FloatArray]]:
+    ) -> tuple[FloatArray, FloatArray, dict[str, FloatArray]]:
         """Flat-output rows (n, 5, 3) [p, v, a, jerk, snap] in F_W of :meth:`_masked_states`,
-        and the planar derivatives they came from."""
+        the tracker's rows (n, 5, 3) (``FreeFlightSamples.reference_W``: p, v and the
+        thrust's acceleration, jerk and snap) and the planar derivatives they came from."""
         meta = self.meta
         d = flat_derivatives(x.T, u.T, meta.mass, meta.inertia, meta.gravity, meta.rotor_drag)
+        p_W = self._to_world(x, d, outside)
+        if meta.rotor_drag == 0.0:
+            return p_W, p_W, d
+        # the thrust's own: the drag-free closed forms of the same states (f_R z_B / m - g,
+        # its jerk and snap), the planned motion less the model's drag and its derivatives
+        f = flat_derivatives(x.T, u.T, meta.mass, meta.inertia, meta.gravity)
+        return p_W, self._to_world(x, f, outside), d
+
+    def _to_world(self, x: FloatArray, d: dict[str, FloatArray], outside: FloatArray) -> FloatArray:
+        """(n, 5, 3) rows [p, v, d["acc"], d["jerk"], d["snap"]] in F_W (zero derivatives
+        from the acceleration on outside [0, T])."""
+        meta = self.meta
         plane = np.stack(
             (x[:, 0:2].T, x[:, 3:5].T, d["acc"], d["jerk"], d["snap"]), axis=1
         )  # (2, 5, n)
@@ -312,23 +332,25 @@ class FreeFlightTrajectory:
         A = meta.R_WA[:, [0, 2]]
         p_W = np.einsum("ij,jkn->nki", A, plane)
         p_W[:, 0, :] += meta.p_L
-        return p_W, d
+        return p_W
 
     def reference_at(self, t: float) -> tuple[FloatArray, float]:
-        """The (5, 3) flat-output rows in F_W and the collective thrust [N] at one time
-        ``t`` [s]: ``sample([t]).p_W[0]`` and ``sample([t]).thrust[0]``, the same numbers
-        by the same operations, without the rest of the sample (the perching reference
-        asks this every control tick of the maneuver)."""
+        """The tracker's (5, 3) rows in F_W and the collective thrust [N] at one time
+        ``t`` [s]: ``sample([t]).reference_W[0]`` and ``sample([t]).thrust[0]``, the same
+        numbers by the same operations, without the rest of the sample (the perching
+        reference asks this every control tick of the maneuver). With rotor drag in the
+        model the rows from the acceleration on are the thrust's, not the flat outputs'
+        (:class:`FreeFlightSamples`)."""
         _, x, u, outside = self._masked_states([t])
-        p_W, _ = self._flat_rows(x, u, outside)
-        return p_W[0], float(x[0, 6])
+        _, rows, _ = self._flat_rows(x, u, outside)
+        return rows[0], float(x[0, 6])
 
     def sample(self, times: ArrayLike) -> FreeFlightSamples:
         """Everything at ``times`` [s] (see :class:`FreeFlightSamples`)."""
         meta = self.meta
         t, x, u, outside = self._masked_states(times)
         n = len(t)
-        p_W, d = self._flat_rows(x, u, outside)
+        p_W, reference_W, d = self._flat_rows(x, u, outside)
         th = x[:, 2]
         c, s = np.cos(th), np.sin(th)
         R_y = np.zeros((n, 3, 3))
@@ -341,6 +363,7 @@ class FreeFlightTrajectory:
         return FreeFlightSamples(
             t=t,
             p_W=p_W,
+            reference_W=reference_W,
             yaw=np.full(n, meta.heading),
             R_WB=R_WB,
             omega_B=np.column_stack((zeros, x[:, 5], zeros)),
@@ -354,8 +377,10 @@ class FreeFlightTrajectory:
         )
 
     def flat_outputs(self, t: float) -> FloatArray:
-        """(5, 3) rows [p, v, a, jerk, snap] at ``t`` in F_W: ``Reference.p_W``."""
-        return self.reference_at(t)[0]
+        """(5, 3) rows [p, v, a, jerk, snap] of the planned motion at ``t`` in F_W
+        (``sample([t]).p_W[0]``; the tracker's rows are :meth:`reference_at`'s)."""
+        _, x, u, outside = self._masked_states([t])
+        return self._flat_rows(x, u, outside)[0][0]
 
     def continuation(self, s: float) -> FloatArray:
         """(5, 3) flat-output rows ``s`` seconds after t_L with the touchdown thrust and
