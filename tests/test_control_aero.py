@@ -135,6 +135,10 @@ def test_drag_feedforward_goes_on_the_acceleration_and_jerk_rows():
     assert inner.seen[-1].p_W is not None and inner.seen[-1].p_W.shape == (1, 3)
     ctrl.update(0.0, est, Reference(t=0.0))
     assert inner.seen[-1].p_W is None
+    # rows from a plan that models the drag (the thrust's rows) are not given it twice
+    planned = Reference(t=0.0, p_W=rows, drag_in_rows=True)
+    ctrl.update(0.0, est, planned)
+    assert inner.seen[-1] is planned
 
 
 @pytest.mark.parametrize("name", ["slope50", "pipe60"])

@@ -49,15 +49,31 @@ def test_feedforward_matches_finite_differences_of_the_attitude():
         np.testing.assert_allclose(w_dot, (wp - wm) / (2 * h), atol=1e-5)
 
 
-def test_feedforward_reproduces_the_planned_nominal_rates(traj20):
-    m = traj20.meta.mass
-    s = traj20.sample(np.linspace(0.0, traj20.duration, 40))
+@pytest.mark.parametrize("drag", [True, False])
+def test_feedforward_reproduces_the_planned_nominal_rates(traj20, drag):
+    """The flatness feed-forward of the rows the tracker gets is the planned attitude,
+    body rate and angular acceleration; with the believed rotor drag in the plan (the
+    default) those rows are the thrust's (``reference_W``), not the flat outputs'."""
+    traj = traj20 if drag else PerchingPlanner().plan(
+        load_scenario("slope50", ["surface.slope_deg=20", "controller.rotor_drag=[0, 0]"])
+    ).require()
+    assert (traj.meta.rotor_drag > 0.0) is drag
+    m = traj.meta.mass
+    s = traj.sample(np.linspace(0.0, traj.duration, 40))
+    if not drag:
+        np.testing.assert_array_equal(s.reference_W, s.p_W)
+    rows = s.reference_W
     for i in range(len(s.t)):
-        F = m * (s.p_W[i, 2] + np.array([0.0, 0.0, g]))
-        R, w, w_dot = attitude_feedforward(F, m * s.p_W[i, 3], m * s.p_W[i, 4], s.yaw[i])
+        F = m * (rows[i, 2] + np.array([0.0, 0.0, g]))
+        R, w, w_dot = attitude_feedforward(F, m * rows[i, 3], m * rows[i, 4], s.yaw[i])
         np.testing.assert_allclose(R, s.R_WB[i], atol=1e-9)
         np.testing.assert_allclose(w, s.omega_B[i], atol=1e-9)
         np.testing.assert_allclose(w_dot, s.omega_dot_B[i], atol=1e-7)
+    if drag:  # the flat outputs' own rows give another attitude (the drag tilts it)
+        i = int(np.argmax(np.linalg.norm(s.p_W[:, 1], axis=1)))
+        F = m * (s.p_W[i, 2] + np.array([0.0, 0.0, g]))
+        R = attitude_feedforward(F, m * s.p_W[i, 3], m * s.p_W[i, 4], s.yaw[i])[0]
+        assert np.linalg.norm(R - s.R_WB[i]) > 1e-3
 
 
 def test_position_controller_default_is_unchanged():
@@ -129,12 +145,15 @@ def test_reference_phases(traj20):
     np.testing.assert_allclose(r0.p_W[1:], 0.0)
     r1 = ref.reference(1.5, far)
     assert r1.phase == PerchPhase.MANEUVER
-    np.testing.assert_allclose(r1.p_W, traj20.flat_outputs(0.5), atol=1e-12)
+    np.testing.assert_allclose(r1.p_W, traj20.reference_at(0.5)[0], atol=1e-12)
+    # the plan models the believed drag: its rows carry it, the drag feed-forward keeps off
+    assert traj20.meta.rotor_drag > 0.0 and r1.drag_in_rows
     # past t_L without contact: the touchdown thrust and attitude are held (constant a)
     T = traj20.duration
     r2 = ref.reference(1.0 + T + 0.02, far)
     assert r2.mode is ControlMode.FREE_FLIGHT
     np.testing.assert_allclose(r2.p_W[2], traj20.flat_outputs(T)[2])
+    assert not r2.drag_in_rows  # the flat outputs' rows: the feed-forward adds the drag
     # grace over: motors off, then terminate after the rest
     r3 = ref.reference(1.0 + T + 0.06, far)
     assert r3.mode is ControlMode.MOTORS_OFF and not r3.terminate
@@ -162,7 +181,8 @@ def test_the_reference_rows_of_a_tick_are_the_samples_numbers(traj20):
         rows, thrust = traj20.reference_at(float(t))
         s = traj20.sample([t])
         assert rows.shape == (5, 3)
-        np.testing.assert_array_equal(rows, s.p_W[0])
+        np.testing.assert_array_equal(rows, s.reference_W[0])
+        np.testing.assert_array_equal(traj20.flat_outputs(float(t)), s.p_W[0])
         assert thrust == s.thrust[0]
     end = traj20.sample([T]).p_W[0]
     first = traj20.continuation(0.05)

@@ -81,7 +81,9 @@ def test_plan_meets_landing_conditions_on_the_rigid_body(planner, slope):
     result = planner.plan(sc)
     assert result.status is PerchStatus.SOLVED, result.message
     traj = result.require()
-    _, xs = resimulate(traj, sc)
+    # the plant's rotor drag (the published fit, on by default) is the plan's believed one
+    assert traj.meta.rotor_drag == sc.controller.rotor_drag[0] == sc.aero.rotor_drag[0] > 0
+    _, xs = resimulate(traj, sc, drag=tuple(sc.aero.rotor_drag))
     geo = LandingGeometry.from_scenario(sc)
     z_S = geo.surface.z_S
     end = xs[-1]
@@ -192,7 +194,22 @@ def test_flat_outputs_are_consistent_derivatives(planner):
     s = traj.sample(np.linspace(0.0, traj.duration, 50))
     m = traj.meta.mass
     acc = s.thrust[:, None] / m * s.z_B - np.array([0.0, 0.0, g])
-    np.testing.assert_allclose(acc, s.p_W[:, 2], atol=1e-9)
+    # the tracker's rows carry the thrust's acceleration (the default plan has the
+    # believed rotor drag: the flat outputs' acceleration is that plus D / m, D = -d s
+    # (v.x_B) x_B, s = sqrt(f_R / (m g)))
+    np.testing.assert_allclose(acc, s.reference_W[:, 2], atol=1e-9)
+    np.testing.assert_array_equal(s.reference_W[:, :2], s.p_W[:, :2])
+    d = traj.meta.rotor_drag
+    assert d > 0.0
+    x_B = s.R_WB[:, :, 0]
+    D = -d * np.sqrt(s.thrust / (m * g)) * np.einsum("ni,ni->n", s.p_W[:, 1], x_B)
+    np.testing.assert_allclose(acc + D[:, None] * x_B / m, s.p_W[:, 2], atol=1e-9)
+    for t in rng.uniform(0.05, traj.duration - 0.05, 12):
+        rows = traj.sample([t - h, t, t + h]).reference_W
+        for k in (3, 4):  # the thrust's acceleration -> jerk -> snap (central differences)
+            np.testing.assert_allclose(
+                (rows[2, k - 1] - rows[0, k - 1]) / (2 * h), rows[1, k], atol=2e-3 * k
+            )
     rotors = s.rotor_thrusts @ RotorLayout.from_config(_scenario(40.0).vehicle).allocation.T
     np.testing.assert_allclose(rotors[:, 0], s.thrust, atol=1e-9)
     np.testing.assert_allclose(rotors[:, 1:], s.torque_B, atol=1e-9)
@@ -316,7 +333,7 @@ def test_the_drag_plan_flies_the_rigid_body_through_the_plant_drag(planner):
 
 
 def test_drag_option_off_gives_the_drag_free_plan_bit_for_bit(planner):
-    base = planner.plan(_scenario(50.0)).require()
+    base = planner.plan(_scenario(50.0, "controller.rotor_drag=[0, 0]")).require()
     off = planner.plan(_scenario(50.0, f"controller.rotor_drag=[{DRAG}, {DRAG}]",
                                  "perching.model_rotor_drag=false")).require()  # fmt: skip
     for name in ("times", "X", "U"):
