@@ -316,10 +316,16 @@ class FreeFlightTrajectory:
         p_W = self._to_world(x, d, outside)
         if meta.rotor_drag == 0.0:
             return p_W, p_W, d
-        # the thrust's own: the drag-free closed forms of the same states (f_R z_B / m - g,
-        # its jerk and snap), the planned motion less the model's drag and its derivatives
+        return p_W, self._thrust_rows(x, u, outside), d
+
+    def _thrust_rows(self, x: FloatArray, u: FloatArray, outside: FloatArray) -> FloatArray:
+        """The tracker's rows (n, 5, 3) in F_W: p, v and the thrust's own acceleration
+        f_R z_B / m - g z_W, jerk and snap, the drag-free closed forms of the same states
+        (the planned motion less the model's drag and its derivatives; without drag in the
+        model, the flat outputs' rows)."""
+        meta = self.meta
         f = flat_derivatives(x.T, u.T, meta.mass, meta.inertia, meta.gravity)
-        return p_W, self._to_world(x, f, outside), d
+        return self._to_world(x, f, outside)
 
     def _to_world(self, x: FloatArray, d: dict[str, FloatArray], outside: FloatArray) -> FloatArray:
         """(n, 5, 3) rows [p, v, d["acc"], d["jerk"], d["snap"]] in F_W (zero derivatives
@@ -342,8 +348,7 @@ class FreeFlightTrajectory:
         model the rows from the acceleration on are the thrust's, not the flat outputs'
         (:class:`FreeFlightSamples`)."""
         _, x, u, outside = self._masked_states([t])
-        _, rows, _ = self._flat_rows(x, u, outside)
-        return rows[0], float(x[0, 6])
+        return self._thrust_rows(x, u, outside)[0], float(x[0, 6])
 
     def sample(self, times: ArrayLike) -> FreeFlightSamples:
         """Everything at ``times`` [s] (see :class:`FreeFlightSamples`)."""
