@@ -192,7 +192,9 @@ class MissionSupervisor:
         self._release_pull: ReleasePull | None = None
         self._t_free = 0.0  # last tick of the free-flight reference [s]
         self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
-        self._thrust_loss = False  # a weak rotor near the surface: feed its loss forward
+        self._thrust_loss: Phase | None = None
+        """The phase of a weak rotor's fault near the surface: its lost thrust is fed
+        forward in the safe hover (:meth:`_lost_thrust`)."""
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
             Phase.TAKEOFF: self._takeoff,
             Phase.APPROACH: self._approach,
@@ -257,7 +259,7 @@ class MissionSupervisor:
         if self._release_pull is not None:
             rows = rows.copy()  # the path's rows are shared and read-only
             rows[2] += self._release_pull.feedforward(t, est, rows[0])
-        elif self._thrust_loss:
+        elif self._thrust_loss is not None:
             rows = rows.copy()
             rows[2] += self._lost_thrust(est)
         return Reference(
@@ -345,10 +347,14 @@ class MissionSupervisor:
         forward as the acceleration f_L d / m [m/s^2] that makes it up, as the release
         hand-over does with a real pull; the position integral needs seconds for it, and
         the vehicle sinks 0.2 m/s meanwhile. Zero once the attachment point is within
-        ``mission.detection.jam_slack`` of the cable's reach (the pull may be real)."""
-        d = est.body.p_W + est.body.R_WB @ self.monitor._r_att - self.geo.p_A
+        ``mission.detection.jam_slack`` of the cable's reach (the pull may be real), unless
+        the fault came before the hooking pass or after the unhooking pass
+        (:data:`_UNHOOKED`: no cable to pull)."""
+        r_att = np.asarray(self.scenario.vehicle.cable_attachment, dtype=float)
+        d = est.body.p_W + est.body.R_WB @ r_att - self.geo.p_A
         n = float(np.linalg.norm(d))
-        if n >= self.scenario.tether.length - self.cfg.detection.jam_slack or n < 1e-9:
+        reach = self.scenario.tether.length - self.cfg.detection.jam_slack
+        if n < 1e-9 or (n >= reach and self._thrust_loss not in _UNHOOKED):
             return np.zeros(3)
         return max(est.tension or 0.0, 0.0) / (self.mass * n) * d
 
@@ -379,7 +385,7 @@ class MissionSupervisor:
         elif found.kind == FaultKind.ROTOR and near:
             # a weak rotor sinks and tilts the vehicle towards the surface: away at once
             # (a step of the reference along z_S), its lost thrust fed forward, then hover
-            self._thrust_loss = True
+            self._thrust_loss = self.phase
             self.abort(t, est, found.reason, away=True, step=True)
         elif found.kind == FaultKind.ROTOR and self.phase in _UNHOOKED:
             self.abort(t, est, found.reason, land=True)
