@@ -180,3 +180,49 @@ def test_fault_campaign_crashes_now_end_in_a_safe_stop(run_id, phase, reason):
     assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
     assert not verdict["crashed"] and verdict["safe_stop"]["reached"]
     assert verdict["abort_reason"].startswith("fault: " + reason)
+
+
+def test_weak_rotor_after_the_hooking_pass_is_the_rotor_and_climbs_away_from_the_slope():
+    """Fault-campaign run rotor-00005 (slope50, seed 15): rotor 2 at 51 % 0.5 s into the
+    stretch, the vehicle still at the end of the hooking pass with its props 0.13 m from
+    the slope. The missing thrust read as a 2.2 N cable pull made the cable look 66 cm
+    short, the anchor rule fired first and the hover at the pull point came too late: prop 2
+    hit the slope with 50 N. Now the torque residual makes the length error a rotor fault
+    (before the stretch takes the cable for taut and before the anchor rule's dwell), and
+    the safe hover steps 0.3 m away along z_S with the lost thrust fed forward."""
+    from tetherland.campaign.jobs import run_job
+    from tetherland.geometry import LandingGeometry
+
+    job = fault_campaign_job("rotor-00005")
+    record, result = run_job(job)
+    assert record["status"] == "ok", record["error"]
+    fault = record["fault"]
+    assert fault["phase"] == "stretch" and min(fault["rotor_efficiency"]) < 0.6
+    verdict = record["verdict"]
+    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
+    assert not verdict["crashed"] and verdict["safe_stop"]["reached"]
+    assert verdict["safe_stop"]["state"] == "hover"
+    # the order of the decisions: the rotor named (not the anchor), the abort, the safe
+    # hover straight from the stretch (the cable never taken for taut)
+    events = [e for e in result.log.metadata["events"] if e.get("source") == "mission"]
+    faults = [e for e in events if e["kind"] == "fault"]
+    assert len(faults) == 1 and faults[0]["message"].startswith("fault: rotor thrust lost")
+    assert "not the anchor" in faults[0]["message"]
+    t_f = faults[0]["t"]
+    after = [(e["kind"], e["message"].split(":")[0]) for e in events if e["t"] >= t_f]
+    assert after[:3] == [("fault", "fault"), ("abort", "fault"),
+                         ("phase", "stretch -> safe_hover")]  # fmt: skip
+    names = [p["name"] for p in verdict["phases"]]
+    assert "tethered_landing" not in names and names[-2:] == ["safe_hover", "aborted"]
+    cfg = load_scenario("slope50").mission.detection
+    # detected before the rotor rule's own low-pass and dwell could have: within
+    # tc + dwell of the fault
+    assert fault["t"] < t_f < fault["t"] + cfg.rotor_torque_time_constant + cfg.rotor_dwell
+    # away from the slope: the estimate ends at least away_distance farther along z_S
+    # than at the detection, less the waypoint tolerance
+    z_S = LandingGeometry.from_scenario(load_scenario("slope50")).surface.z_S
+    log = result.log
+    i_f = int(np.searchsorted(log["t"], t_f))
+    moved = float((log["est_p_W"][-1] - log["est_p_W"][i_f]) @ z_S)
+    tol = load_scenario("slope50").mission.flight.waypoint_tolerance
+    assert moved > cfg.away_distance - tol

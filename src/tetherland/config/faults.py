@@ -169,5 +169,7 @@ class FaultDetectionConfig(Section):
     go off the vehicle settles by up to about 2 cm onto its cable and landers (walls),
     which this must exceed [m]."""
     away_distance: float = Field(0.3, ge=0, le=5)
-    """Snapped cable: the safe hover is this far from the surface along z_S beyond where
-    the fault was detected [m]."""
+    """Snapped cable, a fault near the mechanism, or any fault in free flight with the
+    estimated landers closer than this to the believed surface: the safe hover is this far
+    from the surface along z_S beyond where the fault was detected (a weak rotor near the
+    surface: the reference steps there at once) [m]."""

@@ -12,7 +12,12 @@ limit held for a dwell time:
   the missing arm_i x (1 - eff_i) f_i, which stays;
 * anchor belief: with the cable taut, the believed anchor to the estimated attachment
   point is l + f_L/k (the stretch of an elastic cable; l for an ideal one); a believed
-  anchor off along the cable shows as a length error;
+  anchor off along the cable shows as a length error. A weak rotor fakes one as well: its
+  missing thrust is read as a cable pull (an estimated tension with the cable slack, far
+  short of its length). So the rotor is checked first (:meth:`FaultMonitor.check`): while
+  the torque residual is above ``rotor_suspect`` of its limit the anchor rule does not
+  decide, and a length error beyond its limit with the residual beyond the rotor's limit
+  is a rotor fault at once (two signals agree: no need for the rotor's dwell);
 * motion capture: the estimator's position standard deviation grows while no pose
   arrives (largest axis of the covariance; from ``airborne_delay`` on, once the filter has
   converged from its initial covariance);
@@ -215,6 +220,7 @@ class FaultMonitor:
         self._t_last = t
         if not (airborne and phase in ROTOR_PHASES):
             self._lp_x = self._lp_y = 0.0
+            self.torque_residual = 0.0
             self._rotor.reset()
             return None
         cx, cy = self.cable_torque_xy(est)
@@ -248,7 +254,17 @@ class FaultMonitor:
             )  # fmt: skip
         return None
 
+    def rotor_suspected(self) -> bool:
+        """The low-passed torque residual is above ``rotor_suspect`` of the rotor limit: a
+        weak rotor may be what the other signals see."""
+        cfg = self.cfg
+        return self.torque_residual > cfg.rotor_suspect * cfg.rotor_torque
+
     def _anchor_rule(self, t: float, est: StateEstimate, phase: Phase) -> FaultDetection | None:
+        """The taut cable's length error; checked against the rotor before it names the
+        anchor: beyond the rotor limit the torque residual makes it a rotor fault at once,
+        above ``rotor_suspect`` of it the anchor is not named (its dwell keeps running,
+        the rotor rule may confirm)."""
         tension = est.tension or 0.0
         if phase not in ANCHOR_PHASES or tension < self._tension_threshold:
             self._anchor.reset()
@@ -257,7 +273,20 @@ class FaultMonitor:
         stretch = 0.0 if self._stiffness is None else tension / self._stiffness
         err = self._geometry(est)[3] - self._length - stretch
         self.length_error = err
-        if self._anchor.update(t, abs(err)):
+        held = self._anchor.update(t, abs(err))
+        if abs(err) <= self.cfg.anchor_length_error:
+            return None
+        # a weak rotor's missing thrust reads as a cable pull too: the torque decides
+        r, cfg = self.torque_residual, self.cfg
+        if r > cfg.rotor_torque:  # two signals agree: no need for the rotor's dwell
+            return FaultDetection(
+                FaultKind.ROTOR, t,
+                f"fault: rotor thrust lost (commanded roll/pitch torque beyond the cable's "
+                f"{r:.3f} N m > {cfg.rotor_torque:g} N m, with the taut cable "
+                f"{100 * err:+.1f} cm off its length: the missing thrust read as a cable "
+                f"pull, not the anchor)",
+            )  # fmt: skip
+        if held and not self.rotor_suspected():
             return FaultDetection(
                 FaultKind.ANCHOR, t,
                 f"fault: anchor belief error (taut cable {100 * err:+.1f} cm off its length "

@@ -104,6 +104,11 @@ _UNHOOKED = frozenset({_P.TAKEOFF, _P.APPROACH, _P.RETRY, _P.RETURN})
 _NEAR_MECHANISM = frozenset({_P.HOOKING, _P.RELEASE, _P.UNHOOK})
 """Free-flight phases close to the anchoring mechanism: a fault's safe hover moves away
 from the surface."""
+_NEAR_SURFACE = frozenset({_P.APPROACH, _P.RETRY, _P.HOOKING, _P.STRETCH, _P.RELEASE, _P.UNHOOK,
+                           _P.RETURN})  # fmt: skip
+"""Free-flight phases around the slope: a fault's safe state moves away from the surface
+first when the landers are within ``away_distance`` of it
+(:meth:`MissionSupervisor.near_surface`)."""
 
 
 class TransitionError(TetherlandError):
@@ -187,6 +192,9 @@ class MissionSupervisor:
         self._release_pull: ReleasePull | None = None
         self._t_free = 0.0  # last tick of the free-flight reference [s]
         self._suspect_held = 0.0  # time the passes near the mechanism held still [s]
+        self._thrust_loss: Phase | None = None
+        """The phase of a weak rotor's fault near the surface: its lost thrust is fed
+        forward in the safe hover (:meth:`_lost_thrust`)."""
         self._handlers: Mapping[Phase, Callable[[float, StateEstimate], Reference]] = {
             Phase.TAKEOFF: self._takeoff,
             Phase.APPROACH: self._approach,
@@ -251,6 +259,9 @@ class MissionSupervisor:
         if self._release_pull is not None:
             rows = rows.copy()  # the path's rows are shared and read-only
             rows[2] += self._release_pull.feedforward(t, est, rows[0])
+        elif self._thrust_loss is not None:
+            rows = rows.copy()
+            rows[2] += self._lost_thrust(est)
         return Reference(
             t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
@@ -288,7 +299,7 @@ class MissionSupervisor:
     # ------------------------------------------------------------------ abort and faults
     def abort(
         self, t: float, est: StateEstimate, reason: str, *, hover_at: np.ndarray | None = None,
-        land: bool = False, away: bool = False,
+        land: bool = False, away: bool = False, step: bool = False,
     ) -> None:  # fmt: skip
         """Go to the safe state from the current phase and log ``reason``.
 
@@ -296,7 +307,10 @@ class MissionSupervisor:
         the surface by ``mission.detection.away_distance``), or at ``hover_at``; or, with
         ``land``, fly back to the start pad and land (free flight). Landed with the motors
         off, the motors stay off, unless ``away``: the vehicle is moving without its cable,
-        so the motors come on and it hovers away from the surface.
+        so the motors come on and it hovers away from the surface. With ``step`` the
+        reference jumps to the point away from the surface at once (a weak rotor near it:
+        the vehicle is already sinking and tilting towards it) instead of moving there
+        along a path from the estimate.
         """
         if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
             return
@@ -310,7 +324,7 @@ class MissionSupervisor:
         start = self._pull_point(est) if self.phase.tethered else est.body.p_W
         if away:
             start = start + self.cfg.detection.away_distance * self.geo.surface.z_S
-        self._path = self._new_path(t, est.body.p_W if away else start)
+        self._path = self._new_path(t, est.body.p_W if away and not step else start)
         if land:
             wp = self.wp
             self._path = (
@@ -326,6 +340,37 @@ class MissionSupervisor:
             self._path = self._path.to(target, pause=self.cfg.safe_hover_time)
         self._enter(Phase.SAFE_HOVER, t, f"abort: {reason}")
 
+    def _lost_thrust(self, est: StateEstimate) -> np.ndarray:
+        """After a rotor fault near the surface, the cable believed slack: the estimated
+        cable pull is the thrust the weak rotor does not deliver (the estimator reads the
+        deficit as a pull along -d, d from the believed anchor to the vehicle), fed
+        forward as the acceleration f_L d / m [m/s^2] that makes it up, as the release
+        hand-over does with a real pull; the position integral needs seconds for it, and
+        the vehicle sinks 0.2 m/s meanwhile. Zero once the attachment point is within
+        ``mission.detection.jam_slack`` of the cable's reach (the pull may be real), unless
+        the fault came before the hooking pass or after the unhooking pass
+        (:data:`_UNHOOKED`: no cable to pull)."""
+        r_att = np.asarray(self.scenario.vehicle.cable_attachment, dtype=float)
+        d = est.body.p_W + est.body.R_WB @ r_att - self.geo.p_A
+        n = float(np.linalg.norm(d))
+        reach = self.scenario.tether.length - self.cfg.detection.jam_slack
+        if n < 1e-9 or (n >= reach and self._thrust_loss not in _UNHOOKED):
+            return np.zeros(3)
+        return max(est.tension or 0.0, 0.0) / (self.mass * n) * d
+
+    def near_surface(self, est: StateEstimate) -> bool:
+        """In free flight around the slope (:data:`_NEAR_SURFACE`; not the tethered
+        phases, where the cable holds the vehicle, nor the pad's) with
+        the estimated landers closer to the believed surface than
+        ``mission.detection.away_distance``: a fault's safe state first moves away from
+        the surface along z_S (a weak rotor sinks and tilts the vehicle by centimetres
+        before its fault is confirmed, the end of the hooking pass keeps the landers
+        0.1-0.2 m from the slope)."""
+        if self.phase not in _NEAR_SURFACE:
+            return False
+        clearance = self._contact_rule.geometry.clearance(est.body.p_W, est.body.R_WB)
+        return clearance < self.cfg.detection.away_distance
+
     def command_sent(self, t: float, command: Command) -> None:
         """The runner tells each command sent (``CommandAware``): for the fault monitor."""
         self.monitor.command_sent(t, command)
@@ -334,11 +379,17 @@ class MissionSupervisor:
         """A measured-signal fault: log it and move to the safe state of its kind."""
         self.fault = found
         self._event(t, "fault", found.reason)
+        near = self.near_surface(est)
         if found.kind == FaultKind.JAM:  # still hooked: hover inside the cable's reach
             self.abort(t, est, found.reason, hover_at=self.wp.hook_start)
+        elif found.kind == FaultKind.ROTOR and near:
+            # a weak rotor sinks and tilts the vehicle towards the surface: away at once
+            # (a step of the reference along z_S), its lost thrust fed forward, then hover
+            self._thrust_loss = self.phase
+            self.abort(t, est, found.reason, away=True, step=True)
         elif found.kind == FaultKind.ROTOR and self.phase in _UNHOOKED:
             self.abort(t, est, found.reason, land=True)
-        elif found.kind == FaultKind.SNAP or self.phase in _NEAR_MECHANISM:
+        elif found.kind == FaultKind.SNAP or self.phase in _NEAR_MECHANISM or near:
             self.abort(t, est, found.reason, away=True)  # stop away from the surface
         else:
             self.abort(t, est, found.reason)
