@@ -106,7 +106,8 @@ class HierarchicalController:
         delta_d'' = g sin(phi) sin(delta)/l - sin(2 delta) phi'^2/2 - k_i int(e_delta), so
         that in u_y the gravity, centripetal and integral terms cancel and the sideways
         force is the damping c m l k_d delta' alone, c = ``lateral_damping`` (the integral
-        is kept, not updated: its error is 0)."""
+        is kept, not updated: its error is 0; the first held tick after free ones drops
+        it, :meth:`update`)."""
         out = np.zeros((max(Y.shape[0], 3), 4))
         out[: Y.shape[0]] = Y
         out[0, 1] = link.delta

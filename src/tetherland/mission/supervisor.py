@@ -169,11 +169,6 @@ class MissionSupervisor:
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
-        self._lock_t = 0.0  # time of the lateral lock [s]
-        self._lock_rate = 0.0  # azimuth rate the free rows asked for at the lock [rad/s]
-        gains = scenario.controller.tethered
-        self._lock_tau = 1.0 / gains.link_frequency  # the lock's stop time constant [s]
-        self._free_rate = 1.0 - gains.lateral_damping  # delta_d' / delta' of the free rows
         self._sign_t: float | None = None  # time of the first sign of contact [s]
         self._press_t: float | None = None  # time the preload began (landers stopped) [s]
         self._shed_at_contact = 0.0  # preload's thrust shed at the confirmed contact [-]
@@ -539,26 +534,10 @@ class MissionSupervisor:
         if self._delta_lock is not None:
             assert ref.output is not None
             out = ref.output.copy()
-            out[:, 1] = self._lock_rows(ref.t, out.shape[0])
+            out[0, 1] = self._delta_lock
+            out[1:, 1] = 0.0
             return dataclasses.replace(ref, output=out, lateral_free=False)
         return dataclasses.replace(ref, lateral_free=True) if release else ref
-
-    def _lock_rows(self, t: float, rows: int) -> np.ndarray:
-        """The held link azimuth and its derivatives at ``t`` (``rows`` of them).
-
-        The free rows asked for delta_d' = (1 - c) delta' (c the lateral damping): the hold
-        starts at that rate and the held azimuth stops exponentially at the link loop's
-        time constant tau = 1/omega_n, delta_d = delta_0 + v tau (1 - exp(-s/tau)), so the
-        lock changes neither the damping force nor the reference in one tick (a step of
-        (1 - c) k_d m l delta', about 0.05 N, rolled the frame just above the surface)."""
-        assert self._delta_lock is not None
-        tau, v = self._lock_tau, self._lock_rate
-        decay = math.exp(-max(t - self._lock_t, 0.0) / tau)
-        out = np.empty(rows)
-        out[0] = self._delta_lock + v * tau * (1.0 - decay)
-        for k in range(1, rows):  # d^k/ds^k of -v tau exp(-s/tau)
-            out[k] = v * decay * (-1.0 / tau) ** (k - 1)
-        return out
 
     def _lock_on_contact(self, t: float, est: StateEstimate, decision: ContactDecision) -> None:
         """End the lateral release at the first sign of contact: the landers near the
@@ -598,8 +577,6 @@ class MissionSupervisor:
         self._sign_t = t
         if td.lateral_lock and td.lateral_clearance > 0.0:
             self._delta_lock = est.link.delta
-            self._lock_t = t
-            self._lock_rate = self._free_rate * est.link.delta_dot
             self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
 
     def _preload_shed(self, t: float) -> float:
