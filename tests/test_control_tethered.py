@@ -311,3 +311,53 @@ def test_lateral_free_keeps_a_fraction_of_the_link_damping(scenario, plans):
     assert abs(full) > 1e-3  # the premise: damping 0.1 rad/s tilts the axis
     assert half == pytest.approx(0.5 * full, rel=0.02)
     assert abs(out_of_plane(0.0)) < 1e-9
+
+
+def test_taking_the_azimuth_back_adds_no_sideways_step(scenario, plans):
+    """The lateral lock hands the azimuth back to the law (lateral_free True, then False):
+    at rest in the plumb plane (delta = delta' = 0) with a delta integral I built up before
+    the release, the free tick asks for no sideways force (the free rows cancel k_i I), and
+    so does the first held tick at delta_d = delta: the integral the free rows cancelled is
+    dropped, not returned in one tick as the sideways force m l k_i I (a tilt of about
+    l k_i I / g out of the link plane, which a controller never released still asks for).
+    The phi integral is kept."""
+    from dataclasses import replace
+
+    from tetherland.control.kernels import hierarchical as kernel
+    from tetherland.geometry import link_frame
+
+    traj = plans["landing"]
+    geo = LandingGeometry.from_scenario(scenario)
+    x0 = start_state(traj)
+    x0[1], x0[3] = 0.0, 0.0  # in the plumb plane, at rest sideways
+    est = estimate_of(x0, 0.0, geo, geo.link_length)
+    out = np.zeros((5, 4))
+    theta = theta_A_from_z_B(geo.R_WA.T @ quat_to_rotmat(x0[4:8])[:, 2], x0[0], 0.0)
+    out[0] = [x0[0], 0.0, theta, 0.0]
+    ref = Reference(t=0.0, mode=ControlMode.TETHERED, output=out,
+                    feedforward=Feedforward(np.zeros(3), np.zeros(3), 9.81))  # fmt: skip
+    integral = np.array([0.02, 0.05])  # [rad s]
+    y_L = link_frame(x0[0], x0[1])[:, 1]
+
+    def out_of_plane(ctrl: HierarchicalController) -> float:
+        R_d = ctrl._state[kernel.STATE_R_D].reshape(3, 3)
+        return float((geo.R_WA.T @ R_d[:, 2]) @ y_L)
+
+    def built_up() -> HierarchicalController:
+        ctrl = HierarchicalController(scenario)
+        ctrl._state[kernel.STATE_INTEGRAL] = integral
+        ctrl._state[kernel.STATE_T_LAST] = 0.0
+        return ctrl
+
+    never_free = built_up()
+    never_free.update(0.002, est, replace(ref, t=0.002))
+    k_i = scenario.controller.tethered.link_integral
+    tilt = geo.link_length * k_i * integral[1] / GRAVITY
+    assert abs(out_of_plane(never_free)) > 0.5 * tilt  # the premise: the integral's step
+    locked = built_up()
+    locked.update(0.002, est, replace(ref, t=0.002, lateral_free=True))
+    assert abs(out_of_plane(locked)) < 1e-9  # free: nothing sideways
+    locked.update(0.004, est, replace(ref, t=0.004))  # the lock: delta_d = delta
+    assert abs(out_of_plane(locked)) < 1e-9  # held: still nothing sideways
+    assert locked._state[kernel.STATE_INTEGRAL][1] == 0.0
+    assert locked._state[kernel.STATE_INTEGRAL][0] != 0.0  # phi's integral kept

@@ -187,10 +187,10 @@ def test_the_lateral_release_ends_at_the_first_sign_of_contact():
     assert sign <= t[k_L] + truth.mission.contact.dwell  # sensed before the contact rule's dwell
 
 
-def _lands_with_the_preload(slope: float, index: int):
-    """Fly draw ``index`` of the 20-per-slope sweep at ``slope`` with :data:`PRELOAD`; it
-    must land with conditions (1)-(5). Returns the run's result and its landing summary."""
-    record, result = run_job(study_run(slope, runs=20, index=index, extra=PRELOAD))
+def _lands_with_the_preload(slope: float, index: int, runs: int = 20):
+    """Fly draw ``index`` of the ``runs``-per-slope sweep at ``slope`` with :data:`PRELOAD`;
+    it must land with conditions (1)-(5). Returns the run's result and its landing summary."""
+    record, result = run_job(study_run(slope, runs=runs, index=index, extra=PRELOAD))
     assert record["status"] == "ok", record.get("error")
     verdict = result.verdict.summary
     assert verdict["success"], verdict["reason"]
@@ -261,3 +261,37 @@ def test_the_preload_waits_for_the_landers_to_stop_on_the_surface():
     # no shed in the air: the rotors carry the weight less the cable's share, as before the sign
     before = (t > first - 0.3) & (t < first)
     assert thrust[airborne].min() > thrust[before].mean() - 0.05 * m_g
+
+
+@pytest.mark.slow
+def test_the_press_descent_keeps_the_landers_loaded_against_a_gust():
+    """Sweep draw tethered-60-00031 of the 100-per-slope sweep (60 deg, seed 2026): the
+    landers stopped on the surface with the slowed plan's link reference 0.4 deg above the
+    link, and the plan's end above the true surface: the landers carried almost nothing
+    until the contact was confirmed 1.3 s later, and a 0.46 N gust from 0.15 s after the
+    touch slid the vehicle 12 mm along the surface (condition (5)). Now, from the landers'
+    stop (the preload's start, t_p), the elevation reference stays at or below the guarded
+    descent from the estimated link there (``mission.touchdown.press_descent``), the
+    contact is confirmed within the time the rule's link lag and dwell take at that
+    descent, and the mission succeeds with conditions (1)-(5)."""
+    result, _ = _lands_with_the_preload(60.0, 31, runs=100)
+    log, belief = result.log, result.belief_scenario
+    td, rule = belief.mission.touchdown, belief.mission.contact
+    assert td.press_descent
+    (press,) = [e["t"] for e in log.events if e.get("message", "").startswith("landers stopped")]
+    (t_L,) = [e["t"] for e in log.events if e.get("kind") == "touchdown"]
+    t = log["t"]
+    dt = float(t[1] - t[0])
+    k_p = int(np.searchsorted(t, press))
+    phi_p = log["est_link"][k_p, 0]  # the estimated elevation at the stop
+    rate = math.radians(td.descent_rate_deg_s)
+    stall = math.radians(rule.stall_rate_deg_s)
+    after = (t > press) & (t < t_L)
+    assert after.sum() > 100
+    # phi_d <= phi_p - r (t - t_p), up to the link's move within a tick of the event
+    cap = phi_p - rate * (t[after] - press)
+    assert np.all(log["ref_output"][after, 0] <= cap + 2.0 * dt * (rate + stall))
+    # the lag phi - phi_d grows at least at r - stall_rate while the link is stalled: the
+    # rule's lag is reached within link_lag / (r - stall) and confirmed a dwell later
+    bound = math.radians(rule.link_lag_deg) / (rate - stall) + rule.dwell
+    assert rule.dwell - dt < t_L - press <= bound + dt

@@ -163,6 +163,18 @@ class TouchdownConfig(Section):
     ``contact.surface_force``) plus this lead, up to ``preload``: only as much load as the
     landers are measured to take, so a start that comes before the true touch sheds just
     the lead [N]."""
+    press_descent: bool = True
+    """Press descent: once the landers have stopped on the surface (the start of the
+    preload), the link elevation reference is kept no higher than a guarded descent from
+    the estimated elevation there, at ``descent_rate_deg_s``. The slowed plan's reference
+    lags the vehicle near the surface (0.3-1.3 deg above the link when the landers stop,
+    at 60-70 deg) and its end lies above the true surface wherever the belief does: held
+    up by it, the landers carried next to nothing (and left the surface for a second)
+    until the contact was confirmed 1.2-2.4 s later, and a 0.4-0.5 N gust slid the vehicle
+    11-15 mm (condition (5), docs/results.md). Pressed, the landers take the load and
+    the contact rule's link lag grows at once, so the contact is confirmed within about
+    (``contact.link_lag_deg`` / ``descent_rate_deg_s`` + ``contact.dwell``). Off on walls
+    (``wall90``, ``overhang93``, not flown with it)."""
     spin_down_time: float = Field(1.0, ge=0, le=10)
     """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
     zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or

@@ -84,6 +84,7 @@ class HierarchicalController:
         # integral of the (phi, delta) errors [rad s], last update time, last regular
         # thrust and attitude (held through singularities)
         self._state = kernel.hierarchical_state(self.mass, self.g)
+        self._lateral_free = False  # the last reference left the link azimuth to gravity
         # load the compiled law now (numba's cache, once per process), not at the first
         # tethered tick of a mission: a call on scratch arrays
         kernel.hierarchical_into(
@@ -97,6 +98,7 @@ class HierarchicalController:
         last_thrust = self._state[kernel.STATE_THRUST]
         self._state[:] = kernel.hierarchical_state(self.mass, self.g)
         self._state[kernel.STATE_THRUST] = last_thrust
+        self._lateral_free = False
 
     def _delta_free(self, Y: np.ndarray, link: LinkState) -> np.ndarray:
         """``Y`` with the delta rows that leave the link azimuth to gravity
@@ -104,7 +106,8 @@ class HierarchicalController:
         delta_d'' = g sin(phi) sin(delta)/l - sin(2 delta) phi'^2/2 - k_i int(e_delta), so
         that in u_y the gravity, centripetal and integral terms cancel and the sideways
         force is the damping c m l k_d delta' alone, c = ``lateral_damping`` (the integral
-        is kept, not updated: its error is 0)."""
+        is kept, not updated: its error is 0; the first held tick after free ones drops
+        it, :meth:`update`)."""
         out = np.zeros((max(Y.shape[0], 3), 4))
         out[: Y.shape[0]] = Y
         out[0, 1] = link.delta
@@ -125,6 +128,14 @@ class HierarchicalController:
             raise ValueError("the tethered controller needs estimate.link and reference.output")
         if reference.lateral_free:
             Y = self._delta_free(Y, link)
+        elif self._lateral_free:
+            # the azimuth is taken back (the lateral lock at the first sign of contact):
+            # the free rows cancelled the delta integral, so the sideways force had none of
+            # it; kept, it would return in one tick as a sideways step (about 0.09 N after
+            # an approach held off the true plumb plane), rolling the frame just above the
+            # surface. The hold starts from no integral, as the free hang applied none.
+            self._state[kernel.STATE_INTEGRAL][1] = 0.0
+        self._lateral_free = reference.lateral_free
         ff = reference.feedforward
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
         body = estimate.body

@@ -176,6 +176,7 @@ class MissionSupervisor:
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._sign_t: float | None = None  # time of the first sign of contact [s]
         self._press_t: float | None = None  # time the preload began (landers stopped) [s]
+        self._press_phi = 0.0  # estimated link elevation at the preload's start [rad]
         self._shed_at_contact = 0.0  # preload's thrust shed at the confirmed contact [-]
         self._shed = 0.0  # preload's thrust shed now [-]
         self._shed_t: float | None = None  # time of its last update [s]
@@ -564,6 +565,7 @@ class MissionSupervisor:
         self._landing_rate = abs(float(planned.output[1, 0]))
         ref = self._slow.scale(planned, t)
         ref = self._lateral(ref, self._slow.clearance < self.cfg.touchdown.lateral_clearance)
+        ref = self._pressed(ref, t)
         if early_contact_armed(self.cfg.contact, tau, track.t0, track.duration):
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             self._lock_on_contact(t, est, decision)
@@ -589,6 +591,25 @@ class MissionSupervisor:
             out[1:, 1] = 0.0
             return dataclasses.replace(ref, output=out, lateral_free=False)
         return dataclasses.replace(ref, lateral_free=True) if release else ref
+
+    def _pressed(self, ref: Reference, t: float) -> Reference:
+        """``ref`` with its link elevation no higher than a guarded descent from where the
+        landers stopped (``mission.touchdown.press_descent``): phi_d <= phi_p - r (t - t_p),
+        phi_p the estimated elevation at the start of the preload t_p, r the descent rate,
+        so the reference neither holds the landers up nor lifts them off the surface."""
+        td = self.cfg.touchdown
+        if not td.press_descent or self._press_t is None:
+            return ref
+        rate = math.radians(td.descent_rate_deg_s)
+        cap = self._press_phi - rate * (t - self._press_t)
+        assert ref.output is not None
+        if ref.output[0, 0] <= cap:
+            return ref
+        out = ref.output.copy()
+        out[0, 0] = cap
+        out[1, 0] = -rate
+        out[2:, 0] = 0.0
+        return dataclasses.replace(ref, output=out)
 
     def _lock_on_contact(self, t: float, est: StateEstimate, decision: ContactDecision) -> None:
         """End the lateral release at the first sign of contact: the landers near the
@@ -618,6 +639,7 @@ class MissionSupervisor:
             and ev.link_rate > -math.radians(self.cfg.contact.stall_rate_deg_s)
         ):  # fmt: skip
             self._press_t = t
+            self._press_phi = est.link.phi
             self._event(
                 t, "contact",
                 f"landers stopped on the surface, thrust shed to {1.0 - td.preload:.2f} at "
@@ -667,6 +689,7 @@ class MissionSupervisor:
         cfg = self.cfg
         if self._hold is None:  # searching for the surface
             ref = self._lateral(self._search_reference(t), cfg.touchdown.lateral_clearance > 0.0)
+            ref = self._pressed(ref, t)
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             self._lock_on_contact(t, est, decision)
             if decision.confirmed:
