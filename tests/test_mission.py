@@ -189,14 +189,6 @@ def test_release_on_a_wall_with_a_light_believed_mass_does_not_swing_into_it():
     assert verdict["takeoff_completed"] and verdict["return_completed"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open (issue 23): with the ground effect on, flat seed 1 touches down at t = 30.50 s, "
-    "0.59 s before the planned touchdown phase, meeting all five landing conditions; the "
-    "judge's slack_cable is later, in the tethered takeoff: where the planned tension passes "
-    "planner.min_tension (0.3 N) the true tension chatters between 0 and 0.8 N (13 ticks at "
-    "0 N, airborne), not a touchdown matter",
-)
 def test_flat_mission_lands_although_the_cable_slackens_on_the_ground():
     """On flat ground the planned tension falls towards zero at touchdown and the landers
     take the load: neither the snap rule nor the slack-cable rule may call that a fault."""

@@ -375,6 +375,13 @@ def test_hook_is_caught_and_released_through_contact(bar_plant: Plant, scenario:
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="open (issue 22, bar mechanism): with the rotor drag on (the default since issue 23) "
+    "seed 0 wedges the line 13.5 cm short and the anchor fault stops it; seeds 0-2 land 1 of 3 "
+    "with the drag on and off alike (drag off: seeds 1, 2 'hook did not release'); the hook is "
+    "not seated before the take-up descends (docs/mechanism.md, Open)",
+)
 def test_slope50_mission_hooks_lands_and_releases_through_contact() -> None:
     """Closed loop: the robot flies the bar mechanism on what it measures only; the plant
     engages and releases the hook through contact; the judge (truth) rules a success."""
