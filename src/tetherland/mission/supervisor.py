@@ -575,6 +575,7 @@ class MissionSupervisor:
         if self._sign_t is not None:
             return
         self._sign_t = t
+        self._slow.touched = True
         if td.lateral_lock and td.lateral_clearance > 0.0:
             self._delta_lock = est.link.delta
             self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
@@ -583,8 +584,9 @@ class MissionSupervisor:
         """Advance the preload to ``t`` and return the thrust fraction it sheds [-].
 
         From the start of the preload (:meth:`_lock_on_contact`) the shed fraction moves
-        at ``preload_rate`` towards min(``preload``, (N + ``preload_lead``) / (m g)), N the
-        estimated surface push: the landers are handed only the load they are measured to
+        at ``preload_rate`` towards min(``preload``, (N + ``preload_lead``) / basis), N the
+        estimated surface push and the basis m g or the planned landed thrust
+        (``preload_basis``): the landers are handed only the load they are measured to
         take, plus a small lead. On the surface N grows with the shed and the fraction
         climbs to ``preload``; after a start that came early (the landers still in the air,
         N about 0) it stays at the lead's few per cent, and a vehicle that leaves the
@@ -595,7 +597,10 @@ class MissionSupervisor:
         dt = max(t - self._shed_t, 0.0) if self._shed_t is not None else 0.0
         self._shed_t = t
         push = max(self._surface_force, 0.0)
-        target = min(td.preload, (push + td.preload_lead) / (self.mass * GRAVITY))
+        basis = self.mass * GRAVITY
+        if td.preload_basis == "landed_thrust" and self._track is not None:
+            basis = float(self._track.track.samples.f_R[-1, 0])
+        target = min(td.preload, (push + td.preload_lead) / basis)
         step = td.preload_rate * dt
         self._shed += min(max(target - self._shed, -step), step)
         return self._shed
