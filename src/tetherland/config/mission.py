@@ -116,11 +116,11 @@ class TouchdownConfig(Section):
     the landers do not meet the surface while the frame still rotates, e.g. from a gust
     (condition (3); 0: no hold) [rad/s]."""
     hold_lateral_speed: float = Field(0.0, ge=0, le=5)
-    """Rate hold on the swing: within ``hold_clearance`` and until the first sign of
-    contact, the clock also runs backwards while the estimated sideways speed of the link
+    """Rate hold on the swing: within ``hold_clearance`` the clock stands still (it does
+    not back away: the slip counts from the first touch, and a vehicle that has touched
+    must not leave to land elsewhere) while the estimated sideways speed of the link
     l |delta'| is above this, so the landers do not meet the surface while the vehicle
-    swings along it (a gust's push on the lateral release); once it has touched it stays
-    (the slip counts from the first touch). On a wall the rotors carry a quarter of the weight and the
+    swings along it (a gust's push on the lateral release). On a wall the rotors carry a quarter of the weight and the
     released azimuth swings like a pendulum of the cable's length: a 0.5 N gust sets it
     swinging at about 3 cm/s, and landers that meet the wall mid-swing slide along it
     until the preload holds them (condition (5); ``wall90``, ``overhang93``: 0.015 m/s;

@@ -328,9 +328,9 @@ class SlowApproach:
 
     Rate hold: within ``hold_clearance`` the clock runs backwards (alpha =
     -``hold_retreat``, never before the plan's start) while the estimated
-    roll-pitch rate exceeds ``hold_rate`` or, before the first sign of contact
-    (``touched``), the estimated sideways link speed l |delta'| exceeds
-    ``hold_lateral_speed`` (a swing along a wall), for at most ``hold_max_time`` in
+    roll-pitch rate exceeds ``hold_rate``, and stands still (alpha = 0) while the
+    estimated sideways link speed l |delta'| exceeds ``hold_lateral_speed`` (a swing
+    along a wall), for at most ``hold_max_time`` in
     total, so the reference backs away and a gust's roll or pitch swing decays before the
     landers meet the surface (condition (3)). Backing away along the plan moves the link
     elevation only: the hierarchical law's thrust direction in the link plane is set by
@@ -367,10 +367,6 @@ class SlowApproach:
         self.clearance = math.inf
         """Estimated lander clearance at the last tick where it was needed (within reach
         of the slowing, the rate hold or the lateral release; inf farther) [m]."""
-        self.touched = False
-        """Set by the supervisor at the first sign of contact: the swing hold
-        (``hold_lateral_speed``) no longer backs away (the judge measures the slip from
-        the first touch, so a vehicle that has touched must not leave to land elsewhere)."""
 
     def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
         """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
@@ -397,12 +393,12 @@ class SlowApproach:
                 clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
                 self.clearance = clearance
                 wx, wy, _ = est.body.omega_B.tolist()
-                if (
-                    hold
-                    and clearance < cfg.hold_clearance
-                    and (0.0 < cfg.hold_rate**2 < wx * wx + wy * wy or self._swings(est))
-                ):
+                near = hold and clearance < cfg.hold_clearance
+                if near and 0.0 < cfg.hold_rate**2 < wx * wx + wy * wy:
                     alpha = -cfg.hold_retreat
+                    self.held += max(dt, 0.0)
+                elif near and self._swings(est):
+                    alpha = 0.0
                     self.held += max(dt, 0.0)
                 elif slow:
                     cap = v0 + gain * max(clearance, 0.0)
@@ -416,9 +412,7 @@ class SlowApproach:
         """Whether the estimated sideways link speed l |delta'| exceeds
         ``hold_lateral_speed`` (0: never)."""
         v = self.cfg.hold_lateral_speed
-        if v == 0.0 or self.touched or est.link is None:
-            return False
-        return self.length * abs(est.link.delta_dot) > v
+        return v > 0.0 and est.link is not None and self.length * abs(est.link.delta_dot) > v
 
     def scale(self, ref: Reference, t: float) -> Reference:
         """``ref`` (sampled at tau) for mission time ``t`` with its rates scaled by alpha."""

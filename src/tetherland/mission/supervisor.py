@@ -575,7 +575,6 @@ class MissionSupervisor:
         if self._sign_t is not None:
             return
         self._sign_t = t
-        self._slow.touched = True
         if td.lateral_lock and td.lateral_clearance > 0.0:
             self._delta_lock = est.link.delta
             self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
