@@ -120,11 +120,12 @@ class TouchdownConfig(Section):
     not back away: the slip counts from the first touch, and a vehicle that has touched
     must not leave to land elsewhere) while the estimated sideways speed of the link
     l |delta'| is above this, so the landers do not meet the surface while the vehicle
-    swings along it (a gust's push on the lateral release). On a wall the rotors carry a quarter of the weight and the
-    released azimuth swings like a pendulum of the cable's length: a 0.5 N gust sets it
-    swinging at about 3 cm/s, and landers that meet the wall mid-swing slide along it
-    until the preload holds them (condition (5); ``wall90``, ``overhang93``: 0.015 m/s;
-    0: off, the default, on slopes the frame's rate hold suffices) [m/s]."""
+    swings along it (a gust's push on the lateral release). On a wall the rotors carry a
+    quarter of the weight and the released azimuth swings like a pendulum of the cable's
+    length: a 0.5 N gust sets it swinging at 3-5 cm/s, and landers that meet the wall
+    mid-swing slide along it until the preload holds them (condition (5); ``wall90``,
+    ``overhang93``: 0.015 m/s; 0: off, the default: on slopes the frame's rate hold
+    suffices) [m/s]."""
     hold_clearance: float = Field(0.03, ge=0, le=1)
     """Rate hold: the estimated lander clearance below which it acts [m]."""
     hold_max_time: float = Field(1.5, ge=0, le=60)

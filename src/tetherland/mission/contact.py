@@ -378,7 +378,8 @@ class SlowApproach:
         v0, gain = cfg.approach_speed, cfg.approach_gain
         speed = self.length * abs(rate_at)
         slow = v0 > 0.0 and speed > v0
-        hold = (cfg.hold_rate > 0.0 or cfg.hold_lateral_speed > 0.0) and self.held < cfg.hold_max_time
+        holds = cfg.hold_rate > 0.0 or cfg.hold_lateral_speed > 0.0
+        hold = holds and self.held < cfg.hold_max_time
         lateral = cfg.lateral_clearance
         self.clearance = math.inf
         if slow or hold or lateral > 0.0:
