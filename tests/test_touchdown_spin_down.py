@@ -114,45 +114,6 @@ def test_the_preload_follows_the_measured_surface_push():
     assert np.min(np.diff(lifted)) >= -td.preload_rate * 0.002 - 1e-12
 
 
-def test_on_a_wall_the_preload_sheds_the_push_plus_lead_in_newtons():
-    """wall90 (``preload_basis = "landed_thrust"``): the shed fraction's target is
-    min(preload, (N + lead) / f_R*), f_R* the planned thrust at the end of the landing, so
-    the thrust taken off is N + lead newtons, as on a slope where f_R* is about m g.
-    Divided by m g instead, on a wall (f_R* = m g tan(gamma), a quarter of the weight) the
-    landers were handed only a quarter of it."""
-    from types import SimpleNamespace
-
-    from tetherland.mission.supervisor import MissionSupervisor
-
-    wall = load_scenario("wall90")
-    td = wall.mission.touchdown
-    assert td.preload_basis == "landed_thrust"
-    m_g = wall.vehicle.mass * GRAVITY
-    geo = LandingGeometry.from_scenario(wall)
-    gamma = math.asin(geo.h_att / wall.tether.length)  # the cable at the centre of mass
-    f_star = m_g * math.tan(gamma)  # the landed hover on a wall (docs/walls.md)
-    assert f_star < 0.3 * m_g
-    f_R = np.array([[m_g, 0.0, 0.0], [f_star, 0.0, 0.0]])  # the plan's rows, landed last
-    track = SimpleNamespace(track=SimpleNamespace(samples=SimpleNamespace(f_R=f_R)))
-    sup = SimpleNamespace(cfg=wall.mission, mass=wall.vehicle.mass, _press_t=10.0, _shed=0.0,
-                          _shed_t=None, _surface_force=0.0, _track=track)  # fmt: skip
-    step = MissionSupervisor._preload_shed
-
-    def settle(push: float) -> float:
-        sup._surface_force = push
-        t0 = sup._shed_t or 10.0
-        return [step(sup, t) for t in np.arange(t0, t0 + 2.0, 0.002)][-1]
-
-    assert settle(0.0) * f_star == pytest.approx(td.preload_lead)  # the lead in newtons
-    push = 0.1
-    assert settle(push) * f_star == pytest.approx(push + td.preload_lead)
-    assert settle(5.0) == pytest.approx(td.preload)  # capped
-    sup.cfg = wall.mission.model_copy(
-        update={"touchdown": td.model_copy(update={"preload_basis": "weight"})}
-    )
-    assert settle(0.0) * f_star == pytest.approx(td.preload_lead * f_star / m_g)  # a quarter
-
-
 @pytest.mark.slow
 def test_hovering_on_unloaded_landers_no_longer_drops_at_motors_off():
     """Sweep draw tethered-20-00015 (20 deg, seed 2026): before, the rest began with the

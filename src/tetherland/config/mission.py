@@ -19,8 +19,6 @@
 
 from __future__ import annotations
 
-from typing import Literal
-
 from pydantic import Field
 
 from tetherland.config.base import Section
@@ -116,11 +114,12 @@ class TouchdownConfig(Section):
     the landers do not meet the surface while the frame still rotates, e.g. from a gust
     (condition (3); 0: no hold) [rad/s]."""
     hold_lateral_speed: float = Field(0.0, ge=0, le=5)
-    """Rate hold on the swing: within ``hold_clearance`` the clock stands still (it does
-    not back away: the slip counts from the first touch, and a vehicle that has touched
-    must not leave to land elsewhere) while the estimated sideways speed of the link
-    l |delta'| is above this, so the landers do not meet the surface while the vehicle
-    swings along it (a gust's push on the lateral release). On a wall the rotors carry a
+    """Rate hold on the swing: within ``hold_clearance`` the clock runs backwards (as for
+    ``hold_rate``) while the estimated sideways speed of the link l |delta'| is above
+    this, so the landers do not meet the surface while the vehicle swings along it (a
+    gust's push on the lateral release); once the landers are sensed on the surface (the
+    preload's start) it only stands still: the slip counts from the first touch, and a
+    vehicle that has touched must not leave to land elsewhere. On a wall the rotors carry a
     quarter of the weight and the released azimuth swings like a pendulum of the cable's
     length: a 0.5 N gust sets it swinging at 3-5 cm/s, and landers that meet the wall
     mid-swing slide along it until the preload holds them (condition (5); ``wall90``,
@@ -167,15 +166,6 @@ class TouchdownConfig(Section):
     landers are still a centimetre off the surface (an approach fakes the push): shedding
     from it brought two sweep runs down rocking (condition (3)), hence the stall
     (docs/results.md) (0: off) [-]."""
-    preload_basis: Literal["weight", "landed_thrust"] = "weight"
-    """Preload: what the shed force is divided by to give the shed fraction's target
-    min(``preload``, (N + ``preload_lead``) / basis): the believed weight m g, or the
-    planned total thrust at the end of the landing f_R(phi*) (believed mass and surface).
-    On a slope the two are close; on a wall the rotors carry about a quarter of the
-    weight (f_R = m g tan(gamma), 2.5 N of 9.8 N for ``wall90``), so divided by m g the
-    shed force is only a quarter of N + lead and the landers are pressed with a tenth of
-    a newton through the contact confirmation; with the landed thrust the shed force is
-    N + lead, as meant (``wall90``, ``overhang93``: ``landed_thrust``) [-]."""
     preload_rate: float = Field(0.5, gt=0, le=100)
     """Preload: the rate at which the thrust fraction is shed from its start; slow, so that
     the landers take the load without a jolt (a fixed shed at 1/s made a sweep run drop

@@ -328,9 +328,9 @@ class SlowApproach:
 
     Rate hold: within ``hold_clearance`` the clock runs backwards (alpha =
     -``hold_retreat``, never before the plan's start) while the estimated
-    roll-pitch rate exceeds ``hold_rate``, and stands still (alpha = 0) while the
-    estimated sideways link speed l |delta'| exceeds ``hold_lateral_speed`` (a swing
-    along a wall), for at most ``hold_max_time`` in
+    roll-pitch rate exceeds ``hold_rate`` or the estimated sideways link speed l |delta'|
+    exceeds ``hold_lateral_speed`` (a swing along a wall; once ``touched`` the swing only
+    stops the clock, alpha = 0), for at most ``hold_max_time`` in
     total, so the reference backs away and a gust's roll or pitch swing decays before the
     landers meet the surface (condition (3)). Backing away along the plan moves the link
     elevation only: the hierarchical law's thrust direction in the link plane is set by
@@ -367,6 +367,11 @@ class SlowApproach:
         self.clearance = math.inf
         """Estimated lander clearance at the last tick where it was needed (within reach
         of the slowing, the rate hold or the lateral release; inf farther) [m]."""
+        self.touched = False
+        """Set by the supervisor once the landers are sensed on the surface (the preload's
+        start): from then on a swing stops the clock but no longer backs it away (the
+        judge measures the slip from the first touch: a vehicle that has touched must
+        not leave to land elsewhere)."""
 
     def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
         """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
@@ -399,7 +404,7 @@ class SlowApproach:
                     alpha = -cfg.hold_retreat
                     self.held += max(dt, 0.0)
                 elif near and self._swings(est):
-                    alpha = 0.0
+                    alpha = 0.0 if self.touched else -cfg.hold_retreat
                     self.held += max(dt, 0.0)
                 elif slow:
                     cap = v0 + gain * max(clearance, 0.0)

@@ -567,6 +567,7 @@ class MissionSupervisor:
             and ev.link_rate > -math.radians(self.cfg.contact.stall_rate_deg_s)
         ):  # fmt: skip
             self._press_t = t
+            self._slow.touched = True
             self._event(
                 t, "contact",
                 f"landers stopped on the surface, thrust shed to {1.0 - td.preload:.2f} at "
@@ -583,9 +584,8 @@ class MissionSupervisor:
         """Advance the preload to ``t`` and return the thrust fraction it sheds [-].
 
         From the start of the preload (:meth:`_lock_on_contact`) the shed fraction moves
-        at ``preload_rate`` towards min(``preload``, (N + ``preload_lead``) / basis), N the
-        estimated surface push and the basis m g or the planned landed thrust
-        (``preload_basis``): the landers are handed only the load they are measured to
+        at ``preload_rate`` towards min(``preload``, (N + ``preload_lead``) / (m g)), N the
+        estimated surface push: the landers are handed only the load they are measured to
         take, plus a small lead. On the surface N grows with the shed and the fraction
         climbs to ``preload``; after a start that came early (the landers still in the air,
         N about 0) it stays at the lead's few per cent, and a vehicle that leaves the
@@ -596,10 +596,7 @@ class MissionSupervisor:
         dt = max(t - self._shed_t, 0.0) if self._shed_t is not None else 0.0
         self._shed_t = t
         push = max(self._surface_force, 0.0)
-        basis = self.mass * GRAVITY
-        if td.preload_basis == "landed_thrust" and self._track is not None:
-            basis = float(self._track.track.samples.f_R[-1, 0])
-        target = min(td.preload, (push + td.preload_lead) / basis)
+        target = min(td.preload, (push + td.preload_lead) / (self.mass * GRAVITY))
         step = td.preload_rate * dt
         self._shed += min(max(target - self._shed, -step), step)
         return self._shed
