@@ -270,6 +270,60 @@ def test_the_rate_hold_backs_the_clock_while_the_frame_rotates_near_the_surface(
     assert slow.alpha == pytest.approx(alpha)
 
 
+def test_the_swing_hold_backs_the_clock_away_from_a_swing_along_a_wall():
+    """wall90: within touchdown.hold_clearance the clock runs backwards at
+    touchdown.hold_retreat while the estimated sideways link speed l |delta'| exceeds
+    touchdown.hold_lateral_speed (the frame itself not rotating), and only stands still
+    (alpha = 0) once the landers are sensed on the surface (``touched``); a slower swing,
+    or a swing farther from the wall, leaves the slowed clock; with the default (0) a
+    swing never holds (slopes)."""
+    from dataclasses import replace
+
+    wall = load_scenario("wall90")
+    td = wall.mission.touchdown
+    assert td.hold_lateral_speed > 0.0 and scenario_default_swing_hold() == 0.0
+    assert td.hold_retreat > 0.0
+    wall_geo = LandingGeometry.from_scenario(wall)
+    rule = ContactRule(wall)
+    l = wall.tether.length
+    rate = math.radians(10.0)  # 7 cm/s of reference speed at l = 0.4 m
+    c = 0.5 * td.hold_clearance
+    alpha = min(1.0, (td.approach_speed + td.approach_gain * c) / (l * rate))
+    assert alpha < 1.0
+
+    def swinging(speed: float, t: float, height: float = c) -> StateEstimate:
+        est = estimate(wall_geo, wall, t, phi=wall_geo.phi_star, phi_dot=0.0, height=height)
+        return replace(est, link=replace(est.link, delta_dot=speed / l))
+
+    fast, slow_swing = 1.5 * td.hold_lateral_speed, 0.9 * td.hold_lateral_speed
+    dt = 0.01
+    slow = SlowApproach(td, rule.geometry, l)
+    slow.start(9.0)
+    tau0 = slow.advance(10.0, swinging(0.0, 10.0), rate)
+    tau = slow.advance(10.0 + dt, swinging(-fast, 10.0 + dt), rate)  # either sign
+    assert slow.alpha == -td.hold_retreat and tau == pytest.approx(tau0 - td.hold_retreat * dt)
+    assert slow.held == pytest.approx(dt)
+    tau2 = slow.advance(10.0 + 2 * dt, swinging(slow_swing, 10.0 + 2 * dt), rate)
+    assert slow.alpha == pytest.approx(alpha) and tau2 == pytest.approx(tau + alpha * dt)
+    slow.advance(10.0 + 3 * dt, swinging(fast, 10.0 + 3 * dt, 2.0 * td.hold_clearance), rate)
+    assert slow.alpha > 0.0  # farther than hold_clearance: no hold
+    slow.touched = True  # on the surface: a swing stops the clock, no retreat
+    tau4 = slow.advance(10.0 + 4 * dt, swinging(fast, 10.0 + 4 * dt), rate)
+    tau5 = slow.advance(10.0 + 5 * dt, swinging(fast, 10.0 + 5 * dt), rate)
+    assert slow.alpha == 0.0 and tau5 == tau4
+    # the default: no swing hold
+    off = SlowApproach(td.model_copy(update={"hold_lateral_speed": 0.0}), rule.geometry, l)
+    off.start(9.0)
+    off.advance(10.0, swinging(0.0, 10.0), rate)
+    off.advance(10.0 + dt, swinging(10.0 * fast, 10.0 + dt), rate)
+    assert off.alpha == pytest.approx(alpha)
+
+
+def scenario_default_swing_hold() -> float:
+    """``mission.touchdown.hold_lateral_speed`` of the slope scenarios [m/s]."""
+    return load_scenario("slope50").mission.touchdown.hold_lateral_speed
+
+
 # ---------------------------------------------------------------------- campaign regressions
 STUDY = ["tether.length=1.2", "tether.hook_drop=1.0"]
 """The 1000-run slope study of docs/results.md: base overrides, 100 runs per slope, seed 2026."""

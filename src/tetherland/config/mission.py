@@ -113,6 +113,18 @@ class TouchdownConfig(Section):
     clock stops while the estimated roll-pitch rate |(omega_x, omega_y)| is above this, so
     the landers do not meet the surface while the frame still rotates, e.g. from a gust
     (condition (3); 0: no hold) [rad/s]."""
+    hold_lateral_speed: float = Field(0.0, ge=0, le=5)
+    """Rate hold on the swing: within ``hold_clearance`` the clock runs backwards (as for
+    ``hold_rate``) while the estimated sideways speed of the link l |delta'| is above
+    this, so the landers do not meet the surface while the vehicle swings along it (a
+    gust's push on the lateral release); once the landers are sensed on the surface (the
+    preload's start) it only stands still: the slip counts from the first touch, and a
+    vehicle that has touched must not leave to land elsewhere. On a wall the rotors carry a
+    quarter of the weight and the released azimuth swings like a pendulum of the cable's
+    length: a 0.5 N gust sets it swinging at 3-5 cm/s, and landers that meet the wall
+    mid-swing slide along it until the preload holds them (condition (5); ``wall90``,
+    ``overhang93``: 0.015 m/s; 0: off, the default: on slopes the frame's rate hold
+    suffices) [m/s]."""
     hold_clearance: float = Field(0.03, ge=0, le=1)
     """Rate hold: the estimated lander clearance below which it acts [m]."""
     hold_max_time: float = Field(1.5, ge=0, le=60)

@@ -328,7 +328,9 @@ class SlowApproach:
 
     Rate hold: within ``hold_clearance`` the clock runs backwards (alpha =
     -``hold_retreat``, never before the plan's start) while the estimated
-    roll-pitch rate exceeds ``hold_rate``, for at most ``hold_max_time`` in
+    roll-pitch rate exceeds ``hold_rate`` or the estimated sideways link speed l |delta'|
+    exceeds ``hold_lateral_speed`` (a swing along a wall; once ``touched`` the swing only
+    stops the clock, alpha = 0), for at most ``hold_max_time`` in
     total, so the reference backs away and a gust's roll or pitch swing decays before the
     landers meet the surface (condition (3)). Backing away along the plan moves the link
     elevation only: the hierarchical law's thrust direction in the link plane is set by
@@ -365,6 +367,11 @@ class SlowApproach:
         self.clearance = math.inf
         """Estimated lander clearance at the last tick where it was needed (within reach
         of the slowing, the rate hold or the lateral release; inf farther) [m]."""
+        self.touched = False
+        """Set by the supervisor once the landers are sensed on the surface (the preload's
+        start): from then on a swing stops the clock but no longer backs it away (the
+        judge measures the slip from the first touch: a vehicle that has touched must
+        not leave to land elsewhere)."""
 
     def advance(self, t: float, est: StateEstimate, rate_at: float) -> float:
         """Advance the clock to mission time ``t``; ``rate_at`` is |phi_d'| at the current
@@ -376,7 +383,8 @@ class SlowApproach:
         v0, gain = cfg.approach_speed, cfg.approach_gain
         speed = self.length * abs(rate_at)
         slow = v0 > 0.0 and speed > v0
-        hold = cfg.hold_rate > 0.0 and self.held < cfg.hold_max_time
+        holds = cfg.hold_rate > 0.0 or cfg.hold_lateral_speed > 0.0
+        hold = holds and self.held < cfg.hold_max_time
         lateral = cfg.lateral_clearance
         self.clearance = math.inf
         if slow or hold or lateral > 0.0:
@@ -391,12 +399,12 @@ class SlowApproach:
                 clearance = self.geometry.clearance(est.body.p_W, quat_to_rotmat(est.body.q_WB))
                 self.clearance = clearance
                 wx, wy, _ = est.body.omega_B.tolist()
-                if (
-                    hold
-                    and clearance < cfg.hold_clearance
-                    and wx * wx + wy * wy > cfg.hold_rate**2
-                ):
+                near = hold and clearance < cfg.hold_clearance
+                if near and 0.0 < cfg.hold_rate**2 < wx * wx + wy * wy:
                     alpha = -cfg.hold_retreat
+                    self.held += max(dt, 0.0)
+                elif near and self._swings(est):
+                    alpha = 0.0 if self.touched else -cfg.hold_retreat
                     self.held += max(dt, 0.0)
                 elif slow:
                     cap = v0 + gain * max(clearance, 0.0)
@@ -405,6 +413,12 @@ class SlowApproach:
         self.alpha = alpha
         self.tau = max(self.tau + alpha * max(dt, 0.0), self._t0)
         return self.tau
+
+    def _swings(self, est: StateEstimate) -> bool:
+        """Whether the estimated sideways link speed l |delta'| exceeds
+        ``hold_lateral_speed`` (0: never)."""
+        v = self.cfg.hold_lateral_speed
+        return v > 0.0 and est.link is not None and self.length * abs(est.link.delta_dot) > v
 
     def scale(self, ref: Reference, t: float) -> Reference:
         """``ref`` (sampled at tau) for mission time ``t`` with its rates scaled by alpha."""

@@ -640,6 +640,7 @@ class MissionSupervisor:
         ):  # fmt: skip
             self._press_t = t
             self._press_phi = est.link.phi
+            self._slow.touched = True
             self._event(
                 t, "contact",
                 f"landers stopped on the surface, thrust shed to {1.0 - td.preload:.2f} at "
