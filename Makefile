@@ -27,10 +27,10 @@ demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/tetherland mission $(SCENARIO) --out $(OUT) --overwrite
 
 test: $(STAMP)
-	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS)
+	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS) --dist worksteal
 
 test-fast: $(STAMP)
-	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS) -m "not slow"
+	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS) --dist worksteal -m "not slow"
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks examples
