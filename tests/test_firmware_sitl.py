@@ -67,17 +67,26 @@ def _query(fw: FirmwareInnerLoop, msp: MspClient, command: int, imu: ImuSample) 
     raise AssertionError("no MSP answer within 2 s of firmware time")
 
 
-def _listening(port: int, table: str) -> list[str]:
-    """Local addresses (hex) bound to ``port`` in /proc/net/<table>."""
-    out = []
-    with open(f"/proc/net/{table}") as f:
-        next(f)
-        for line in f:
-            local = line.split()[1]
-            addr, p = local.split(":")
-            if int(p, 16) == port:
-                out.append(addr)
-    return out
+def _listening(port: int, table: str, within_s: float = 2.0) -> list[str]:
+    """Local addresses (hex) bound to ``port`` in /proc/net/<table>.
+
+    The kernel lists its sockets in chunks, not atomically: while other processes open and
+    close sockets (the parallel test workers do) one read can skip an entry. Read again until
+    the port shows up or ``within_s`` has passed.
+    """
+    deadline = time.monotonic() + within_s
+    while True:
+        out = []
+        with open(f"/proc/net/{table}") as f:
+            next(f)
+            for line in f:
+                local = line.split()[1]
+                addr, p = local.split(":")
+                if int(p, 16) == port:
+                    out.append(addr)
+        if out or time.monotonic() > deadline:
+            return out
+        time.sleep(0.05)
 
 
 def test_parallel_instances_bind_distinct_loopback_ports(build):
@@ -85,6 +94,7 @@ def test_parallel_instances_bind_distinct_loopback_ports(build):
                                                                         lockstep=True) as b:
         assert a.state_port != b.state_port and a.cli_port != b.cli_port
         for sitl in (a, b):
+            assert sitl.alive()
             assert _listening(sitl.state_port, "udp") == ["0100007F"]  # 127.0.0.1
             assert _listening(sitl.cli_port, "tcp") == ["0100007F"]
 
