@@ -140,13 +140,13 @@ def test_hook_jam_is_detected_on_the_return_and_the_vehicle_hovers_hooked():
 
 
 
-def fault_campaign_job(run_id: str):
-    """The job of the fault campaign (slope50, 20 runs per kind, seed 15) named ``run_id``."""
+def fault_campaign_job(run_id: str, runs: int = 20):
+    """The job of the fault campaign (slope50, ``runs`` per kind, seed 15) named ``run_id``."""
     from tetherland.campaign.faults import FAULT_KINDS
     from tetherland.campaign.jobs import Job
     from tetherland.campaign.spec import CampaignSpec
 
-    spec = CampaignSpec(scenario=load_scenario("slope50").model_dump(mode="json"), runs=20,
+    spec = CampaignSpec(scenario=load_scenario("slope50").model_dump(mode="json"), runs=runs,
                         faults=FAULT_KINDS, seed=15)  # fmt: skip
     (run,) = [r for r in spec.expand() if r.run_id == run_id]
     return Job(scenario=spec.scenario, run=run)
@@ -180,6 +180,31 @@ def test_fault_campaign_crashes_now_end_in_a_safe_stop(run_id, phase, reason):
     assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
     assert not verdict["crashed"] and verdict["safe_stop"]["reached"]
     assert verdict["abort_reason"].startswith("fault: " + reason)
+
+
+def test_snap_early_in_the_spin_up_steps_off_the_slope_before_levelling():
+    """Run snap-00049 of the fault campaign at 100 runs per kind (slope50, seed 15): the
+    cable snaps 70 ms into the spin-up, the rotors at 40 % of the vehicle's weight. Only
+    the cable held the vehicle on the 50 deg slope: it slides at once, and the snap is seen
+    70 ms later. The safe hover used to move off along a path from where the vehicle was,
+    so the position loop levelled a frame lying on the slope: the uphill prop hit it with
+    84 N. Now, with the landers within ``away_distance`` of the believed surface, the
+    reference steps ``away_distance`` along z_S at once and the thrust pushes the vehicle
+    off the slope while it levels: a safe stop, no part touches the slope."""
+    from tetherland.campaign.jobs import run_job
+
+    job = fault_campaign_job("snap-00049", runs=100)
+    record, result = run_job(job)
+    assert record["status"] == "ok", record["error"]
+    assert record["fault"]["phase"] == "spin_up"
+    verdict = record["verdict"]
+    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
+    assert verdict["crash"] is None and verdict["safe_stop"]["reached"]
+    assert verdict["abort_reason"].startswith("fault: cable lost, tension gone")
+    # no frame part touched anything after the snap (the landers slide on the slope)
+    log = result.log
+    after = log["t"] >= record["fault"]["t"]
+    assert float(np.max(log["frame_force"][after])) == 0.0
 
 
 def test_weak_rotor_after_the_hooking_pass_is_the_rotor_and_climbs_away_from_the_slope():

@@ -309,9 +309,9 @@ class MissionSupervisor:
         ``land``, fly back to the start pad and land (free flight). Landed with the motors
         off, the motors stay off, unless ``away``: the vehicle is moving without its cable,
         so the motors come on and it hovers away from the surface. With ``step`` the
-        reference jumps to the point away from the surface at once (a weak rotor near it:
-        the vehicle is already sinking and tilting towards it) instead of moving there
-        along a path from the estimate.
+        reference jumps to the point away from the surface at once (a weak rotor near it,
+        or a lost cable on it: the vehicle is already sinking, sliding or tilting towards
+        it) instead of moving there along a path from the estimate.
         """
         if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
             return
@@ -390,7 +390,15 @@ class MissionSupervisor:
             self.abort(t, est, found.reason, away=True, step=True)
         elif found.kind == FaultKind.ROTOR and self.phase in _UNHOOKED:
             self.abort(t, est, found.reason, land=True)
-        elif found.kind == FaultKind.SNAP or self.phase in _NEAR_MECHANISM or near:
+        elif found.kind == FaultKind.SNAP:
+            # on or just above the slope (landed, spinning up, the last centimetres of a
+            # landing) the cable was all that held the vehicle: it slides and tips at once,
+            # so the reference steps away along z_S (the thrust pushes it off the surface
+            # before the attitude levels, instead of levelling a frame that lies on it)
+            clearance = self._contact_rule.geometry.clearance(est.body.p_W, est.body.R_WB)
+            step = clearance < self.cfg.detection.away_distance
+            self.abort(t, est, found.reason, away=True, step=step)
+        elif self.phase in _NEAR_MECHANISM or near:
             self.abort(t, est, found.reason, away=True)  # stop away from the surface
         else:
             self.abort(t, est, found.reason)
