@@ -471,6 +471,36 @@ def test_landed_rule_sees_the_vehicle_leave_its_landed_pose(slope50):
     assert at(10.5, 1.1 * cfg.landed_distance, Phase.MOTORS_OFF) is None  # new reference
 
 
+def test_landed_rule_watches_the_spin_down_from_the_contact(slope50):
+    """From the confirmed contact (touchdown: the thrust is shed, the plan no longer says
+    what the cable carries) a move of more than landed_distance is a lost cable too; when
+    the motors go off the reference is taken again (the landing settles then), so a
+    spin-down's and a settling's moves do not add up."""
+    geo = LandingGeometry.from_scenario(slope50)
+    l, cfg = slope50.tether.length, slope50.mission.detection
+    down = np.array([0.6, 0.0, -0.8])
+
+    def at(mon, t, shift, phase):
+        est = _hover_estimate(slope50, t, d_len=l, tension=5.0)
+        est = replace(est, body=replace(est.body, p_W=est.body.p_W + shift * down))
+        return mon.check(t, est, phase, airborne=False)
+
+    mon = FaultMonitor(slope50, geo)
+    assert at(mon, 10.0, 0.0, Phase.TOUCHDOWN) is None
+    assert at(mon, 10.1, 0.9 * cfg.landed_distance, Phase.TOUCHDOWN) is None
+    found = at(mon, 10.2, 1.1 * cfg.landed_distance, Phase.TOUCHDOWN)
+    assert found is not None and found.kind is FaultKind.SNAP
+    assert found.reason.endswith("since the contact)")
+    mon = FaultMonitor(slope50, geo)
+    assert at(mon, 10.0, 0.0, Phase.TOUCHDOWN) is None
+    assert at(mon, 10.1, 0.9 * cfg.landed_distance, Phase.TOUCHDOWN) is None
+    # the motors go off: a new reference, 0.9 + 0.9 landed_distance from the contact is fine
+    assert at(mon, 10.2, 0.9 * cfg.landed_distance, Phase.MOTORS_OFF) is None
+    assert at(mon, 10.3, 1.8 * cfg.landed_distance, Phase.MOTORS_OFF) is None
+    found = at(mon, 10.4, 2.0 * cfg.landed_distance, Phase.SPIN_UP)
+    assert found is not None and found.reason.endswith("since the motors went off)")
+
+
 # ---------------------------------------------------------------------- safe states
 def _supervisor_view(scenario, phase, thrust_loss=None):
     """The parts of a MissionSupervisor that near_surface and _lost_thrust read."""

@@ -207,6 +207,33 @@ def test_snap_early_in_the_spin_up_steps_off_the_slope_before_levelling():
     assert float(np.max(log["frame_force"][after])) == 0.0
 
 
+def test_snap_in_the_spin_down_is_seen_on_the_slope_before_the_motors_go_off():
+    """Run snap-00045 of the fault campaign at 100 runs per kind (slope50, seed 15): the
+    cable snaps 0.17 s after the confirmed contact, in the spin-down that sheds the thrust
+    before the motors go off. No rule watched that phase: the vehicle slid off the slope
+    and fell for 0.85 s, 1.4 m at 3.5 m/s, before the landed rule (from the motors off)
+    saw it. Now the landed rule watches from the confirmed contact: the snap is seen once
+    the vehicle has moved ``landed_distance``, with the landers still on the slope, and the
+    safe hover steps off it: a safe stop, no part touches anything."""
+    from tetherland.campaign.jobs import run_job
+
+    job = fault_campaign_job("snap-00045", runs=100)
+    record, result = run_job(job)
+    assert record["status"] == "ok", record["error"]
+    fault = record["fault"]
+    assert fault["phase"] == "touchdown"
+    verdict = record["verdict"]
+    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
+    assert verdict["crash"] is None and verdict["safe_stop"]["reached"]
+    assert verdict["abort_reason"].startswith("fault: cable lost while landed")
+    assert verdict["abort_reason"].endswith("since the contact)")
+    events = [e for e in result.log.metadata["events"] if e.get("kind") == "fault"]
+    assert len(events) == 1 and fault["t"] < events[0]["t"] < fault["t"] + 0.3
+    log = result.log
+    after = log["t"] >= fault["t"]
+    assert float(np.max(log["frame_force"][after])) == 0.0
+
+
 def test_weak_rotor_after_the_hooking_pass_is_the_rotor_and_climbs_away_from_the_slope():
     """Fault-campaign run rotor-00005 (slope50, seed 15): rotor 2 at 51 % 0.5 s into the
     stretch, the vehicle still at the end of the hooking pass with its props 0.13 m from

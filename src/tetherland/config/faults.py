@@ -162,8 +162,9 @@ class FaultDetectionConfig(Section):
     this from the believed anchor (a cable that could be slack cannot be pulling: an
     estimated tension there is a disturbance, e.g. a gust) [m]."""
     landed_distance: float = Field(0.04, gt=0, le=10)
-    """Cable lost while landed: the estimated position of the landed vehicle (motors off
-    or spinning up) moved this far from where it was when the motors went off. On a slope
+    """Cable lost while landed: the estimated position of the landed vehicle moved this
+    far from where it was at the confirmed contact (in the spin-down) or, once the motors
+    are off (motors off, spinning up), from where it was when they went off. On a slope
     steeper than the landers' friction angle only the cable holds the vehicle: without it
     the vehicle slides or falls off (from rest it falls 4 cm in 0.09 s). When the motors
     go off the vehicle settles by up to about 2 cm onto its cable and landers (walls),

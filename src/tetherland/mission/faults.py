@@ -51,8 +51,11 @@ ANCHOR_PHASES = frozenset({Phase.STRETCH, Phase.TETHERED_LANDING, Phase.TETHERED
 SNAP_PHASES = frozenset({Phase.TETHERED_LANDING, Phase.SPIN_UP, Phase.TETHERED_TAKEOFF})
 """The cable carries the vehicle: tethered flight, and the spin-up before the takeoff (the
 motors reach the landed hover's thrust with the landers still down)."""
-LANDED_PHASES = frozenset({Phase.MOTORS_OFF, Phase.SPIN_UP})
-"""Landed on the cable: a moving vehicle means the cable no longer holds it."""
+LANDED_PHASES = frozenset({Phase.TOUCHDOWN, Phase.MOTORS_OFF, Phase.SPIN_UP})
+"""Landed on the cable: a moving vehicle means the cable no longer holds it. Watched from
+the confirmed contact (the spin-down, where the plan no longer tells the tension the cable
+must carry) and again from where the motors went off (the landing settles onto the
+landers and the cable then)."""
 SNAP_PLAN_FACTOR = 3.0
 """The snap rule watches where the planned tension is at least this many snap_tension."""
 JAM_PHASES = frozenset({Phase.RETURN, Phase.LAND})
@@ -110,7 +113,8 @@ class FaultMonitor:
         self._anchor = ThresholdDwell(cfg.anchor_length_error, cfg.anchor_dwell)
         self._jam = ThresholdDwell(cfg.jam_tension, cfg.jam_dwell)
         self._snap = ThresholdDwell(0.0, cfg.snap_dwell)  # fed limit - tension
-        self._landed_p: tuple[float, float, float] | None = None  # where the motors went off
+        self._landed_p: tuple[float, float, float] | None = None  # where the phase began
+        self._landed_phase: Phase | None = None  # TOUCHDOWN, or MOTORS_OFF for both after
         # a phase in which the snap, anchor, jam and landed rules were last found idle (all
         # reset): while it lasts, their resets are not repeated every tick
         self._idle_phase: Phase | None = None
@@ -298,17 +302,19 @@ class FaultMonitor:
         if phase not in LANDED_PHASES:
             self._landed_p = None
             return None
+        since = Phase.TOUCHDOWN if phase == Phase.TOUCHDOWN else Phase.MOTORS_OFF
         px, py, pz = est.body.p_W.tolist()
-        if self._landed_p is None:
-            self._landed_p = (px, py, pz)
+        if self._landed_p is None or since != self._landed_phase:
+            self._landed_p, self._landed_phase = (px, py, pz), since
             return None
         x0, y0, z0 = self._landed_p
         moved = math.sqrt((px - x0) ** 2 + (py - y0) ** 2 + (pz - z0) ** 2)
         if moved > self.cfg.landed_distance:
+            when = "the contact" if since == Phase.TOUCHDOWN else "the motors went off"
             return FaultDetection(
                 FaultKind.SNAP, t,
                 f"fault: cable lost while landed (the vehicle moved {100 * moved:.1f} cm > "
-                f"{100 * self.cfg.landed_distance:g} cm since the motors went off)",
+                f"{100 * self.cfg.landed_distance:g} cm since {when})",
             )  # fmt: skip
         return None
 
