@@ -401,19 +401,18 @@ def _plane_bound(loc: FloatArray, k: int, bx: float, by: float, bz: float, sign:
     return low / -uz  # (rounded division is monotone: below every start's -lz / uz)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _nearest_dir(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: float,
                  ux: float, uy: float) -> float:  # fmt: skip
     """As :func:`_nearest` along the in-plane body direction (ux, uy, 0)."""
     best = _INF
     for k in range(shapes.shape[0]):
-        L = loc[k]
-        lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
-        ly = L[1] + L[4] * bx + L[7] * by + L[10] * bz
-        lz = L[2] + L[5] * bx + L[8] * by + L[11] * bz
+        lx = loc[k, 0] + loc[k, 3] * bx + loc[k, 6] * by + loc[k, 9] * bz
+        ly = loc[k, 1] + loc[k, 4] * bx + loc[k, 7] * by + loc[k, 10] * bz
+        lz = loc[k, 2] + loc[k, 5] * bx + loc[k, 8] * by + loc[k, 11] * bz
         t = _ray_local(shapes[k, 0], shapes[k, 13], shapes[k, 14], shapes[k, 15], lx, ly, lz,
-                       L[3] * ux + L[6] * uy, L[4] * ux + L[7] * uy,
-                       L[5] * ux + L[8] * uy)  # fmt: skip
+                       loc[k, 3] * ux + loc[k, 6] * uy, loc[k, 4] * ux + loc[k, 7] * uy,
+                       loc[k, 5] * ux + loc[k, 8] * uy)  # fmt: skip
         if t < best:
             best = t
     return best
