@@ -205,6 +205,15 @@ class Plant:
         self._prev_att = (0.0, 0.0, 0.0)
         self._hook_side = False
         self._tick = 0
+        # what step() reads, in one tuple: the cable's step (mj_step with the cable force,
+        # sim/cable.py), the kernel's arguments, the hook, views into MjData and the
+        # capture plane (line: the mechanism whose contact decides the hook instead)
+        self._step_context = (
+            self.cable.advance, self._step_args, self.hook, self._p_att_view, self._warnings,
+            _BAD_STATE_WARNINGS[2], self._lander_normals, self._lander_peak,
+            self._frame_found, self._depth_view, self._contact_hook, *self._hook_plane,
+            self.data, self.dt,
+        )  # fmt: skip
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -644,19 +653,9 @@ class Plant:
         SimulationError
             If MuJoCo reports a non-finite or diverging state.
         """
-        advance = self.cable.advance  # mj_step with the cable force (sim/cable.py)
-        args = self._step_args  # the rotors and the aero model: one kernel call per step
-        hook = self.hook
-        p_att = self._p_att_view
-        warn = self._warnings
-        bad_qacc = _BAD_STATE_WARNINGS[2]
-        lander_normals, lander_peak = self._lander_normals, self._lander_peak
-        frame_found, depth = self._frame_found, self._depth_view
-        line = self._contact_hook  # None: the capture plane decides the hook
-        if line is None:
-            nx, ny, nz, n_dot_p0 = self._hook_plane
-        data = self.data
-        dt = self.dt
+        # (one tuple, built once: this runs once per physics step)
+        (advance, args, hook, p_att, warn, bad_qacc, lander_normals, lander_peak, frame_found,
+         depth, line, nx, ny, nz, n_dot_p0, data, dt) = self._step_context  # fmt: skip
         for _ in range(n):
             rotor_step(*args)
             advance()
