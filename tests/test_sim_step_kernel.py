@@ -31,9 +31,7 @@ def plant():
 def _aero_arrays(plant: Plant, aero: bool):
     if aero:
         a = plant.aero
-        return (a.rotor_centres_B, a.samples, a.shapes, a.params), aero_work_size(
-            a.shapes.shape[0]
-        )
+        return (a.rotor_centres_B, a.samples, a.shapes, a.params), aero_work_size(a.shapes.shape[0])
     return (np.zeros((0, 3)), np.zeros((0, 2)), np.zeros((0, 16)), np.zeros(0)), 0
 
 

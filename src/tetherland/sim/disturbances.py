@@ -11,7 +11,6 @@ import numpy as np
 
 from tetherland.sim.plant import Plant
 
-
 _CALM = [0.0, 0.0, 0.0]
 
 

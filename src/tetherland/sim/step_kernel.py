@@ -36,8 +36,9 @@ ROTOR_WIDTH = 22
 """Floats in the rotor state."""
 
 
-def rotor_state(c_f: float, mean_factor: float, alpha: float, settle_tol: float,
-                aero: bool) -> FloatArray:  # fmt: skip
+def rotor_state(
+    c_f: float, mean_factor: float, alpha: float, settle_tol: float, aero: bool
+) -> FloatArray:
     """A rotor state at rest (speeds and commands 0, factors 1, spinning) with the lag's
     constants (see the module doc and the ``R_*`` offsets)."""
     rot = np.zeros(ROTOR_WIDTH)
@@ -99,9 +100,17 @@ def rotor_step(rot: FloatArray, qpos: FloatArray, v_W: FloatArray, centres_B: Fl
             rot[R_SPINNING] = 0.0
 
 
-def rotor_step_reference(rot: FloatArray, qpos: FloatArray, v_W: FloatArray,
-                         centres_B: FloatArray, samples: FloatArray, shapes: FloatArray,
-                         params: FloatArray, ctrl: FloatArray, wrench: FloatArray) -> None:  # fmt: skip
+def rotor_step_reference(
+    rot: FloatArray,
+    qpos: FloatArray,
+    v_W: FloatArray,
+    centres_B: FloatArray,
+    samples: FloatArray,
+    shapes: FloatArray,
+    params: FloatArray,
+    ctrl: FloatArray,
+    wrench: FloatArray,
+) -> None:
     """:func:`rotor_step` written plainly (Python floats; the aero model by
     :func:`~tetherland.models.aero.aero_into`), for tests."""
     c_f = float(rot[R_CF])
