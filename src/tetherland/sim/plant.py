@@ -75,6 +75,9 @@ CONTACT_PEAK_WIDTH = 11
 """Width of :meth:`Plant.contact_peaks_into`'s row: the landers' peaks on the surface (4)
 and the ground (4), the frame's peak force, the part code and the deepest penetration."""
 _N_LANDER_PEAKS = 4 * len(CONTACT_PARTNERS)
+# the peaks of a read with no contact since the last: no force, no part (-1), no depth
+# (written -0.0, the negated zero minimum of a contact-free read)
+_NO_CONTACT_PEAKS = [0.0] * (_N_LANDER_PEAKS + 1) + [-1.0, -0.0]
 
 
 def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
@@ -202,6 +205,7 @@ class Plant:
         )
         # hook.side(x, y, z) >= 0  <=>  n.(x, y, z) >= c0 (precomputed for the step loop)
         self._hook_plane = self.hook.plane
+        self._hook_offset = self.hook.offset_W  # (fixed for the hook's life) [m]
         self._prev_att = (0.0, 0.0, 0.0)
         self._hook_side = False
         self._tick = 0
@@ -264,6 +268,7 @@ class Plant:
         self._lander_peak[:] = 0.0
         self._part_peak[:] = 0.0
         self._depth_min = 0.0
+        self._touched = False
         self.model.actuator_gear[0:4] = self._gear0
         self._write_state(self.start_state() if state is None else state)
         w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
@@ -304,7 +309,7 @@ class Plant:
             out[:3] = self.data.site_xpos[self._crown_site]
         else:
             out[:3] = self._p_att_view
-            out[:3] += self.hook.offset_W
+            out[:3] += self._hook_offset
 
     def set_state(self, state: RigidBodyState) -> None:
         """Overwrite position, attitude and velocities (time and rotors unchanged).
@@ -583,6 +588,10 @@ class Plant:
         physics step: a touch that lasts a single step is seen (the judge's touchdowns,
         bounces and crashes).
         """
+        if not self._touched:  # no contact since the last read: the peaks are all zero
+            out[:CONTACT_PEAK_WIDTH] = _NO_CONTACT_PEAKS
+            return
+        self._touched = False
         n = _N_LANDER_PEAKS
         out[:n] = self._lander_peak
         parts = self._part_peak
@@ -660,6 +669,7 @@ class Plant:
             rotor_step(*args)
             advance()
             if data.ncon:  # (no contact: every contact sensor reads 0, nothing to track)
+                self._touched = True
                 np.maximum(lander_peak, lander_normals, out=lander_peak)
                 if frame_found[0]:  # a part but the landers touches: a crash
                     self._track_parts()
