@@ -10,17 +10,9 @@ import pytest
 
 from tetherland.config import load_scenario
 from tetherland.models.aero import aero_work_size
+from tetherland.sim import step_kernel as sk
 from tetherland.sim.plant import Plant
-from tetherland.sim.step_kernel import (
-    R_BASE,
-    R_CMD,
-    R_FACTOR,
-    R_SPINNING,
-    R_W,
-    rotor_state,
-    rotor_step,
-    rotor_step_reference,
-)
+from tetherland.sim.step_kernel import rotor_state, rotor_step, rotor_step_reference
 
 
 @pytest.fixture(scope="module")
@@ -59,9 +51,9 @@ def test_kernel_matches_the_plain_reference_bit_for_bit(plant, aero):
             if rng.random() < 0.1:
                 cmd[rng.integers(4)] = 0.0  # a stopped motor
         for r in (rot, ref):
-            if not np.array_equal(r[R_CMD : R_CMD + 4], cmd):
-                r[R_CMD : R_CMD + 4] = cmd
-                r[R_SPINNING] = 1.0
+            if not np.array_equal(r[sk.R_CMD : sk.R_CMD + 4], cmd):
+                r[sk.R_CMD : sk.R_CMD + 4] = cmd
+                r[sk.R_SPINNING] = 1.0
         for _ in range(3000 if spans % 8 == 0 else int(rng.integers(1, 40))):  # 3 s: settles
             q = landed.q_WB + rng.normal(0.0, 0.05, 4)
             qpos = np.concatenate((landed.p_W + rng.uniform(0.0, 0.8) * z_S, q / np.linalg.norm(q)))
@@ -71,15 +63,16 @@ def test_kernel_matches_the_plain_reference_bit_for_bit(plant, aero):
             assert np.array_equal(rot, ref)
             assert np.array_equal(ctrl, ctrl_ref)
             assert np.array_equal(wrench, wrench_ref)
-        settled += rot[R_SPINNING] == 0.0
+        settled += rot[sk.R_SPINNING] == 0.0
         spans += 1
     assert settled >= 4  # the settled branch was exercised
     if aero:  # the rotors near the surface: factors above 1 reached the actuators
-        assert np.all(rot[R_FACTOR : R_FACTOR + 4] > 1.0)
-        np.testing.assert_array_equal(ctrl, rot[R_BASE : R_BASE + 4] * rot[R_FACTOR : R_FACTOR + 4])
+        factors, base = rot[sk.R_FACTOR : sk.R_FACTOR + 4], rot[sk.R_BASE : sk.R_BASE + 4]
+        assert np.all(factors > 1.0)
+        np.testing.assert_array_equal(ctrl, base * factors)
     else:
-        np.testing.assert_array_equal(rot[R_FACTOR : R_FACTOR + 4], 1.0)
-        np.testing.assert_array_equal(ctrl, rot[R_BASE : R_BASE + 4])
+        np.testing.assert_array_equal(rot[sk.R_FACTOR : sk.R_FACTOR + 4], 1.0)
+        np.testing.assert_array_equal(ctrl, rot[sk.R_BASE : sk.R_BASE + 4])
 
 
 def test_speeds_follow_the_exact_lag_and_the_thrust_the_mean_speed(plant):
@@ -91,20 +84,20 @@ def test_speeds_follow_the_exact_lag_and_the_thrust_the_mean_speed(plant):
     rot = rotor_state(c_f, tau * (1.0 - alpha) / dt, alpha, 1e-12 * plant.speed_limit, False)
     arrays, _ = _aero_arrays(plant, False)
     w0, c = 100.0, 400.0
-    rot[R_W : R_W + 4] = w0
-    rot[R_CMD : R_CMD + 4] = c
+    rot[sk.R_W : sk.R_W + 4] = w0
+    rot[sk.R_CMD : sk.R_CMD + 4] = c
     ctrl, wrench = np.zeros(4), np.zeros(6)
     qpos, v_W = np.array([0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0]), np.zeros(6)
     for n in range(1, 60):
-        w_before = rot[R_W]
+        w_before = rot[sk.R_W]
         rotor_step(rot, qpos, v_W, *arrays, np.empty(0), ctrl, wrench)
         t0, t1 = (n - 1) * dt, n * dt
         exact = c + (w0 - c) * math.exp(-t1 / tau)
-        assert rot[R_W] == pytest.approx(exact, rel=1e-12)
+        assert rot[sk.R_W] == pytest.approx(exact, rel=1e-12)
         # the mean of w(t) = c + (w0 - c) exp(-t/tau) over [t0, t1]
         mean = c + (w0 - c) * tau * (math.exp(-t0 / tau) - math.exp(-t1 / tau)) / dt
         assert ctrl == pytest.approx(c_f * mean * mean, rel=1e-12)
-        assert w_before < rot[R_W] < c  # monotone toward the command
+        assert w_before < rot[sk.R_W] < c  # monotone toward the command
     np.testing.assert_array_equal(wrench, 0.0)  # aero off: the wrench is left alone
 
 
@@ -122,5 +115,5 @@ def test_a_plant_step_applies_the_kernel_thrusts(plant):
     plant.step()
     np.testing.assert_array_equal(plant.data.ctrl[0:4], ctrl)
     np.testing.assert_array_equal(plant.data.qfrc_applied[0:6], wrench)
-    np.testing.assert_array_equal(plant.rotor_speeds, rot[R_W : R_W + 4])
+    np.testing.assert_array_equal(plant.rotor_speeds, rot[sk.R_W : sk.R_W + 4])
     assert np.all(plant.surface_factors > 1.0)  # landed: the slope under the rotors
