@@ -15,6 +15,11 @@ exact mean speed over the step), the surface factors, the constants of the lag a
 Beside it sits its plain Python reference, :func:`rotor_step_reference` (Python floats for
 the lag, :func:`~tetherland.models.aero.aero_into` for the surface model, itself checked
 against its numpy reference), which a test compares bit for bit with the kernel.
+
+numba's on-disk cache of :func:`rotor_step` is keyed on this file alone: after an edit of
+the aero kernel (:mod:`tetherland.models.aero`) delete this module's cache files
+(``__pycache__/step_kernel.*``), or the plant keeps the old aero code compiled in (the
+bit-for-bit test then fails where the change shows).
 """
 
 from __future__ import annotations
