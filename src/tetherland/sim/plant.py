@@ -141,6 +141,7 @@ class Plant:
                                 self.aero is not None)  # fmt: skip
         self._w = self._rot[R_W : R_W + 4]
         self._w_cmd = self._rot[R_CMD : R_CMD + 4]
+        self._cmd_list = [0.0, 0.0, 0.0, 0.0]  # the commands as Python floats (command())
         self._f_base = self._rot[R_BASE : R_BASE + 4]  # c_f wbar^2 [N]
         self._factors = self._rot[R_FACTOR : R_FACTOR + 4]  # surface factors, last step [-]
         if self.aero is not None:
@@ -411,7 +412,7 @@ class Plant:
         values = np.asarray(rotor_speeds, dtype=float).tolist()
         if len(values) != 4:
             raise SimulationError(f"expected 4 rotor speed commands, got {len(values)}")
-        cmd = self._w_cmd.tolist()
+        cmd = self._cmd_list
         changed = False
         for i, w in enumerate(values):
             if w != w:
