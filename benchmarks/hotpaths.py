@@ -12,8 +12,8 @@ Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
 ``estimator`` (one control tick: two IMU samples, the estimate, a mocap update every 4th
 tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
 prints the number of ticks), ``aero`` (the plant's surface-factor kernel ``aero_into``
-of slope50, cycling over poses near the slope, on the pad and at cruise height)
-, ``believed`` (the estimator's believed ground effect at the same poses) and ``plant``
+of slope50, cycling over poses near the slope, on the pad and at cruise height),
+``believed`` (the estimator's believed ground effect at the same poses) and ``plant``
 (one physics step of the slope50 plant, :meth:`Plant.step`, as the runner calls it: the
 command changed every second step, cycling over 16 starts near the slope with the cable
 engaged, each held for 64 steps; counted per physics step, the restarts included).
