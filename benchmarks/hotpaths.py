@@ -12,8 +12,11 @@ Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
 ``estimator`` (one control tick: two IMU samples, the estimate, a mocap update every 4th
 tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
 prints the number of ticks), ``aero`` (the plant's surface-factor kernel ``aero_into``
-of slope50, cycling over poses near the slope, on the pad and at cruise height)
-and ``believed`` (the estimator's believed ground effect at the same poses).
+of slope50, cycling over poses near the slope, on the pad and at cruise height),
+``believed`` (the estimator's believed ground effect at the same poses) and ``plant``
+(one physics step of the slope50 plant, :meth:`Plant.step`, as the runner calls it: the
+command changed every second step, cycling over 16 starts near the slope with the cable
+engaged, each held for 64 steps; counted per physics step, the restarts included).
 ``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
 
 Measured (issue 25, exact culling in ``aero_into``, the same bits): ``aero`` 74.6k ->
@@ -141,6 +144,36 @@ def _aero(name: str):
     return call
 
 
+def _plant():
+    """One :meth:`Plant.step` per call (see the module doc)."""
+    from tetherland import GRAVITY
+    from tetherland.sim.plant import Plant
+    from tetherland.state import RigidBodyState
+
+    sc = load_scenario("slope50")
+    v = sc.vehicle
+    plant = Plant(sc)
+    landed = plant.landed_state()
+    z_S = plant.layout.geometry.surface.z_S
+    starts = [RigidBodyState.at_rest(landed.p_W + h * z_S, landed.q_WB)
+              for h in np.linspace(0.03, 0.6, 16)]  # fmt: skip
+    w_h = math.sqrt(v.mass * GRAVITY / (4.0 * v.thrust_coefficient))
+    commands = (np.full(4, w_h + 0.5), np.full(4, w_h - 0.5))
+    plant.reset(starts[0], rotor_speeds=commands[0], cable_engaged=True)
+    k = [0]
+
+    def call() -> None:
+        i = k[0]
+        k[0] = i + 1
+        if i % 64 == 0:
+            plant.set_state(starts[(i // 64) % len(starts)])
+        if i % 2 == 0:
+            plant.command(commands[(i // 2) % 2])
+        plant.step()
+
+    return call
+
+
 def _counted(fn) -> None:
     """Run ``fn()`` inside math.fsum: the region callgrind collects."""
     math.fsum(map(lambda _: fn() or 0.0, range(1)))
@@ -172,6 +205,8 @@ def main() -> None:
         return
     if name in ("aero", "believed"):
         call = _aero(name)
+    elif name == "plant":
+        call = _plant()
     else:
         call = _estimator() if name == "estimator" else _controllers(name)
     for _ in range(50):

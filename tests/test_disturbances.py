@@ -55,3 +55,28 @@ def test_gust_peaks_at_mid_duration_and_vanishes_outside(plant):
         np.testing.assert_array_equal(wind.force_at(t), np.zeros(3))
     wind(2.5 - 0.001, plant)  # held over the next control period, evaluated mid-way
     assert wind.peak == pytest.approx(math.hypot(0.4, 0.2))
+
+
+def test_the_held_force_is_written_each_tick_and_again_after_a_reset(plant):
+    # calm ticks leave the (zero) force alone; a gust is written mid-period, cleared when
+    # it is over, and written again after a reset zeroed MuJoCo's applied forces
+    g = Gust(2.0, 1.0, (0.4, -0.2))
+    wind = WindGusts(plant, [g], 0.002)
+    body = plant.model.body("vehicle").id
+    xfrc = plant.data.xfrc_applied
+    plant.reset()
+    wind(0.5, plant)
+    np.testing.assert_array_equal(xfrc[body], 0.0)
+    assert wind.peak == 0.0
+    t = 2.3
+    wind(t, plant)
+    np.testing.assert_array_equal(xfrc[body, 0:3], wind.force_at(t + 0.001))
+    assert np.all(xfrc[body, 0:2] != 0.0)
+    plant.reset()  # mj_resetData: the applied force is gone
+    np.testing.assert_array_equal(xfrc[body], 0.0)
+    wind(t, plant)  # the same gust force as before the reset: written again
+    np.testing.assert_array_equal(xfrc[body, 0:3], wind.force_at(t + 0.001))
+    wind(5.0, plant)  # over: back to calm
+    np.testing.assert_array_equal(xfrc[body], 0.0)
+    k = 0.5 * (1.0 - math.cos(2.0 * math.pi * (t + 0.001 - 2.0) / 1.0))
+    assert wind.peak == pytest.approx(k * math.hypot(0.4, 0.2))

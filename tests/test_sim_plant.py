@@ -292,3 +292,26 @@ def test_lander_contact_peaks_are_taken_at_every_physics_step(scenario):
     assert np.max(per_step) > np.max(per_step[-1])  # the peak is not the last step's value
     plant.contact_peaks_into(peaks)
     assert not np.any(peaks[:9]) and peaks[9] == -1  # no force, no part touched
+
+
+def test_a_contact_free_read_overwrites_every_peak(scenario):
+    """In the air (no contact at any step since the last read) the read writes no force,
+    no part (-1) and no depth over whatever the buffer held; after a touchdown the next
+    read carries the landers' forces again, and a read with no step between is empty."""
+    plant = Plant(scenario)
+    plant.reset(in_air(plant, 0.02))
+    peaks = np.full(CONTACT_PEAK_WIDTH, 7.0)
+    plant.step(5)
+    assert plant.data.ncon == 0
+    plant.contact_peaks_into(peaks)
+    np.testing.assert_array_equal(peaks[:9], 0.0)
+    assert peaks[9] == -1.0 and peaks[10] == 0.0
+    plant.step(120)  # falls 2 cm onto the pad: the landers touch
+    peaks[:] = 7.0
+    plant.contact_peaks_into(peaks)
+    assert np.all(peaks[4:8] > 0.0) and not np.any(peaks[:4])
+    assert peaks[10] >= 0.0 and peaks[9] == -1.0
+    peaks[:] = 7.0
+    plant.contact_peaks_into(peaks)  # nothing stepped since: all zero again
+    np.testing.assert_array_equal(peaks[:9], 0.0)
+    assert peaks[9] == -1.0 and peaks[10] == 0.0

@@ -45,7 +45,8 @@ of :class:`ShapeKind`, R_WL the shape's local frame in F_W and size its half siz
 (radius, half length, 0) (cylinder, axis local z) or unused (plane: solid below its local
 z axis through the centre). The per-step kernel is :func:`aero_into`; beside it sits its
 plain reference :func:`aero_reference` (numpy, vectorised over the samples), checked
-against it by a property test.
+against it by a property test; :func:`aero_work_into` is the same kernel in a caller's
+workspace (the plant's per-step kernel, :mod:`tetherland.sim.step_kernel`).
 """
 
 from __future__ import annotations
@@ -241,7 +242,7 @@ def _slab(o: float, u: float, h: float, t0: float, t1: float) -> tuple[float, fl
     return max(t0, e), min(t1, f)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ray_local(kind: float, a: float, b: float, c: float, lx: float, ly: float, lz: float,
                ux: float, uy: float, uz: float) -> float:  # fmt: skip
     """Distance along the unit ray l + t u (t >= 0, shape-local coordinates) to a shape of
@@ -356,7 +357,7 @@ def _reachable(shapes: FloatArray, loc: FloatArray, k: int, bx: float, by: float
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _nearest(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: float,
              sign: float, axis: int, mask: FloatArray) -> float:  # fmt: skip
     """Shortest distance from the body point (bx, by, bz) (F_B, about the centre of mass)
@@ -366,17 +367,17 @@ def _nearest(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: floa
     is not cast. The shapes are taken last to first (planes usually come first, and have
     a bound; the minimum does not depend on the order)."""
     best = _INF
+    j = 3 + 3 * axis
     for k in range(shapes.shape[0] - 1, -1, -1):
         bound = mask[k]
         if bound < 0.0 or bound >= best:
             continue
-        L = loc[k]
-        lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
-        ly = L[1] + L[4] * bx + L[7] * by + L[10] * bz
-        lz = L[2] + L[5] * bx + L[8] * by + L[11] * bz
-        j = 3 + 3 * axis
+        # (loc[k, i], not a row view: no view object per shape and sample)
+        lx = loc[k, 0] + loc[k, 3] * bx + loc[k, 6] * by + loc[k, 9] * bz
+        ly = loc[k, 1] + loc[k, 4] * bx + loc[k, 7] * by + loc[k, 10] * bz
+        lz = loc[k, 2] + loc[k, 5] * bx + loc[k, 8] * by + loc[k, 11] * bz
         t = _ray_local(shapes[k, 0], shapes[k, 13], shapes[k, 14], shapes[k, 15], lx, ly, lz,
-                       sign * L[j], sign * L[j + 1], sign * L[j + 2])  # fmt: skip
+                       sign * loc[k, j], sign * loc[k, j + 1], sign * loc[k, j + 2])  # fmt: skip
         if t < best:
             best = t
     return best
@@ -400,22 +401,26 @@ def _plane_bound(loc: FloatArray, k: int, bx: float, by: float, bz: float, sign:
     return low / -uz  # (rounded division is monotone: below every start's -lz / uz)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _nearest_dir(shapes: FloatArray, loc: FloatArray, bx: float, by: float, bz: float,
                  ux: float, uy: float) -> float:  # fmt: skip
     """As :func:`_nearest` along the in-plane body direction (ux, uy, 0)."""
     best = _INF
     for k in range(shapes.shape[0]):
-        L = loc[k]
-        lx = L[0] + L[3] * bx + L[6] * by + L[9] * bz
-        ly = L[1] + L[4] * bx + L[7] * by + L[10] * bz
-        lz = L[2] + L[5] * bx + L[8] * by + L[11] * bz
+        lx = loc[k, 0] + loc[k, 3] * bx + loc[k, 6] * by + loc[k, 9] * bz
+        ly = loc[k, 1] + loc[k, 4] * bx + loc[k, 7] * by + loc[k, 10] * bz
+        lz = loc[k, 2] + loc[k, 5] * bx + loc[k, 8] * by + loc[k, 11] * bz
         t = _ray_local(shapes[k, 0], shapes[k, 13], shapes[k, 14], shapes[k, 15], lx, ly, lz,
-                       L[3] * ux + L[6] * uy, L[4] * ux + L[7] * uy,
-                       L[5] * ux + L[8] * uy)  # fmt: skip
+                       loc[k, 3] * ux + loc[k, 6] * uy, loc[k, 4] * ux + loc[k, 7] * uy,
+                       loc[k, 5] * ux + loc[k, 8] * uy)  # fmt: skip
         if t < best:
             best = t
     return best
+
+
+def aero_work_size(n_shapes: int) -> int:
+    """Floats of the workspace :func:`aero_work_into` needs for ``n_shapes`` shapes."""
+    return 9 + 36 * n_shapes
 
 
 @njit(cache=True)
@@ -423,6 +428,21 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
               samples: FloatArray, shapes: FloatArray, p: FloatArray, factors: FloatArray,
               acting: FloatArray, wrench: FloatArray) -> None:  # fmt: skip
     """Surface factors, acting thrusts and the extra wrench of one physics step.
+
+    Arguments as for :func:`aero_work_into`, which this calls with a fresh workspace.
+    """
+    work = np.empty(9 + 36 * shapes.shape[0])
+    aero_work_into(qpos, v_W, thrusts, centres_B, samples, shapes, p, factors, acting, wrench,
+                   work)  # fmt: skip
+
+
+@njit(cache=True)
+def aero_work_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray,
+                   centres_B: FloatArray, samples: FloatArray, shapes: FloatArray, p: FloatArray,
+                   factors: FloatArray, acting: FloatArray, wrench: FloatArray,
+                   work: FloatArray) -> None:  # fmt: skip
+    """Surface factors, acting thrusts and the extra wrench of one physics step, in a
+    caller's workspace (no allocation: the plant's per-step kernel).
 
     Parameters
     ----------
@@ -447,10 +467,11 @@ def aero_into(qpos: FloatArray, v_W: FloatArray, thrusts: FloatArray, centres_B:
     wrench : (6,) array, out
         [force F_W (3) at the centre of mass, torque F_B (3)]: rotor drag and wall effect
         [N, N m].
+    work : (:func:`aero_work_size`,) array
+        Scratch: R_WB, the shapes' local frames and the culling masks (overwritten).
     """
     qw, qx, qy, qz = qpos[3], qpos[4], qpos[5], qpos[6]
     s2 = 2.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
-    work = np.empty(9 + 36 * shapes.shape[0])  # R_WB, the local frames, the masks
     Rm = work[0:9].reshape((3, 3))
     Rm[0, 0] = 1.0 - s2 * (qy * qy + qz * qz)
     Rm[0, 1] = s2 * (qx * qy - qw * qz)

@@ -11,6 +11,8 @@ import numpy as np
 
 from tetherland.sim.plant import Plant
 
+_CALM = [0.0, 0.0, 0.0]
+
 
 class GustLike(Protocol):
     def force(self, t: float) -> tuple[float, float]: ...
@@ -34,7 +36,7 @@ class WindGusts:
         self.gusts = tuple(gusts)
         self.period = period
         self._body = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_BODY, "vehicle")
-        self._xfrc = plant.data.xfrc_applied
+        self._xfrc_row = plant.data.xfrc_applied[self._body, 0:3]  # the vehicle's, F_W [N]
         self.peak = 0.0
         # raised-cosine gusts (campaign.perturb.Gust) as plain tuples sorted by start,
         # so that a tick skips the gusts that are over or still to come with two
@@ -48,13 +50,18 @@ class WindGusts:
 
     def force_at(self, t: float) -> np.ndarray:
         """Total gust force at time ``t`` in F_W [N]."""
+        fx, fy = self._force_xy(t)
+        return np.array([fx, fy, 0.0])
+
+    def _force_xy(self, t: float) -> tuple[float, float]:
+        """The horizontal components of :meth:`force_at` [N]."""
         fx = fy = 0.0
         if self._windows is None:
             for g in self.gusts:
                 gx, gy = g.force(t)
                 fx += gx
                 fy += gy
-            return np.array([fx, fy, 0.0])
+            return fx, fy
         for t_start, duration, peak_x, peak_y in self._windows:
             if t < t_start:
                 break  # sorted by start: the rest are still to come
@@ -63,9 +70,14 @@ class WindGusts:
                 k = 0.5 * (1.0 - math.cos(2.0 * math.pi * s))
                 fx += k * peak_x
                 fy += k * peak_y
-        return np.array([fx, fy, 0.0])
+        return fx, fy
 
     def __call__(self, t: float, plant: Plant) -> None:
-        f = self.force_at(t + 0.5 * self.period)
-        self._xfrc[self._body, 0:3] = f
-        self.peak = max(self.peak, float(np.hypot(f[0], f[1])))
+        fx, fy = self._force_xy(t + 0.5 * self.period)
+        row = self._xfrc_row
+        # (calm and calm before, the usual tick: nothing to write; the sums start at +0.0,
+        # so a zero force is never -0.0 and equality keeps the bits)
+        if fx != 0.0 or fy != 0.0 or row.tolist() != _CALM:
+            row[:] = (fx, fy, 0.0)
+            if fx != 0.0 or fy != 0.0:
+                self.peak = max(self.peak, float(np.hypot(fx, fy)))

@@ -38,7 +38,7 @@ from tetherland.config import Scenario
 from tetherland.errors import SimulationError
 from tetherland.geometry import FloatArray, landed_rotation
 from tetherland.interfaces import StateEstimate
-from tetherland.models.aero import aero_into
+from tetherland.models.aero import aero_into, aero_work_size
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.aero import aero_model
 from tetherland.sim.cable import Cable, HangingLine, MagnetCable, make_cable
@@ -51,6 +51,15 @@ from tetherland.sim.mjcf import (
     build_mjcf,
 )
 from tetherland.sim.model_cache import compiled_model
+from tetherland.sim.step_kernel import (
+    R_BASE,
+    R_CMD,
+    R_FACTOR,
+    R_SPINNING,
+    R_W,
+    rotor_state,
+    rotor_step,
+)
 from tetherland.state import LinkState, RigidBodyState, link_state_of
 
 _BAD_STATE_WARNINGS = (
@@ -66,6 +75,9 @@ CONTACT_PEAK_WIDTH = 11
 """Width of :meth:`Plant.contact_peaks_into`'s row: the landers' peaks on the surface (4)
 and the ground (4), the frame's peak force, the part code and the deepest penetration."""
 _N_LANDER_PEAKS = 4 * len(CONTACT_PARTNERS)
+# the peaks of a read with no contact since the last: no force, no part (-1), no depth
+# (written -0.0, the negated zero minimum of a contact-free read)
+_NO_CONTACT_PEAKS = [0.0] * (_N_LANDER_PEAKS + 1) + [-1.0, -0.0]
 
 
 def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
@@ -119,23 +131,34 @@ class Plant:
         self._alpha = math.exp(-self.dt / tau) if tau > 0 else 0.0
         # mean of w over a step: w_cmd + (w_k - w_cmd) tau (1 - alpha) / dt
         self._mean_factor = tau * (1.0 - self._alpha) / self.dt if tau > 0 else 0.0
-        self._w = [0.0, 0.0, 0.0, 0.0]
-        self._w_cmd = [0.0, 0.0, 0.0, 0.0]
-        self._spinning_up = True  # False once the speeds equal the command (no work to do)
-        self._settle_tol = 1e-12 * self._w_max
         self._gear0 = self.model.actuator_gear[0:4].copy()  # nominal rotor gears
         self.aero = aero_model(scenario, m)
         """The ``[aero]`` model (None: every effect off)."""
-        self._f_base = np.zeros(4)  # thrusts c_f wbar^2 before the surface factors [N]
-        self._factors = np.ones(4)  # surface factor of each rotor, last step [-]
+        # the rotor state of the per-step kernel (sim/step_kernel.py): speeds, commands,
+        # thrusts before the surface factors, the factors of the last step, the lag's
+        # constants and whether the speeds still move toward the command
+        self._rot = rotor_state(self._c_f, self._mean_factor, self._alpha, 1e-12 * self._w_max,
+                                self.aero is not None)  # fmt: skip
+        self._w = self._rot[R_W : R_W + 4]
+        self._w_cmd = self._rot[R_CMD : R_CMD + 4]
+        self._cmd_list = [0.0, 0.0, 0.0, 0.0]  # the commands as Python floats (command())
+        self._f_base = self._rot[R_BASE : R_BASE + 4]  # c_f wbar^2 [N]
+        self._factors = self._rot[R_FACTOR : R_FACTOR + 4]  # surface factors, last step [-]
         if self.aero is not None:
             a = self.aero
             # the acting thrust may exceed f_max by the factor's bound
             m.actuator_ctrlrange[0:4, 1] *= a.factor_bound
             self._aero_args = (a.rotor_centres_B, a.samples, a.shapes, a.params)
+            work = np.empty(aero_work_size(a.shapes.shape[0]))
+        else:  # (the kernel does not read them)
+            self._aero_args = (np.zeros((0, 3)), np.zeros((0, 2)), np.zeros((0, 16)),
+                               np.zeros(0))  # fmt: skip
+            work = np.empty(0)
         # Views into MjData (stable for the life of ``data``).
         self._ctrl = self.data.ctrl[0:4]  # rotor thrusts (the elastic cable owns ctrl[4])
         self._wrench = self.data.qfrc_applied[0:6]  # aero force F_W and torque F_B
+        self._step_args = (self._rot, self.data.qpos[0:7], self.data.qvel[0:6],
+                           *self._aero_args, work, self._ctrl, self._wrench)  # fmt: skip
         self._p_att_view = self.data.site_xpos[self._att_site]
         self._qpos, self._qvel = self.data.qpos[0:7], self.data.qvel[0:6]
         self._warnings = self.data.warning.number
@@ -183,9 +206,19 @@ class Plant:
         )
         # hook.side(x, y, z) >= 0  <=>  n.(x, y, z) >= c0 (precomputed for the step loop)
         self._hook_plane = self.hook.plane
+        self._hook_offset = self.hook.offset_W  # (fixed for the hook's life) [m]
         self._prev_att = (0.0, 0.0, 0.0)
         self._hook_side = False
         self._tick = 0
+        # what step() reads, in one tuple: the cable's step (mj_step with the cable force,
+        # sim/cable.py), the kernel's arguments, the hook, views into MjData and the
+        # capture plane (line: the mechanism whose contact decides the hook instead)
+        self._step_context = (
+            self.cable.advance, self._step_args, self.hook, self._p_att_view, self._warnings,
+            _BAD_STATE_WARNINGS[2], self._lander_normals, self._lander_peak,
+            self._frame_found, self._depth_view, self._contact_hook, *self._hook_plane,
+            self.data, self.dt,
+        )  # fmt: skip
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -236,12 +269,13 @@ class Plant:
         self._lander_peak[:] = 0.0
         self._part_peak[:] = 0.0
         self._depth_min = 0.0
+        self._touched = False
         self.model.actuator_gear[0:4] = self._gear0
         self._write_state(self.start_state() if state is None else state)
         w0 = np.zeros(4) if rotor_speeds is None else np.asarray(rotor_speeds, dtype=float)
         self.command(w0)
-        self._w = list(self._w_cmd)
-        self._spinning_up = True
+        self._w[:] = self._w_cmd
+        self._rot[R_SPINNING] = 1.0
         self._set_cable(cable_engaged)
         self.hook.reset(cable_engaged)
         self.forward()
@@ -276,7 +310,7 @@ class Plant:
             out[:3] = self.data.site_xpos[self._crown_site]
         else:
             out[:3] = self._p_att_view
-            out[:3] += self.hook.offset_W
+            out[:3] += self._hook_offset
 
     def set_state(self, state: RigidBodyState) -> None:
         """Overwrite position, attitude and velocities (time and rotors unchanged).
@@ -335,9 +369,9 @@ class Plant:
     def forward(self) -> None:
         """Recompute kinematics, forces and sensors at the current state (no time step)."""
         if self.aero is None:
-            self._ctrl[:] = [self._c_f * w * w for w in self._w]
+            self._ctrl[:] = [self._c_f * w * w for w in self._w.tolist()]
         else:
-            self._f_base[:] = [self._c_f * w * w for w in self._w]
+            self._f_base[:] = [self._c_f * w * w for w in self._w.tolist()]
             self._apply_aero()
         self.cable.forward()
 
@@ -375,19 +409,26 @@ class Plant:
         The caller validates (finite, shape 4); this is on the control path.
         """
         w_max = self._w_max
-        cmd = self._w_cmd
         values = np.asarray(rotor_speeds, dtype=float).tolist()
         if len(values) != 4:
             raise SimulationError(f"expected 4 rotor speed commands, got {len(values)}")
+        cmd = self._cmd_list
+        changed = False
         for i, w in enumerate(values):
             if w != w:
+                if changed:  # (the commands before it are held, as before the check)
+                    self._w_cmd[:] = cmd
+                    self._rot[R_SPINNING] = 1.0
                 raise SimulationError(
                     f"non-finite rotor speed command {values} at t = {self.time:.4f} s"
                 )
             w = 0.0 if w < 0.0 else (w_max if w > w_max else w)
             if w != cmd[i]:
                 cmd[i] = w
-                self._spinning_up = True
+                changed = True
+        if changed:
+            self._w_cmd[:] = cmd
+            self._rot[R_SPINNING] = 1.0
 
     def set_rotor_efficiency(self, efficiency: ArrayLike) -> None:
         """Scale each rotor's thrust and drag torque by ``efficiency`` (4 factors in (0, 1],
@@ -468,14 +509,14 @@ class Plant:
         :meth:`forward`): one physics step old in a running loop (the step loop does not
         evaluate the model twice).
         """
-        w = self._w
+        w = self._w.tolist()
         c_f = self._c_f
         if self.aero is None:
             out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0], c_f * w[1] * w[1],
                         c_f * w[2] * w[2], c_f * w[3] * w[3], 1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
                         0.0]  # fmt: skip
             return
-        k, F = self._factors, self._wrench
+        k, F = self._factors.tolist(), self._wrench
         out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0] * k[0], c_f * w[1] * w[1] * k[1],
                     c_f * w[2] * w[2] * k[2], c_f * w[3] * w[3] * k[3], k[0], k[1], k[2], k[3],
                     F[0], F[1], F[2]]  # fmt: skip
@@ -548,6 +589,10 @@ class Plant:
         physics step: a touch that lasts a single step is seen (the judge's touchdowns,
         bounces and crashes).
         """
+        if not self._touched:  # no contact since the last read: the peaks are all zero
+            out[:CONTACT_PEAK_WIDTH] = _NO_CONTACT_PEAKS
+            return
+        self._touched = False
         n = _N_LANDER_PEAKS
         out[:n] = self._lander_peak
         parts = self._part_peak
@@ -618,76 +663,34 @@ class Plant:
         SimulationError
             If MuJoCo reports a non-finite or diverging state.
         """
-        advance = self.cable.advance  # mj_step with the cable force (sim/cable.py)
-        ctrl = self._ctrl
-        w, cmd = self._w, self._w_cmd
-        c_f, a = self._c_f, self._alpha
-        hook = self.hook
-        p_att = self._p_att_view
-        warn = self._warnings
-        bad_qacc = _BAD_STATE_WARNINGS[2]
-        nx, ny, nz, n_dot_p0 = self._hook_plane
-        b = self._mean_factor
-        aero = self.aero is not None
-        # thrusts out of ground effect go to the actuators, or through the aero kernel
-        tgt = self._f_base if aero else ctrl
-        if aero:
-            qpos, qvel, factors, wrench = self._qpos, self._qvel, self._factors, self._wrench
-            centres, samples, shapes, params = self._aero_args
-        lander_normals, lander_peak = self._lander_normals, self._lander_peak
-        frame_found, depth, depth_min = self._frame_found, self._depth_view, self._depth_min
-        maximum = np.maximum
-        line = self._contact_hook
-        if line is not None:  # no capture plane: the contact decides (line or magnet)
-            n_dot_p0 = math.inf
-            nx = ny = nz = 0.0
-        data = self.data
+        # (one tuple, built once: this runs once per physics step)
+        (advance, args, hook, p_att, warn, bad_qacc, lander_normals, lander_peak, frame_found,
+         depth, line, nx, ny, nz, n_dot_p0, data, dt) = self._step_context  # fmt: skip
         for _ in range(n):
-            if self._spinning_up:
-                w0, w1, w2, w3 = w
-                c0, c1, c2, c3 = cmd
-                # thrust from the exact mean speed over the step, the command held
-                m0, m1, m2 = c0 + (w0 - c0) * b, c1 + (w1 - c1) * b, c2 + (w2 - c2) * b
-                m3 = c3 + (w3 - c3) * b
-                tgt[0] = c_f * m0 * m0  # element-wise: cheaper than a slice from a list
-                tgt[1] = c_f * m1 * m1
-                tgt[2] = c_f * m2 * m2
-                tgt[3] = c_f * m3 * m3
-            if aero:
-                aero_into(qpos, qvel, tgt, centres, samples, shapes, params, factors, ctrl,
-                          wrench)  # fmt: skip
+            rotor_step(*args)
             advance()
             if data.ncon:  # (no contact: every contact sensor reads 0, nothing to track)
-                maximum(lander_peak, lander_normals, out=lander_peak)
+                self._touched = True
+                np.maximum(lander_peak, lander_normals, out=lander_peak)
                 if frame_found[0]:  # a part but the landers touches: a crash
                     self._track_parts()
-                if depth[0] < depth_min:
-                    depth_min = self._depth_min = depth.item()
+                if depth[0] < self._depth_min:
+                    self._depth_min = depth.item()
             k = self._tick
             self._tick = k + 1
-            if self._spinning_up:
-                w[0] = c0 + (w0 - c0) * a
-                w[1] = c1 + (w1 - c1) * a
-                w[2] = c2 + (w2 - c2) * a
-                w[3] = c3 + (w3 - c3) * a
-                # Settled (1e-12 w_max): hold exactly, skip updates until the next command.
-                if (
-                    abs(w[0] - c0) + abs(w[1] - c1) + abs(w[2] - c2) + abs(w[3] - c3)
-                ) < self._settle_tol:
-                    w[:] = cmd
-                    tgt[:] = [c_f * c0 * c0, c_f * c1 * c1, c_f * c2 * c2, c_f * c3 * c3]
-                    self._spinning_up = False
             # Kinematics in ``data`` refer to t_k after mj_step; a hook crossing found
             # now takes effect from the next step.
             x, y, z = p_att.tolist()
             if x != x or warn[bad_qacc]:  # NaN state or MuJoCo's bad-acceleration flag
-                self._diverged(k * self.dt)
-            if line is not None and line.changed:
-                hook.record(k * self.dt, line.caught, self.data.site_xpos[self._crown_site])
+                self._diverged(k * dt)
+            if line is not None:  # no capture plane: the contact decides (line or magnet)
+                if line.changed:
+                    hook.record(k * dt, line.caught, data.site_xpos[self._crown_site])
+                continue
             side = nx * x + ny * y + nz * z >= n_dot_p0
             if side != self._hook_side:
                 self._hook_side = side
-                if hook.cross(k * self.dt, self._prev_att, (x, y, z)) is not None:
+                if hook.cross(k * dt, self._prev_att, (x, y, z)) is not None:
                     self._set_cable(hook.engaged)
             self._prev_att = (x, y, z)
 

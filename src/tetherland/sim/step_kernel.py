@@ -1,0 +1,146 @@
+"""The plant's rotors for one physics step in one compiled call (docs/theory.md section 4).
+
+Before each MuJoCo step the plant needs the thrusts the actuators apply over the step and,
+with ``[aero]`` on, the surface factors and the rotor drag wrench; after it, the rotor
+speeds at the end of the step. None of this depends on what MuJoCo computes in the step
+(the command is held and the aero model reads the state at the start of the step), so one
+kernel, :func:`rotor_step`, does it all before ``mj_step``: a single compiled call per
+physics step instead of some sixty Python operations and the aero kernel's call.
+
+The rotor state lives in one float array of :data:`ROTOR_WIDTH` entries (``R_*`` offsets):
+the speeds w_i, the held commands, the thrusts out of ground effect c_f wbar_i^2 (wbar the
+exact mean speed over the step), the surface factors, the constants of the lag and a flag
+``spinning`` (0: the speeds equal the command, nothing to integrate until the next one).
+
+Beside it sits its plain Python reference, :func:`rotor_step_reference` (Python floats for
+the lag, :func:`~tetherland.models.aero.aero_into` for the surface model, itself checked
+against its numpy reference), which a test compares bit for bit with the kernel.
+
+numba's on-disk cache of :func:`rotor_step` is keyed on this file alone: after an edit of
+the aero kernel (:mod:`tetherland.models.aero`) delete this module's cache files
+(``__pycache__/step_kernel.*``), or the plant keeps the old aero code compiled in (the
+bit-for-bit test then fails where the change shows).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from tetherland.geometry import FloatArray
+from tetherland.models.aero import aero_into, aero_work_into
+
+R_W, R_CMD, R_BASE, R_FACTOR = 0, 4, 8, 12
+"""Offsets of the speeds [rad/s], commands [rad/s], thrusts out of ground effect [N] and
+surface factors [-] (4 each) in the rotor state."""
+R_CF, R_MEAN, R_ALPHA, R_SETTLE, R_SPINNING, R_AERO = 16, 17, 18, 19, 20, 21
+"""Offsets of c_f [N/(rad/s)^2], the mean-speed factor tau (1 - alpha) / dt [-], the lag
+factor alpha = exp(-dt/tau) [-], the settling tolerance [rad/s], the spinning flag and the
+aero flag (1: ``[aero]`` on) in the rotor state."""
+ROTOR_WIDTH = 22
+"""Floats in the rotor state."""
+
+
+def rotor_state(
+    c_f: float, mean_factor: float, alpha: float, settle_tol: float, aero: bool
+) -> FloatArray:
+    """A rotor state at rest (speeds and commands 0, factors 1, spinning) with the lag's
+    constants (see the module doc and the ``R_*`` offsets)."""
+    rot = np.zeros(ROTOR_WIDTH)
+    rot[R_FACTOR : R_FACTOR + 4] = 1.0
+    rot[R_CF], rot[R_MEAN], rot[R_ALPHA], rot[R_SETTLE] = c_f, mean_factor, alpha, settle_tol
+    rot[R_SPINNING] = 1.0
+    rot[R_AERO] = 1.0 if aero else 0.0
+    return rot
+
+
+@njit(cache=True)
+def rotor_step(rot: FloatArray, qpos: FloatArray, v_W: FloatArray, centres_B: FloatArray,
+               samples: FloatArray, shapes: FloatArray, params: FloatArray, work: FloatArray,
+               ctrl: FloatArray, wrench: FloatArray) -> None:  # fmt: skip
+    """The rotors over one physics step, before ``mj_step``.
+
+    Parameters
+    ----------
+    rot : (ROTOR_WIDTH,) array, in/out
+        The rotor state (module doc) at t_k; at t_{k+1} on return.
+    qpos, v_W : arrays
+        The vehicle's [p_W, q_WB] and velocity at t_k (the aero model's inputs) [m, -, m/s].
+    centres_B, samples, shapes, params, work : arrays
+        The aero model (:func:`~tetherland.models.aero.aero_work_into`; unused with the
+        aero flag off).
+    ctrl : (4,) array, out
+        The thrusts the actuators apply over the step, c_f wbar_i^2 times the surface
+        factors [N].
+    wrench : (6,) array, out
+        The aero wrench of the step (aero flag on; untouched otherwise) [N, N m].
+    """
+    c_f = rot[R_CF]
+    spinning = rot[R_SPINNING] != 0.0
+    if spinning:
+        b = rot[R_MEAN]
+        for i in range(4):
+            c = rot[R_CMD + i]
+            m = c + (rot[R_W + i] - c) * b  # the exact mean speed over the step
+            rot[R_BASE + i] = c_f * m * m
+    if rot[R_AERO] != 0.0:
+        aero_work_into(qpos, v_W, rot[R_BASE : R_BASE + 4], centres_B, samples, shapes, params,
+                       rot[R_FACTOR : R_FACTOR + 4], ctrl, wrench, work)  # fmt: skip
+    else:
+        for i in range(4):
+            ctrl[i] = rot[R_BASE + i]
+    if spinning:
+        a = rot[R_ALPHA]
+        gap = 0.0
+        for i in range(4):
+            c = rot[R_CMD + i]
+            w = c + (rot[R_W + i] - c) * a
+            rot[R_W + i] = w
+            gap += abs(w - c)
+        if gap < rot[R_SETTLE]:  # settled: hold exactly until the next command
+            for i in range(4):
+                c = rot[R_CMD + i]
+                rot[R_W + i] = c
+                rot[R_BASE + i] = c_f * c * c
+            rot[R_SPINNING] = 0.0
+
+
+def rotor_step_reference(
+    rot: FloatArray,
+    qpos: FloatArray,
+    v_W: FloatArray,
+    centres_B: FloatArray,
+    samples: FloatArray,
+    shapes: FloatArray,
+    params: FloatArray,
+    ctrl: FloatArray,
+    wrench: FloatArray,
+) -> None:
+    """:func:`rotor_step` written plainly (Python floats; the aero model by
+    :func:`~tetherland.models.aero.aero_into`), for tests."""
+    c_f = float(rot[R_CF])
+    w = [float(v) for v in rot[R_W : R_W + 4]]
+    cmd = [float(v) for v in rot[R_CMD : R_CMD + 4]]
+    base = [float(v) for v in rot[R_BASE : R_BASE + 4]]
+    spinning = bool(rot[R_SPINNING])
+    if spinning:
+        b = float(rot[R_MEAN])
+        means = [c + (wi - c) * b for wi, c in zip(w, cmd, strict=True)]
+        base = [c_f * m * m for m in means]
+    rot[R_BASE : R_BASE + 4] = base
+    if rot[R_AERO]:
+        factors = np.empty(4)
+        aero_into(qpos, v_W, rot[R_BASE : R_BASE + 4].copy(), centres_B, samples, shapes,
+                  params, factors, ctrl, wrench)  # fmt: skip
+        rot[R_FACTOR : R_FACTOR + 4] = factors
+    else:
+        ctrl[:4] = base
+    if spinning:
+        a = float(rot[R_ALPHA])
+        w = [c + (wi - c) * a for wi, c in zip(w, cmd, strict=True)]
+        gap = abs(w[0] - cmd[0]) + abs(w[1] - cmd[1]) + abs(w[2] - cmd[2]) + abs(w[3] - cmd[3])
+        if gap < rot[R_SETTLE]:
+            w = list(cmd)
+            rot[R_BASE : R_BASE + 4] = [c_f * c * c for c in cmd]
+            rot[R_SPINNING] = 0.0
+        rot[R_W : R_W + 4] = w
