@@ -24,7 +24,7 @@ from tetherland.mission.faults import (
 )
 from tetherland.mission.paths import Path, ZVShaper, path_rows, path_rows_reference
 from tetherland.planning.spline import smoothstep9_scalar
-from tetherland.rotations import _quat_to_rotmat_kernel, quat_to_rotmat, quat_to_rotmat_reference
+from tetherland.rotations import _quat_to_rotmat_into, quat_to_rotmat, quat_to_rotmat_reference
 from tetherland.state import RigidBodyState
 
 
@@ -44,7 +44,9 @@ def test_compiled_rotation_matrix_has_the_reference_bits():
     ))  # fmt: skip
     for q in quats:
         expected = quat_to_rotmat_reference(q)
-        assert np.array_equal(_quat_to_rotmat_kernel(q), expected)
+        R = np.full((3, 3), np.nan)
+        _quat_to_rotmat_into(q, R)
+        assert np.array_equal(R, expected)
         assert np.array_equal(quat_to_rotmat(q), expected)
     state = np.concatenate((rng.normal(size=3), quats[0], rng.normal(size=6)))
     assert np.array_equal(quat_to_rotmat(state[3:7]), quat_to_rotmat_reference(quats[0]))
@@ -148,3 +150,31 @@ def test_shaped_path_rows_are_the_convolved_smoothstep():
         inside += 1
     assert inside == 500
     np.testing.assert_array_equal(path.sample(seg.t_end + 1.0), [end, np.zeros(3), np.zeros(3)])
+
+
+def test_kept_path_end_time_is_the_last_segments():
+    """Path.t_end, kept as segments are added and delayed, is the last segment's end
+    exactly (the start time before any)."""
+    rng = np.random.default_rng(13)
+    path = Path(1.25, rng.normal(size=3), speed=1.0, accel=1.0)
+    assert path.t_end == 1.25
+    for k in range(30):
+        if k % 3 == 2:
+            path.delay(float(rng.uniform(0.0, 0.01)))
+        else:
+            path.to(rng.normal(size=3), pause=float(rng.choice([0.0, 0.3])))
+        assert path.t_end == path.segments[-1].t0 + path.segments[-1].duration
+    empty = Path(2.0, np.zeros(3), speed=1.0, accel=1.0)
+    empty.delay(0.5)
+    assert empty.t_end == empty.t0 == 2.5
+
+
+def test_compiled_kernels_refuse_wrong_shapes():
+    """A wrong length is an error, not a read or write past an array's end."""
+    none = np.empty(0)
+    with pytest.raises(ValueError):
+        path_rows(0.5, 0.0, 1.0, none, none, np.zeros(2), np.ones(3))
+    with pytest.raises(ValueError):
+        path_rows(0.5, 0.0, 1.0, np.zeros(2), np.ones(1), np.zeros(3), np.ones(3))
+    with pytest.raises(ValueError):
+        attachment_geometry(np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros(6))

@@ -62,14 +62,13 @@ def quat_to_rotmat_reference(q: ArrayLike) -> FloatArray:
     )
 
 
-@njit("float64[:, ::1](float64[:])", cache=True)
-def _quat_to_rotmat_kernel(q: FloatArray) -> FloatArray:  # pragma: no cover (compiled)
-    """Compiled :func:`quat_to_rotmat_reference` of a float64 vector (the same operations
-    in the same order, no fast-math: the same bits)."""
-    if q.shape[0] != 4:
-        raise ValueError("a quaternion has 4 entries (w, x, y, z)")
+@njit("void(float64[:], float64[:, ::1])", cache=True)
+def _quat_to_rotmat_into(q: FloatArray, R: FloatArray) -> None:  # pragma: no cover (compiled)
+    """Compiled :func:`quat_to_rotmat_reference` of a float64 vector, written into ``R``
+    (3, 3) (the same operations in the same order, no fast-math: the same bits)."""
+    if q.shape[0] != 4 or R.shape[0] != 3 or R.shape[1] != 3:
+        raise ValueError("a quaternion has 4 entries (w, x, y, z), its matrix 3 x 3")
     w, x, y, z = q[0], q[1], q[2], q[3]
-    R = np.empty((3, 3))
     R[0, 0] = 1 - 2 * (y * y + z * z)
     R[0, 1] = 2 * (x * y - w * z)
     R[0, 2] = 2 * (x * z + w * y)
@@ -79,20 +78,25 @@ def _quat_to_rotmat_kernel(q: FloatArray) -> FloatArray:  # pragma: no cover (co
     R[2, 0] = 2 * (x * z - w * y)
     R[2, 1] = 2 * (y * z + w * x)
     R[2, 2] = 1 - 2 * (x * x + y * y)
-    return R
+
+
+_empty = np.empty
 
 
 def quat_to_rotmat(q: ArrayLike) -> FloatArray:
     """Rotation matrix of a unit quaternion (w, x, y, z).
 
     A writable float64 vector (every estimate's and the plant's) goes through one compiled
-    call (it runs about 45 000 times in an 80 s mission); anything else through
+    call (it runs about 45 000 times in an 80 s mission; the matrix is allocated here: a
+    compiled function returning an array pays more to box it); anything else through
     :func:`quat_to_rotmat_reference`. Both give the same bits.
     """
+    R = _empty((3, 3))
     try:
-        return _quat_to_rotmat_kernel(q)
+        _quat_to_rotmat_into(q, R)
     except TypeError:  # not a writable float64 vector: a list, ints, float32, read-only
         return quat_to_rotmat_reference(q)
+    return R
 
 
 def quat_to_rotmat_many(q: ArrayLike) -> FloatArray:

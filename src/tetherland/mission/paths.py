@@ -122,6 +122,7 @@ class Path:
         )
         self._cursor = 0
         self._start_rows = _rest_rows(self.start)
+        self._t_end = self.t0
 
     @property
     def end(self) -> FloatArray:
@@ -129,7 +130,9 @@ class Path:
 
     @property
     def t_end(self) -> float:
-        return self.segments[-1].t_end if self.segments else self.t0
+        """End of the last segment [s] (kept as segments are added or delayed: the
+        supervisor reads it at every tick)."""
+        return self._t_end
 
     def to(self, p: ArrayLike, speed: float | None = None, pause: float = 0.0) -> Path:
         """Append a move to ``p`` (optionally slower), then an optional pause; returns self."""
@@ -146,9 +149,11 @@ class Path:
         """Hold the path for ``dt`` [s]: every segment starts that much later."""
         self.t0 += dt
         self.segments = [replace(seg, t0=seg.t0 + dt) for seg in self.segments]
+        self._t_end = self.segments[-1].t_end if self.segments else self.t0
 
     def _append(self, seg: Segment) -> None:
         self.segments.append(seg)
+        self._t_end = seg.t_end
         delta = seg.p1 - seg.p0
         self._delta.append(delta)
         self._rest.append(_rest_rows(seg.p1) if not delta.any() else None)
@@ -175,9 +180,11 @@ class Path:
             return _rest_rows(seg.p1)
         T = seg.base if seg.base > 0.0 else seg.duration
         shaped = self.shaper is not None and seg.duration != T
-        return path_rows(t, seg.t0, T, self._shaper_times if shaped else _UNSHAPED,
-                         self._shaper_amplitudes if shaped else _UNSHAPED, seg.p0,
-                         self._delta[i])  # fmt: skip
+        rows = _empty((3, 3))  # path_rows, inlined
+        path_rows_into(t, seg.t0, T, self._shaper_times if shaped else _UNSHAPED,
+                       self._shaper_amplitudes if shaped else _UNSHAPED, seg.p0,
+                       self._delta[i], rows)  # fmt: skip
+        return rows
 
 
 _UNSHAPED = np.empty(0)
@@ -222,17 +229,36 @@ def _smoothstep2(tau: float) -> tuple[float, float, float]:  # pragma: no cover 
     return s, 630.0 * u2v2 * u2v2, 2520.0 * u2v2 * uv * w
 
 
-@njit(
-    "float64[:, ::1](float64, float64, float64, float64[::1], float64[::1], float64[::1], "
-    "float64[::1])",
-    cache=True,
-)
 def path_rows(
     t: float, t0: float, T: float, times: FloatArray, amplitudes: FloatArray,
     p0: FloatArray, delta: FloatArray,
-) -> FloatArray:  # fmt: skip  # pragma: no cover (compiled)
-    """Compiled :func:`path_rows_reference` (the same operations in the same order: the
-    same bits; a test checks it). Called at every control tick of free flight."""
+) -> FloatArray:  # fmt: skip
+    """:func:`path_rows_reference` compiled (:func:`path_rows_into`, the same operations in
+    the same order: the same bits; a test checks it): called at every control tick of
+    free flight. Float64 vectors (contiguous, writable) only."""
+    rows = _empty((3, 3))
+    path_rows_into(t, t0, T, times, amplitudes, p0, delta, rows)
+    return rows
+
+
+_empty = np.empty
+
+
+@njit(
+    "void(float64, float64, float64, float64[::1], float64[::1], float64[::1], float64[::1], "
+    "float64[:, ::1])",
+    cache=True,
+)
+def path_rows_into(
+    t: float, t0: float, T: float, times: FloatArray, amplitudes: FloatArray,
+    p0: FloatArray, delta: FloatArray, rows: FloatArray,
+) -> None:  # fmt: skip  # pragma: no cover (compiled)
+    """:func:`path_rows` written into ``rows`` (3, 3)."""
+    if (
+        p0.shape[0] != 3 or delta.shape[0] != 3 or rows.shape[0] != 3 or rows.shape[1] != 3
+        or amplitudes.shape[0] != times.shape[0]
+    ):  # fmt: skip
+        raise ValueError("p0 (3,), delta (3,), rows (3, 3), one amplitude per impulse time")
     if times.shape[0] == 0:
         s0, s1, s2 = _smoothstep2((t - t0) / T)
     else:
@@ -242,13 +268,11 @@ def path_rows(
             r0, r1, r2 = _smoothstep2((t - t0 - times[k]) / T)
             s0, s1, s2 = s0 + ai * r0, s1 + ai * r1, s2 + ai * r2
     a, b = s1 / T, s2 / (T * T)
-    rows = np.empty((3, 3))
     for j in range(3):
         d = delta[j]
         rows[0, j] = p0[j] + s0 * d
         rows[1, j] = a * d
         rows[2, j] = b * d
-    return rows
 
 
 def _rest_rows(p: FloatArray) -> FloatArray:
