@@ -84,17 +84,16 @@ def workload(name: str) -> Callable[[], None]:
     return call
 
 
+def _repeat(call: Callable[[], None], n: int) -> None:
+    for _ in range(n):
+        call()
+
+
 def main() -> None:
     name, n = sys.argv[1], int(sys.argv[2])
     call = workload(name)
-    for _ in range(100):
-        call()
-
-    def calls() -> None:
-        for _ in range(n):
-            call()
-
-    _counted(calls)
+    _repeat(call, 100)  # warm-up: compiled kernels loaded, caches filled
+    _counted(lambda: _repeat(call, n))
 
 
 if __name__ == "__main__":
