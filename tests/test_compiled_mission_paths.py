@@ -1,7 +1,7 @@
 """The compiled per-tick kernels of the mission glue give their plain forms' bits (issue 25).
 
-Each kernel compiled for the control loop (rotation matrix of a quaternion, the fault
-monitor's attachment geometry, the free-flight path's rows) is compared with the plain
+Each kernel compiled for the control loop (rotation matrix of a quaternion, the
+free-flight path's rows) is compared with the plain
 Python form beside it with exact equality: the default missions' logs must not change by
 a bit. Inputs the kernels do not take (lists, other dtypes, read-only arrays) must fall
 back to the plain forms, with the same result.
@@ -9,23 +9,12 @@ back to the plain forms, with the same result.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
-from tetherland.config import load_scenario
-from tetherland.geometry import LandingGeometry
-from tetherland.interfaces import StateEstimate
-from tetherland.mission.faults import (
-    FaultMonitor,
-    attachment_geometry,
-    attachment_geometry_scalar,
-)
 from tetherland.mission.paths import Path, ZVShaper, path_rows, path_rows_reference
 from tetherland.planning.spline import smoothstep9_scalar
 from tetherland.rotations import _quat_to_rotmat_into, quat_to_rotmat, quat_to_rotmat_reference
-from tetherland.state import RigidBodyState
 
 
 def _unit_quats(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -69,49 +58,6 @@ def test_rotation_matrix_takes_what_the_kernel_does_not():
     assert np.array_equal(quat_to_rotmat(q32), quat_to_rotmat_reference(q32.astype(float)))
     with pytest.raises(ValueError):
         quat_to_rotmat(np.zeros(3))
-
-
-def test_compiled_attachment_geometry_has_the_scalar_bits():
-    """The fault monitor's geometry (d in F_B, |p_att - p_A|) compiled and in Python
-    floats, over random poses, an attachment point at the anchor (D = 0: the 1e-9 floor)
-    and a NaN pose (NaN kept, as Python's max keeps it)."""
-    rng = np.random.default_rng(7)
-    r_att, p_A = np.array([0.01, -0.02, -0.05]), np.array([0.4, -0.3, 1.2])
-    geo = np.concatenate((r_att, p_A))
-    args = (*r_att.tolist(), *p_A.tolist())
-    for q, p in zip(_unit_quats(rng, 20000), rng.uniform(-3.0, 3.0, (20000, 3)), strict=True):
-        got = attachment_geometry(p, q, geo)
-        assert got == attachment_geometry_scalar(*p.tolist(), *q.tolist(), *args)
-    level = np.array([1.0, 0.0, 0.0, 0.0])
-    at_anchor = p_A - r_att  # the attachment point on the anchor
-    got = attachment_geometry(at_anchor, level, geo)
-    assert got == attachment_geometry_scalar(*at_anchor.tolist(), *level.tolist(), *args)
-    assert got[3] == 0.0
-    nan_p = np.array([math.nan, 0.0, 0.0])
-    got = attachment_geometry(nan_p, level, geo)
-    expected = attachment_geometry_scalar(*nan_p.tolist(), *level.tolist(), *args)
-    assert all(math.isnan(g) and math.isnan(e) for g, e in zip(got, expected, strict=True))
-
-
-def test_fault_monitor_geometry_follows_each_new_estimate():
-    """The monitor keeps the geometry of the last estimate for the other rules of the same
-    tick; every new estimate gets its own (the numpy reference's distance and the scalar
-    form's bits), also when it comes as lists."""
-    sc = load_scenario("slope50")
-    geo = LandingGeometry.from_scenario(sc)
-    mon = FaultMonitor(sc, geo)
-    rng = np.random.default_rng(9)
-    r_att = np.asarray(sc.vehicle.cable_attachment, dtype=float)
-    for q, p in zip(_unit_quats(rng, 200), rng.uniform(-2.0, 2.0, (200, 3)), strict=True):
-        est = StateEstimate(t=0.0, body=RigidBodyState(p, np.zeros(3), q, np.zeros(3)))
-        got = mon._geometry(est)
-        assert got == mon._geometry_scalar(est)
-        assert mon._geometry(est) is got  # kept for the rules of the same tick
-        D = float(np.linalg.norm(p + quat_to_rotmat_reference(q) @ r_att - geo.p_A))
-        assert got[3] == pytest.approx(D, abs=1e-12)
-        listed = StateEstimate(t=0.0, body=RigidBodyState(p.tolist(), [0.0] * 3, q.tolist(),
-                                                          [0.0] * 3))  # fmt: skip
-        assert mon._geometry(listed) == got
 
 
 def test_compiled_path_rows_have_the_reference_bits():
@@ -176,5 +122,3 @@ def test_compiled_kernels_refuse_wrong_shapes():
         path_rows(0.5, 0.0, 1.0, none, none, np.zeros(2), np.ones(3))
     with pytest.raises(ValueError):
         path_rows(0.5, 0.0, 1.0, np.zeros(2), np.ones(1), np.zeros(3), np.ones(3))
-    with pytest.raises(ValueError):
-        attachment_geometry(np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros(6))

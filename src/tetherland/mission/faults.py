@@ -32,11 +32,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from tetherland.config import FaultKind, Scenario
 from tetherland.estimation import ThresholdDwell
-from tetherland.geometry import FloatArray, LandingGeometry
+from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, StateEstimate
 from tetherland.mission.phases import Phase
 from tetherland.rotations import quat_to_rotmat
@@ -61,54 +60,6 @@ JAM_PHASES = frozenset({Phase.RETURN, Phase.LAND})
 _DWELL_RULE_PHASES = SNAP_PHASES | ANCHOR_PHASES | LANDED_PHASES | JAM_PHASES
 """Phases in which the snap, anchor, landed or jam rule watches; in any other phase each of
 them only stays reset."""
-
-
-def attachment_geometry_scalar(
-    px: float, py: float, pz: float, w: float, x: float, y: float, z: float,
-    rx: float, ry: float, rz: float, ax: float, ay: float, az: float,
-) -> tuple[float, float, float, float]:
-    """Unit link direction d in F_B and distance D [m] from the anchor p_A = (ax, ay, az)
-    to the attachment point p_W + R_WB r_att, r_att = (rx, ry, rz) in F_B, of the pose
-    (p_W, q_WB = (w, x, y, z)): plain Python floats, the reference of
-    :func:`attachment_geometry`."""  # fmt: skip
-    # R_WB from the unit quaternion (w, x, y, z)
-    r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
-    r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
-    r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
-    dx = px + r00 * rx + r01 * ry + r02 * rz - ax
-    dy = py + r10 * rx + r11 * ry + r12 * rz - ay
-    dz = pz + r20 * rx + r21 * ry + r22 * rz - az
-    D = math.sqrt(dx * dx + dy * dy + dz * dz)
-    inv = 1.0 / max(D, 1e-9)
-    # d in F_B = R_WB^T d_W
-    bx = (r00 * dx + r10 * dy + r20 * dz) * inv
-    by = (r01 * dx + r11 * dy + r21 * dz) * inv
-    bz = (r02 * dx + r12 * dy + r22 * dz) * inv
-    return bx, by, bz, D
-
-
-@njit("UniTuple(float64, 4)(float64[:], float64[:], float64[::1])", cache=True)
-def attachment_geometry(
-    p_W: FloatArray, q_WB: FloatArray, geo: FloatArray
-) -> tuple[float, float, float, float]:  # pragma: no cover (compiled)
-    """Compiled :func:`attachment_geometry_scalar` of a pose (p_W, q_WB) with ``geo`` =
-    [r_att_B (3), p_A (3)]: the same operations in the same order (the same bits)."""
-    if p_W.shape[0] != 3 or q_WB.shape[0] != 4 or geo.shape[0] != 6:
-        raise ValueError("p_W (3,), q_WB (4,) and geo (6,) expected")
-    w, x, y, z = q_WB[0], q_WB[1], q_WB[2], q_WB[3]
-    rx, ry, rz = geo[0], geo[1], geo[2]
-    r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
-    r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
-    r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
-    dx = p_W[0] + r00 * rx + r01 * ry + r02 * rz - geo[3]
-    dy = p_W[1] + r10 * rx + r11 * ry + r12 * rz - geo[4]
-    dz = p_W[2] + r20 * rx + r21 * ry + r22 * rz - geo[5]
-    D = math.sqrt(dx * dx + dy * dy + dz * dz)
-    inv = 1.0 / (1e-9 if 1e-9 > D else D)  # max(D, 1e-9), NaN kept as Python's max does
-    bx = (r00 * dx + r10 * dy + r20 * dz) * inv
-    by = (r01 * dx + r11 * dy + r21 * dz) * inv
-    bz = (r02 * dx + r12 * dy + r22 * dz) * inv
-    return bx, by, bz, D
 
 
 @dataclass(frozen=True)
@@ -150,10 +101,6 @@ class FaultMonitor:
         self._stiffness = scenario.tether.stiffness
         self._rx, self._ry, self._rz = (float(x) for x in self._r_att)
         self._ax, self._ay, self._az = (float(x) for x in self._p_A)
-        self._geo_packed = np.array([self._rx, self._ry, self._rz, self._ax, self._ay, self._az])
-        # the attachment geometry of the last estimate seen (the rules of one tick share it)
-        self._geo_est: StateEstimate | None = None
-        self._geo = (math.nan, math.nan, math.nan, math.nan)
         self._torque_cmd = (0.0, 0.0)
         self._lp_x = self._lp_y = 0.0
         self._t_last: float | None = None
@@ -191,27 +138,26 @@ class FaultMonitor:
         return np.cross(self._r_att, R_WB.T @ (-tension * d))
 
     def _geometry(self, est: StateEstimate) -> tuple[float, float, float, float]:
-        """The unit link direction d in F_B and the distance D = |p_att - p_A| [m] of
-        ``est`` (the control-rate path: one compiled call, :func:`attachment_geometry`,
-        kept for the other rules of the same tick); :meth:`_geometry_scalar` is its plain
-        form and :meth:`cable_torque_B` its numpy reference (tests check all agree)."""
-        if est is self._geo_est:
-            return self._geo
-        body = est.body
-        try:
-            geo = attachment_geometry(body.p_W, body.q_WB, self._geo_packed)
-        except TypeError:  # not float64 vectors (a test's lists): the plain form
-            geo = self._geometry_scalar(est)
-        self._geo_est, self._geo = est, geo
-        return geo
-
-    def _geometry_scalar(self, est: StateEstimate) -> tuple[float, float, float, float]:
-        """:meth:`_geometry` with Python floats, for any array-like pose."""
-        w, x, y, z = np.asarray(est.body.q_WB, dtype=float).tolist()
-        px, py, pz = np.asarray(est.body.p_W, dtype=float).tolist()
-        return attachment_geometry_scalar(
-            px, py, pz, w, x, y, z, self._rx, self._ry, self._rz, self._ax, self._ay, self._az
-        )
+        """Scalar form (the control-rate path) of the attachment geometry: the unit link
+        direction d in F_B and the distance D = |p_att - p_A| [m]; :meth:`cable_torque_B`
+        is its plain reference (a test checks both agree)."""
+        w, x, y, z = est.body.q_WB.tolist()
+        px, py, pz = est.body.p_W.tolist()
+        rx, ry, rz = self._rx, self._ry, self._rz
+        # R_WB from the unit quaternion (w, x, y, z)
+        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
+        r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+        r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+        dx = px + r00 * rx + r01 * ry + r02 * rz - self._ax
+        dy = py + r10 * rx + r11 * ry + r12 * rz - self._ay
+        dz = pz + r20 * rx + r21 * ry + r22 * rz - self._az
+        D = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inv = 1.0 / max(D, 1e-9)
+        # d in F_B = R_WB^T d_W
+        bx = (r00 * dx + r10 * dy + r20 * dz) * inv
+        by = (r01 * dx + r11 * dy + r21 * dz) * inv
+        bz = (r02 * dx + r12 * dy + r22 * dz) * inv
+        return bx, by, bz, D
 
     def cable_torque_xy(self, est: StateEstimate) -> tuple[float, float]:
         """Roll and pitch of :meth:`cable_torque_B` in scalar form [N m]."""
@@ -277,7 +223,7 @@ class FaultMonitor:
             self.torque_residual = 0.0
             self._rotor.reset()
             return None
-        # cable_torque_xy, inlined (the control-rate path)
+        # cable_torque_xy, inlined (the control-rate path: two calls fewer)
         tension = est.tension or 0.0
         tension = 0.0 if 0.0 > tension else tension  # max(tension, 0.0), the same bits
         bx, by, bz, _ = self._geometry(est)
@@ -398,6 +344,4 @@ __all__ = [
     "SNAP_PHASES",
     "FaultDetection",
     "FaultMonitor",
-    "attachment_geometry",
-    "attachment_geometry_scalar",
 ]
