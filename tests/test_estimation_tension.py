@@ -63,3 +63,46 @@ def test_motor_lag_matches_exponential_response():
         f = lag.step(np.full(4, 500.0), 0.001)
     w_expected = 500.0 * (1.0 - math.exp(-0.03 / 0.03))
     np.testing.assert_allclose(f, 1e-5 * w_expected**2, rtol=1e-12)
+
+
+def test_filter_value_is_the_filter_without_its_record():
+    """The estimator's path (filtered value and the taut rule as an attribute) gives the
+    record's filtered tension and taut flag exactly, through a step that turns the rule on
+    and a drop that resets it."""
+    a = TensionEstimator(mass=1.2, threshold=1.0, dwell=0.1, time_constant=0.02)
+    b = TensionEstimator(mass=1.2, threshold=1.0, dwell=0.1, time_constant=0.02)
+    rng = np.random.default_rng(1)
+    taut = 0
+    for k in range(600):
+        t = k * 0.002
+        raw = (3.0 if 0.2 <= t < 0.7 else 0.2) + rng.normal(0.0, 0.1)
+        record = a.filter(t, raw)
+        assert b.filter_value(t, raw) == record.filtered == b.value
+        assert b.taut == record.taut
+        taut += record.taut
+    assert 0 < taut < 600
+
+
+def test_estimator_last_tension_is_the_last_estimates():
+    """UkfEstimator.last_tension (built on demand) holds the raw and filtered tension and
+    the taut rule of the last estimate; the filtered one is the estimate's tension."""
+    from tetherland.config import load_scenario
+    from tetherland.estimation import UkfEstimator
+    from tetherland.interfaces import ImuSample
+    from tetherland.state import RigidBodyState
+
+    sc = load_scenario("slope50")
+    est = UkfEstimator(sc, RigidBodyState.at_rest(np.zeros(3)))
+    assert est.last_tension is None
+    rng = np.random.default_rng(2)
+    for k in range(1, 40):
+        f_B = np.array([0.0, 0.0, g]) + rng.normal(0.0, 0.2, 3)
+        est.predict(ImuSample(k * 1e-3, f_B, np.zeros(3)))
+        e = est.estimate()
+        last = est.last_tension
+        assert last.filtered == e.tension == est.tension.value
+        assert last.taut == est.tension.taut
+        assert math.isfinite(last.raw)
+    # the raw tension of the last estimate, with the motors off: the residual force's
+    # projection on the link (or its norm): m |f_B - b_a| for a level vehicle at most
+    assert abs(last.raw) <= sc.vehicle.mass * float(np.linalg.norm(f_B - e.accel_bias_B)) + 1e-9

@@ -561,3 +561,27 @@ def test_lost_thrust_feeds_the_estimated_pull_forward_while_the_cable_is_slack(s
     view._thrust_loss = Phase.APPROACH  # not hooked: any pull is the deficit
     far = lost(view, _hover_estimate(slope50, 0.0, d_len=l + 0.5, tension=T))
     assert np.linalg.norm(far) == pytest.approx(T / m)
+
+
+def test_rotor_rule_low_passes_the_scalar_cable_torque(slope50):
+    """The rotor rule's inlined cable torque is cable_torque_xy's: with no commanded
+    torque, after one tick from rest the residual is the low-pass weight times its norm,
+    exactly (the weight 1 - exp(-dt/tau) of the tick)."""
+    from tetherland.mission.faults import ROTOR_PHASES
+
+    mon = FaultMonitor(slope50, LandingGeometry.from_scenario(slope50))
+    rng = np.random.default_rng(21)
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    est = StateEstimate(t=0.0, body=RigidBodyState(rng.uniform(-1, 1, 3), np.zeros(3), q,
+                                                   np.zeros(3)), tension=4.0)  # fmt: skip
+    phase = next(iter(ROTOR_PHASES))
+    dt = 0.002
+    mon.check(10.0, est, phase, airborne=True)  # the first tick: dt = 0, weight 0
+    assert mon.torque_residual == 0.0
+    mon.check(10.0 + dt, est, phase, airborne=True)
+    cx, cy = mon.cable_torque_xy(est)
+    step = (10.0 + dt) - 10.0  # the tick as the rule sees it
+    a = 1.0 - math.exp(-step / slope50.mission.detection.rotor_torque_time_constant)
+    assert mon.torque_residual == math.hypot(a * cx, a * cy)
+    assert mon.torque_residual > 0.0

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 from tetherland.config import Scenario
 from tetherland.estimation import kernels
 from tetherland.estimation.ground_effect import BelievedGroundEffect
+from tetherland.estimation.kernels import estimate_into as _estimate_into
 from tetherland.estimation.tension import (
     CableEstimate,
     MotorLagThrust,
@@ -37,6 +38,11 @@ from tetherland.rotations import quat_to_rotmat
 from tetherland.state import LinkState, RigidBodyState
 
 _BUFFER = 16
+_P_W, _V_W, _Q_WB, _OMEGA_B = kernels.P_W, kernels.V_W, kernels.Q_WB, kernels.OMEGA_B
+_ACCEL_BIAS, _GYRO_BIAS, _EXTERNAL = kernels.ACCEL_BIAS, kernels.GYRO_BIAS, kernels.EXTERNAL
+_LINK_TO_TENSION = slice(kernels.LINK.start, kernels.TENSION + 1)
+"""The link state (4), d_B (3) and the raw tension of ``estimate_into``'s output."""
+assert kernels.LINK.stop == kernels.D_B.start and kernels.D_B.stop == kernels.TENSION
 """IMU samples buffered at most between two integrations."""
 
 
@@ -114,21 +120,25 @@ class UkfEstimator:
         kernels.estimate_into(
             self.ukf.x_view, self.ukf.imu_view, 0.0, self.mass, self._geo, np.empty(kernels.WIDTH)
         )
-        self.last_tension: TensionEstimate | None = None
-        """Raw and filtered tension and the taut rule, as of the last estimate."""
+        self._last_raw: float | None = None  # raw tension of the last estimate [N]
+        # the UKF's live state and IMU record (updated in place, never replaced)
+        self._x_view, self._imu_view = self.ukf.x_view, self.ukf.imu_view
 
     # ------------------------------------------------------------------ Estimator protocol
     def predict(self, imu: ImuSample) -> None:
         """Buffer one IMU sample; it is integrated before the next estimate or update."""
-        if imu.t <= self.ukf.t:
+        t = imu.t
+        if t <= self._imu_view[0]:  # ukf.t
             return  # a sample at the estimate's own time spans no interval
-        if self._n == _BUFFER:
+        n = self._n
+        if n == _BUFFER:
             self._flush()
-        row = self._buf[self._n]
-        row[0] = imu.t
-        row[1:4] = imu.specific_force_B
-        row[4:7] = imu.omega_B
-        self._n += 1
+            n = 0
+        buf = self._buf  # (indexed in place: no row view per sample)
+        buf[n, 0] = t
+        buf[n, 1:4] = imu.specific_force_B
+        buf[n, 4:7] = imu.omega_B
+        self._n = n + 1
         self._cached = None
 
     def update(self, mocap: MocapSample) -> None:
@@ -142,35 +152,49 @@ class UkfEstimator:
 
     def estimate(self) -> StateEstimate:
         """Current estimate, with link state (w.r.t. the believed anchor) and tension."""
-        if self._cached is not None:
-            return self._cached
-        self._flush()
-        ukf = self.ukf
-        t = ukf.t
+        cached = self._cached
+        if cached is not None:
+            return cached
+        if self._n:  # _flush
+            self.ukf.predict_rows(self._buf, self._n)
+            self._n = 0
+        x, imu = self._x_view, self._imu_view
+        t = float(imu[0])  # ukf.t
         out = np.empty(kernels.WIDTH)  # fresh: the record's arrays are views into it
         thrust = self._thrust_at(t)
-        if self.ground_effect is not None:
-            c_f = self.motors.c_f
-            w0, w1, w2, w3 = self.motors.speeds
-            thrust = self.ground_effect.total_thrust_of(
-                ukf.x_view, [c_f * (w0 * w0), c_f * (w1 * w1), c_f * (w2 * w2), c_f * (w3 * w3)]
+        ge = self.ground_effect
+        if ge is not None:
+            motors = self.motors
+            c_f = motors.c_f
+            w0, w1, w2, w3 = motors.speeds
+            thrust = ge.total_thrust_of(
+                x, [c_f * (w0 * w0), c_f * (w1 * w1), c_f * (w2 * w2), c_f * (w3 * w3)]
             )
-        kernels.estimate_into(ukf.x_view, ukf.imu_view, thrust, self.mass, self._geo, out)
-        phi, delta, phi_dot, delta_dot = out[kernels.LINK].tolist()
-        # tension: thrust (motor lag) and the specific force projected on the link
-        tension = self.tension.filter(t, float(out[kernels.TENSION]))
-        self.last_tension = tension
-        self._cached = StateEstimate(
-            t=t,
-            body=RigidBodyState(out[0:3], out[3:6], out[6:10], out[10:13]),
-            gyro_bias_B=out[kernels.GYRO_BIAS],
-            accel_bias_B=out[kernels.ACCEL_BIAS],
-            covariance=ukf.covariance,
-            link=LinkState(phi, delta, phi_dot, delta_dot),
-            tension=tension.filtered,
-            external_force_B=out[kernels.EXTERNAL],
+        _estimate_into(x, imu, thrust, self.mass, self._geo, out)
+        # link (4) and the raw tension: the tension low-passed, the taut rule applied
+        phi, delta, phi_dot, delta_dot, _, _, _, raw = out[_LINK_TO_TENSION].tolist()
+        tension = self.tension
+        filtered = tension.filter_value(t, raw)
+        self._last_raw = raw
+        self._cached = cached = StateEstimate(
+            t,
+            RigidBodyState(out[_P_W], out[_V_W], out[_Q_WB], out[_OMEGA_B]),
+            out[_GYRO_BIAS],
+            out[_ACCEL_BIAS],
+            self.ukf.covariance,
+            LinkState(phi, delta, phi_dot, delta_dot),
+            filtered,
+            out[_EXTERNAL],
         )
-        return self._cached
+        return cached
+
+    @property
+    def last_tension(self) -> TensionEstimate | None:
+        """Raw and filtered tension and the taut rule, as of the last estimate (None
+        before the first)."""
+        if self._last_raw is None:
+            return None
+        return TensionEstimate(self._last_raw, self.tension.value, self.tension.taut)
 
     def cable(self) -> CableEstimate:
         """The cable seen from the current estimate: distance, stretch and, for an elastic

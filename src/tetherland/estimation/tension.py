@@ -161,6 +161,8 @@ class TensionEstimator:
         self._filtered = 0.0
         self._dt, self._a = math.nan, 0.0
         self.rule.reset()
+        self.taut = False
+        """The taut rule's result at the last sample."""
 
     def update(
         self,
@@ -175,6 +177,12 @@ class TensionEstimator:
     def filter(self, t: float, raw: float) -> TensionEstimate:
         """Add one instantaneous estimate ``raw`` [N] at time ``t`` [s] (first-order
         low-pass, exact for a sample held over the interval) and apply the taut rule."""
+        filtered = self.filter_value(t, raw)
+        return TensionEstimate(raw, filtered, self.taut)
+
+    def filter_value(self, t: float, raw: float) -> float:
+        """:meth:`filter` without its record (the estimator's control-rate path): returns
+        the filtered estimate [N]; the taut rule's result is :attr:`taut`."""
         if self._t is None or self.time_constant == 0.0:
             self._filtered = raw
         else:
@@ -184,7 +192,8 @@ class TensionEstimator:
                 self._a = 1.0 - math.exp(-max(dt, 0.0) / self.time_constant)
             self._filtered += self._a * (raw - self._filtered)
         self._t = t
-        return TensionEstimate(raw, self._filtered, self.rule.update(t, self._filtered))
+        self.taut = self.rule.update(t, self._filtered)
+        return self._filtered
 
     @property
     def value(self) -> float:
@@ -243,6 +252,8 @@ class MotorLagThrust:
             a = self._decay
             w = self._w
             c0, c1, c2, c3 = w_cmd
-            self._w = [c0 + (w[0] - c0) * a, c1 + (w[1] - c1) * a, c2 + (w[2] - c2) * a,
-                       c3 + (w[3] - c3) * a]  # fmt: skip
-        return self.total_thrust
+            w0, w1, w2, w3 = w
+            self._w = [c0 + (w0 - c0) * a, c1 + (w1 - c1) * a, c2 + (w2 - c2) * a,
+                       c3 + (w3 - c3) * a]  # fmt: skip
+        w0, w1, w2, w3 = self._w  # total_thrust, inlined
+        return self.c_f * (w0 * w0 + w1 * w1 + w2 * w2 + w3 * w3)

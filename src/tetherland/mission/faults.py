@@ -227,7 +227,13 @@ class FaultMonitor:
             self.torque_residual = 0.0
             self._rotor.reset()
             return None
-        cx, cy = self.cable_torque_xy(est)
+        # cable_torque_xy, inlined (the control-rate path: two calls fewer)
+        tension = est.tension or 0.0
+        tension = 0.0 if 0.0 > tension else tension  # max(tension, 0.0), the same bits
+        bx, by, bz, _ = self._geometry(est)
+        fx, fy, fz = -tension * bx, -tension * by, -tension * bz
+        rx, ry, rz = self._rx, self._ry, self._rz
+        cx, cy = ry * fz - rz * fy, rz * fx - rx * fz
         if dt != self._lp_dt:  # (the tick is constant: the weight is computed once)
             self._lp_dt = dt
             self._lp_a = 1.0 - math.exp(-dt / self.cfg.rotor_torque_time_constant)

@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
@@ -114,10 +115,14 @@ class Path:
         # per segment, for sample(): p1 - p0, and the held rows of a pause (read-only)
         self._delta: list[FloatArray] = []
         self._rest: list[FloatArray | None] = []
-        # p0 and p1 - p0 of each segment as floats (the scalar form of sample())
-        self._floats: list[tuple[tuple[float, ...], tuple[float, ...]]] = []
+        # the shaper's impulses as arrays (the compiled path_rows)
+        self._shaper_times = np.array(shaper.times if shaper is not None else (), dtype=float)
+        self._shaper_amplitudes = np.array(
+            shaper.amplitudes if shaper is not None else (), dtype=float
+        )
         self._cursor = 0
         self._start_rows = _rest_rows(self.start)
+        self._t_end = self.t0
 
     @property
     def end(self) -> FloatArray:
@@ -125,7 +130,9 @@ class Path:
 
     @property
     def t_end(self) -> float:
-        return self.segments[-1].t_end if self.segments else self.t0
+        """End of the last segment [s] (kept as segments are added or delayed: the
+        supervisor reads it at every tick)."""
+        return self._t_end
 
     def to(self, p: ArrayLike, speed: float | None = None, pause: float = 0.0) -> Path:
         """Append a move to ``p`` (optionally slower), then an optional pause; returns self."""
@@ -142,12 +149,13 @@ class Path:
         """Hold the path for ``dt`` [s]: every segment starts that much later."""
         self.t0 += dt
         self.segments = [replace(seg, t0=seg.t0 + dt) for seg in self.segments]
+        self._t_end = self.segments[-1].t_end if self.segments else self.t0
 
     def _append(self, seg: Segment) -> None:
         self.segments.append(seg)
+        self._t_end = seg.t_end
         delta = seg.p1 - seg.p0
         self._delta.append(delta)
-        self._floats.append((tuple(seg.p0.tolist()), tuple(delta.tolist())))
         self._rest.append(_rest_rows(seg.p1) if not delta.any() else None)
 
     def sample(self, t: float) -> FloatArray:
@@ -171,18 +179,100 @@ class Path:
         if t >= seg.t_end:  # past the end of the path: held at its end
             return _rest_rows(seg.p1)
         T = seg.base if seg.base > 0.0 else seg.duration
-        if self.shaper is None or seg.duration == T:
-            s0, s1, s2 = smoothstep9_scalar((t - seg.t0) / T, 2)
-        else:  # the smoothstep convolved with the shaper's impulses
-            s0 = s1 = s2 = 0.0
-            for ti, ai in zip(self.shaper.times, self.shaper.amplitudes, strict=True):
-                r0, r1, r2 = smoothstep9_scalar((t - seg.t0 - ti) / T, 2)
-                s0, s1, s2 = s0 + ai * r0, s1 + ai * r1, s2 + ai * r2
-        (x0, y0, z0), (dx, dy, dz) = self._floats[i]
-        a, b = s1 / T, s2 / (T * T)
-        # element-wise as p0 + s0 delta, a delta, b delta with numpy: the same bits
-        return np.array([[x0 + s0 * dx, y0 + s0 * dy, z0 + s0 * dz],
-                         [a * dx, a * dy, a * dz], [b * dx, b * dy, b * dz]])  # fmt: skip
+        shaped = self.shaper is not None and seg.duration != T
+        rows = _empty((3, 3))  # path_rows, inlined
+        path_rows_into(t, seg.t0, T, self._shaper_times if shaped else _UNSHAPED,
+                       self._shaper_amplitudes if shaped else _UNSHAPED, seg.p0,
+                       self._delta[i], rows)  # fmt: skip
+        return rows
+
+
+_UNSHAPED = np.empty(0)
+"""No shaper impulses: :func:`path_rows` takes the plain smoothstep."""
+
+
+def path_rows_reference(
+    t: float, t0: float, T: float, times: FloatArray, amplitudes: FloatArray,
+    p0: FloatArray, delta: FloatArray,
+) -> FloatArray:  # fmt: skip
+    """Rows (p, v, a) at ``t`` [s] of a move from ``p0`` by ``delta`` [m] started at
+    ``t0`` [s], the smoothstep of duration ``T`` [s] convolved with the impulses
+    (``times`` [s], ``amplitudes`` [-]) of a shaper, none (empty arrays): the plain
+    smoothstep. Plain Python floats, the reference of :func:`path_rows`."""
+    if times.shape[0] == 0:
+        s0, s1, s2 = smoothstep9_scalar((t - t0) / T, 2)
+    else:  # the smoothstep convolved with the shaper's impulses
+        s0 = s1 = s2 = 0.0
+        for ti, ai in zip(times.tolist(), amplitudes.tolist(), strict=True):
+            r0, r1, r2 = smoothstep9_scalar((t - t0 - ti) / T, 2)
+            s0, s1, s2 = s0 + ai * r0, s1 + ai * r1, s2 + ai * r2
+    x0, y0, z0 = p0.tolist()
+    dx, dy, dz = delta.tolist()
+    a, b = s1 / T, s2 / (T * T)
+    # element-wise as p0 + s0 delta, a delta, b delta with numpy: the same bits
+    return np.array([[x0 + s0 * dx, y0 + s0 * dy, z0 + s0 * dz],
+                     [a * dx, a * dy, a * dz], [b * dx, b * dy, b * dz]])  # fmt: skip
+
+
+@njit(cache=True)
+def _smoothstep2(tau: float) -> tuple[float, float, float]:  # pragma: no cover (compiled)
+    """:func:`~tetherland.planning.spline.smoothstep9_scalar` to order 2, compiled with
+    the same operations (``u ** 5.0``: the C library's pow, as Python's)."""
+    if tau <= 0.0 or tau >= 1.0:
+        return (0.0 if tau <= 0.0 else 1.0), 0.0, 0.0
+    u = tau
+    v = 1.0 - u
+    w = 1.0 - 2.0 * u
+    uv = u * v
+    u2v2 = uv * uv
+    s = u**5.0 * (126.0 + u * (-420.0 + u * (540.0 + u * (-315.0 + 70.0 * u))))
+    return s, 630.0 * u2v2 * u2v2, 2520.0 * u2v2 * uv * w
+
+
+def path_rows(
+    t: float, t0: float, T: float, times: FloatArray, amplitudes: FloatArray,
+    p0: FloatArray, delta: FloatArray,
+) -> FloatArray:  # fmt: skip
+    """:func:`path_rows_reference` compiled (:func:`path_rows_into`, the same operations in
+    the same order: the same bits; a test checks it): called at every control tick of
+    free flight. Float64 vectors (contiguous, writable) only."""
+    rows = _empty((3, 3))
+    path_rows_into(t, t0, T, times, amplitudes, p0, delta, rows)
+    return rows
+
+
+_empty = np.empty
+
+
+@njit(
+    "void(float64, float64, float64, float64[::1], float64[::1], float64[::1], float64[::1], "
+    "float64[:, ::1])",
+    cache=True,
+)
+def path_rows_into(
+    t: float, t0: float, T: float, times: FloatArray, amplitudes: FloatArray,
+    p0: FloatArray, delta: FloatArray, rows: FloatArray,
+) -> None:  # fmt: skip  # pragma: no cover (compiled)
+    """:func:`path_rows` written into ``rows`` (3, 3)."""
+    if (
+        p0.shape[0] != 3 or delta.shape[0] != 3 or rows.shape[0] != 3 or rows.shape[1] != 3
+        or amplitudes.shape[0] != times.shape[0]
+    ):  # fmt: skip
+        raise ValueError("p0 (3,), delta (3,), rows (3, 3), one amplitude per impulse time")
+    if times.shape[0] == 0:
+        s0, s1, s2 = _smoothstep2((t - t0) / T)
+    else:
+        s0 = s1 = s2 = 0.0
+        for k in range(times.shape[0]):
+            ai = amplitudes[k]
+            r0, r1, r2 = _smoothstep2((t - t0 - times[k]) / T)
+            s0, s1, s2 = s0 + ai * r0, s1 + ai * r1, s2 + ai * r2
+    a, b = s1 / T, s2 / (T * T)
+    for j in range(3):
+        d = delta[j]
+        rows[0, j] = p0[j] + s0 * d
+        rows[1, j] = a * d
+        rows[2, j] = b * d
 
 
 def _rest_rows(p: FloatArray) -> FloatArray:

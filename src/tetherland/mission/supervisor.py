@@ -111,6 +111,16 @@ first when the landers are within ``away_distance`` of it
 (:meth:`MissionSupervisor.near_surface`)."""
 
 
+_ENDED = frozenset({_P.SAFE_HOVER, _P.ABORTED, _P.DONE})
+"""Phases past an abort or the end: no further abort, no fault checks."""
+_PLANNED_TENSION = frozenset({_P.TETHERED_LANDING, _P.SPIN_UP, _P.TETHERED_TAKEOFF})
+"""Phases on a planned tethered trajectory: the snap rule gets the plan's tension."""
+# members as module constants: an enum member's class attribute lookup costs ~80 ns, and
+# the supervisor runs at the control rate
+_P_TETHERED_LANDING, _P_TETHERED_TAKEOFF = _P.TETHERED_LANDING, _P.TETHERED_TAKEOFF
+_FREE_FLIGHT = ControlMode.FREE_FLIGHT
+
+
 class TransitionError(TetherlandError):
     """The supervisor tried a phase change that :data:`TRANSITIONS` does not allow."""
 
@@ -165,6 +175,8 @@ class MissionSupervisor:
         self.fault: FaultDetection | None = None
         """The fault the monitor detected, if any."""
         self.monitor = FaultMonitor(scenario, self.geo)
+        self._airborne_after = cfg.settle_time + cfg.detection.airborne_delay
+        """Time from which the rotor rule may run (off the pad) [s]."""
         self._safe_land = False
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
@@ -258,13 +270,15 @@ class MissionSupervisor:
         else:
             rows = self._path.sample(t)
         if self._release_pull is not None:
-            rows = rows.copy()  # the path's rows are shared and read-only
+            if not rows.flags.writeable:  # the path's held rows are shared and read-only
+                rows = rows.copy()
             rows[2] += self._release_pull.feedforward(t, est, rows[0])
         elif self._thrust_loss is not None:
-            rows = rows.copy()
+            if not rows.flags.writeable:
+                rows = rows.copy()
             rows[2] += self._lost_thrust(est)
         return Reference(
-            t=t, mode=ControlMode.FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
+            t=t, mode=_FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
         )  # fmt: skip
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None,
@@ -408,23 +422,24 @@ class MissionSupervisor:
         if not math.isfinite(sum(body.p_W.tolist()) + sum(body.q_WB.tolist())):
             self.abort(t, est, "fault: the state estimate is not finite")
             return
-        if self.phase in (Phase.SAFE_HOVER, Phase.ABORTED, Phase.DONE):
+        phase = self.phase
+        if phase in _ENDED:
             return
         det = self.cfg.detection
-        airborne = t >= self.cfg.settle_time + det.airborne_delay and not (
-            self.phase == Phase.TETHERED_TAKEOFF and t < self._phase_start + det.airborne_delay
+        airborne = t >= self._airborne_after and not (
+            phase == _P_TETHERED_TAKEOFF and t < self._phase_start + det.airborne_delay
         )
         planned = None
-        if self.phase in (Phase.TETHERED_LANDING, Phase.SPIN_UP, Phase.TETHERED_TAKEOFF):
+        if phase in _PLANNED_TENSION:
             ff = ref.feedforward
             planned = ff.tension if ff is not None else 0.0  # off the plan: not needed
-        found = self.monitor.check(t, est, self.phase, airborne, planned)
+        found = self.monitor.check(t, est, phase, airborne, planned)
         if found is not None:
             self._on_fault(t, est, found)
             return
-        active = self.phase == Phase.TETHERED_LANDING or (
-            self.phase == Phase.TETHERED_TAKEOFF and self._track is not None
-            and t > self._track.track.t0 + self.cfg.detection.tethered_takeoff_delay
+        active = phase == _P_TETHERED_LANDING or (
+            phase == _P_TETHERED_TAKEOFF and self._track is not None
+            and t > self._track.track.t0 + det.tethered_takeoff_delay
         )  # fmt: skip
         if not active or est.link is None or self._track is None:
             self._slack.reset()
@@ -433,18 +448,18 @@ class MissionSupervisor:
             # the landers are at the surface and may carry the vehicle: a slackening cable
             # is expected there (flat ground, gentle slopes), not a fault
             self._slack.reset()
-        elif self._slack.update(t, self.cfg.detection.slack_tension - (est.tension or 0.0)):
+        elif self._slack.update(t, det.slack_tension - (est.tension or 0.0)):
             self.abort(
                 t,
                 est,
-                f"fault: cable slack (estimated tension < {self.cfg.detection.slack_tension} N)",
+                f"fault: cable slack (estimated tension < {det.slack_tension} N)",
                 away=True,
             )
             return
         if ref.output is None:
             return
         err = math.degrees(abs(ref.output[0, 0] - est.link.phi))
-        if err > self.cfg.detection.tracking_error_deg:
+        if err > det.tracking_error_deg:
             self.abort(t, est, f"fault: link tracking error {err:.1f} deg")
 
     # ------------------------------------------------------------------ ReferenceSource
