@@ -21,7 +21,7 @@ The drag's parameters are packed once per wrapper (:func:`pack_drag`, fields ``D
 
 Bits. The plain forms multiply 3x3 matrices by vectors with numpy, which hands them to
 BLAS. On this project's machines (OpenBLAS, x86-64 with FMA) ``R @ v`` of a C-ordered R
-rounds each row as fma(R_i0, v_0, fma(R_i1, v_1, R_i2 v_2)) and ``R.T @ v`` as the plain
+rounds each row as fma(R_i2, v_2, fma(R_i0, v_0, R_i1 v_1)) and ``R.T @ v`` as the plain
 sum left to right; the kernels do the same (:func:`fma`), so that the missions' logs keep
 the bits they had with the plain forms. Where a BLAS rounds otherwise, the two agree to
 rounding (tests/test_control_aero_kernels.py: exactly where this machine's BLAS rounds
@@ -254,7 +254,7 @@ def _drag_into(R: FloatArray, vx: float, vy: float, vz: float, ax: float, ay: fl
     az = az + GRAVITY
     k = math.sqrt(math.sqrt(ax * ax + ay * ay + az * az) / GRAVITY) / drag[DRAG_MASS]
     for i in range(3):  # R f_B, f_B = (fx, fy, 0)
-        out[i] = out[i] + fma(R[3 * i], fx, fma(R[3 * i + 1], fy, R[3 * i + 2] * 0.0)) * k
+        out[i] = out[i] + fma(R[3 * i + 2], 0.0, fma(R[3 * i], fx, R[3 * i + 1] * fy)) * k
 
 
 @njit(cache=True)
@@ -298,17 +298,17 @@ def link_drag_into(q_WB: FloatArray, Y: FloatArray, thrust: float,
     ly = length * (c1 * zy - c2 * yy)
     lz = length * (c1 * zz - c2 * yz)
     # v_W = R_WA l (...)
-    vx = fma(A[0], lx, fma(A[1], ly, A[2] * lz))
-    vy = fma(A[3], lx, fma(A[4], ly, A[5] * lz))
-    vz = fma(A[6], lx, fma(A[7], ly, A[8] * lz))
+    vx = fma(A[2], lz, fma(A[0], lx, A[1] * ly))
+    vy = fma(A[5], lz, fma(A[3], lx, A[4] * ly))
+    vz = fma(A[8], lz, fma(A[6], lx, A[7] * ly))
     scale = math.sqrt(thrust / (m * GRAVITY)) if thrust > 0.0 else 1.0
     bx = R[0] * vx + R[3] * vy + R[6] * vz  # v_B = R_WB^T v_W (x and y)
     by = R[1] * vx + R[4] * vy + R[7] * vz
     fx, fy = drag[_D_X] * bx, drag[_D_Y] * by
     # D_W = -(R_WB f_B) scale
-    dx = -fma(R[0], fx, fma(R[1], fy, R[2] * 0.0)) * scale
-    dy = -fma(R[3], fx, fma(R[4], fy, R[5] * 0.0)) * scale
-    dz = -fma(R[6], fx, fma(R[7], fy, R[8] * 0.0)) * scale
+    dx = -fma(R[2], 0.0, fma(R[0], fx, R[1] * fy)) * scale
+    dy = -fma(R[5], 0.0, fma(R[3], fx, R[4] * fy)) * scale
+    dz = -fma(R[8], 0.0, fma(R[6], fx, R[7] * fy)) * scale
     # D_L = R_AL^T R_WA^T D_W (its y and z)
     ux = A[0] * dx + A[3] * dy + A[6] * dz
     uy = A[1] * dx + A[4] * dy + A[7] * dz
