@@ -140,22 +140,28 @@ def believed_distance(px: float, py: float, pz: float, pack: FloatArray) -> floa
 
 
 @njit(cache=True)
+def rotmat_of(qw: float, qx: float, qy: float, qz: float) -> FloatArray:
+    """R_WB (3, 3) of the quaternion (qw, qx, qy, qz), normalised on the way (2 / |q|^2
+    in place of 2), with the bits of the rotation in
+    :func:`~tetherland.models.aero.aero_into` [-]."""
+    s2 = 2.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
+    xx, yy, zz = qx * qx, qy * qy, qz * qz
+    xy, xz, yz = qx * qy, qx * qz, qy * qz
+    wx, wy, wz = qw * qx, qw * qy, qw * qz
+    return np.array((
+        (1.0 - s2 * (yy + zz), s2 * (xy - wz), s2 * (xz + wy)),
+        (s2 * (xy + wz), 1.0 - s2 * (xx + zz), s2 * (yz - wx)),
+        (s2 * (xz - wy), s2 * (yz + wx), 1.0 - s2 * (xx + yy)),
+    ))  # fmt: skip
+
+
+@njit(cache=True)
 def believed_factors_into(px: float, py: float, pz: float, qw: float, qx: float, qy: float,
                           qz: float, pack: FloatArray, factors: FloatArray) -> None:  # fmt: skip
     """Believed factor of each rotor at the pose p_W = (px, py, pz) [m],
     q_WB = (qw, qx, qy, qz) [-], into ``factors`` (4,) [-]: :func:`aero_into` of the packed
     belief (:func:`pack_believed`), the same operations in the same order."""
-    s2 = 2.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
-    Rm = np.empty((3, 3))
-    Rm[0, 0] = 1.0 - s2 * (qy * qy + qz * qz)
-    Rm[0, 1] = s2 * (qx * qy - qw * qz)
-    Rm[0, 2] = s2 * (qx * qz + qw * qy)
-    Rm[1, 0] = s2 * (qx * qy + qw * qz)
-    Rm[1, 1] = 1.0 - s2 * (qx * qx + qz * qz)
-    Rm[1, 2] = s2 * (qy * qz - qw * qx)
-    Rm[2, 0] = s2 * (qx * qz - qw * qy)
-    Rm[2, 1] = s2 * (qy * qz + qw * qx)
-    Rm[2, 2] = 1.0 - s2 * (qx * qx + qy * qy)
+    Rm = rotmat_of(qw, qx, qy, qz)
     shapes = np.empty((1, SHAPE_WIDTH))
     shapes[0, :] = pack[B_SHAPE]
     loc = np.empty((1, 12))
