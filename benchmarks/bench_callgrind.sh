@@ -6,7 +6,8 @@ set -euo pipefail
 PY=${1:-.venv/bin/python}
 shift || true
 HERE=$(dirname "$0")
-WORKLOADS=${*:-"free_flight hierarchical dfl estimator aero believed plant mission"}
+
+WORKLOADS=${*:-"free_flight hierarchical dfl estimator aero believed compensation plant mission"}
 tmp=$(mktemp -d)
 for w in $WORKLOADS; do
     if [ "$w" = mission ]; then n=1; else n=2000; fi

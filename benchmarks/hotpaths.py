@@ -13,15 +13,21 @@ Workloads: ``free_flight``, ``hierarchical``, ``dfl`` (one controller update),
 tick), ``mission`` (the runner loop of N full slope50 missions, counted per control tick;
 prints the number of ticks), ``aero`` (the plant's surface-factor kernel ``aero_into``
 of slope50, cycling over poses near the slope, on the pad and at cruise height),
-``believed`` (the estimator's believed ground effect at the same poses) and ``plant``
-(one physics step of the slope50 plant, :meth:`Plant.step`, as the runner calls it: the
-command changed every second step, cycling over 16 starts near the slope with the cable
-engaged, each held for 64 steps; counted per physics step, the restarts included).
+``believed`` (the estimator's believed ground effect at the same poses),
+``compensation`` (the controller wrappers of a mission, rotor-drag feed-forward and
+ground-effect compensation, around a controller that returns fixed speeds: the same poses,
+moving, with free-flight references of 2 to 4 rows and tethered ones in turn) and
+``plant`` (one physics step of the slope50 plant, :meth:`Plant.step`, as the runner calls
+it: the command changed every second step, cycling over 16 starts near the slope with the
+cable engaged, each held for 64 steps; counted per physics step, the restarts included).
 ``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
 
 Measured (issue 25, exact culling in ``aero_into``, the same bits): ``aero`` 74.6k ->
 53.7k and ``believed`` 68.5k -> 56.1k instructions per call, main b01e26b -> i25-speed
-(the same workload file run against both source trees).
+(the same workload file run against both source trees). The believed aerodynamics
+compiled (one call per wrapper per tick, the belief's one shape, the same bits):
+``compensation`` 255.9k -> 84.6k and ``believed`` 55.7k -> 26.6k instructions per call,
+main 2900ad9 -> s25-ctrl-aero.
 """
 
 from __future__ import annotations
@@ -99,29 +105,15 @@ def _estimator():
 
 
 def _aero(name: str):
-    """One surface-factor evaluation per call, cycling over 64 poses: 48 on the normal of
-    the slope50 landing point, from the landed height to 1.5 m out, level and aligned
-    with the slope (as on the tethered landing), 8 on the start pad and 8 at 1.3 m above
-    it (no planner: quick under valgrind)."""
+    """One surface-factor evaluation per call, cycling over the 64 poses of
+    :func:`_poses`."""
     from tetherland.estimation.ground_effect import BelievedGroundEffect
-    from tetherland.geometry import LandingGeometry
     from tetherland.models.aero import aero_into
-    from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
     from tetherland.sim.plant import Plant
 
     sc = load_scenario("slope50")
-    geo = LandingGeometry.from_scenario(sc)
-    z_S = geo.surface.z_S
     plant = Plant(sc)
-    pad = plant.qpos.copy()
-    cruise = pad + np.array([0.0, 0.0, 1.3, 0.0, 0.0, 0.0, 0.0])
-    level, aligned = (
-        np.array([1.0, 0.0, 0.0, 0.0]),
-        rotmat_to_quat(rotation_from_z_and_yaw(z_S, 0.0)),
-    )
-    poses = [np.concatenate((geo.p_L + h * z_S, q))
-             for h in np.linspace(sc.vehicle.h_R, 1.5, 24) for q in (level, aligned)]  # fmt: skip
-    poses += [pad] * 8 + [cruise] * 8
+    poses = _poses(sc, plant)
     thrusts, v_W = np.full(4, 2.45), np.zeros(3)
     k = [0]
     if name == "believed":
@@ -170,8 +162,63 @@ def _plant():
         if i % 2 == 0:
             plant.command(commands[(i // 2) % 2])
         plant.step()
+def _compensation():
+    """The two controller wrappers of a mission (:func:`~tetherland.control.rotor_drag.
+    with_aero_belief`) around a controller that returns fixed speeds: one control tick per
+    call, cycling over the poses of :func:`_poses` (moving at 0.4 m/s toward the slope,
+    turning at 1 rad/s) and over free-flight references of 2, 3 and 4 rows and a
+    tethered one."""
+    from tetherland.control.rotor_drag import with_aero_belief
+    from tetherland.geometry import LandingGeometry
+    from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
+    from tetherland.state import RigidBodyState
+
+    class Fixed:
+        def update(self, t, estimate, reference):
+            return Command(np.full(4, 520.0), 9.0, np.zeros(3))
+
+    sc = load_scenario("slope50")
+    geo = LandingGeometry.from_scenario(sc)
+    ctrl = with_aero_belief(Fixed(), sc)
+    v_W, omega_B = -0.4 * geo.surface.z_S, np.array([0.3, -1.0, 0.2])
+    estimates = [
+        StateEstimate(t=0.0, body=RigidBodyState(q[0:3], v_W, q[3:7], omega_B))
+        for q in _poses(sc)
+    ]
+    rows = np.array([[0.1, 0.2, 1.0], [0.6, -0.3, 0.2], [0.3, 0.1, -0.4], [1.0, 0.5, 0.2]])
+    Y = np.array([[0.9, 0.1, 0.0, 0.0], [0.5, -0.3, 0.0, 0.0], [0.2, 0.1, 0.0, 0.0]])
+    references = [Reference(t=0.0, p_W=rows[:n]) for n in (2, 3, 4)]
+    references.append(Reference(t=0.0, mode=ControlMode.TETHERED, output=Y, thrust_ff=12.0))
+    k = [0]
+
+    def call() -> None:
+        k[0] += 1
+        i = k[0]
+        ctrl.update(0.0, estimates[i % len(estimates)], references[i % len(references)])
 
     return call
+
+
+def _poses(sc, plant=None) -> list:
+    """64 poses [p_W, q_WB]: 48 on the normal of the slope50 landing point, from the
+    landed height to 1.5 m out, level and aligned with the slope (as on the tethered
+    landing), 8 on the start pad and 8 at 1.3 m above it (no planner: quick under
+    valgrind)."""
+    from tetherland.geometry import LandingGeometry
+    from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
+    from tetherland.sim.plant import Plant
+
+    geo = LandingGeometry.from_scenario(sc)
+    z_S = geo.surface.z_S
+    pad = (Plant(sc) if plant is None else plant).qpos.copy()
+    cruise = pad + np.array([0.0, 0.0, 1.3, 0.0, 0.0, 0.0, 0.0])
+    level, aligned = (
+        np.array([1.0, 0.0, 0.0, 0.0]),
+        rotmat_to_quat(rotation_from_z_and_yaw(z_S, 0.0)),
+    )
+    poses = [np.concatenate((geo.p_L + h * z_S, q))
+             for h in np.linspace(sc.vehicle.h_R, 1.5, 24) for q in (level, aligned)]  # fmt: skip
+    return poses + [pad] * 8 + [cruise] * 8
 
 
 def _counted(fn) -> None:
@@ -207,6 +254,8 @@ def main() -> None:
         call = _aero(name)
     elif name == "plant":
         call = _plant()
+    elif name == "compensation":
+        call = _compensation()
     else:
         call = _estimator() if name == "estimator" else _controllers(name)
     for _ in range(50):

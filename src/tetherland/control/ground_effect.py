@@ -14,51 +14,28 @@ touchdown. The command therefore uses the factor at the pose predicted tau_m ahe
 (p + v tau_m, q exp(omega tau_m / 2)): to first order w_c = w_a + tau_m w_a' for the
 wanted acting speed w_a = w / sqrt(k), the same lead the controllers give their own
 thrust (:mod:`tetherland.control.tracking`).
+
+Each tick is one compiled call after the wrapped controller's
+(:func:`~tetherland.control.kernels.aero.ground_effect_speeds_into`; its plain form
+:func:`~tetherland.control.kernels.aero.ground_effect_speeds_reference`).
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
 from tetherland.config import Scenario
+from tetherland.control.kernels.aero import (
+    ground_effect_speeds_into,
+    predicted_attitude,
+    predicted_attitude_reference,
+)
 from tetherland.estimation.ground_effect import BelievedGroundEffect
-from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command, Controller, Reference, StateEstimate
-from tetherland.rotations import SMALL_ANGLE, quat_multiply, rotvec_to_quat
 
-
-def predicted_attitude(q_WB: FloatArray, omega_B: FloatArray, tau: float) -> list[float]:
-    """q_WB exp(tau omega_B / 2), normalised, as four floats [-] (scalar form, the same bits
-    as :func:`predicted_attitude_reference`).
-
-    ``omega_B`` in [rad/s], ``tau`` in [s].
-    """
-    w, x, y, z = np.asarray(q_WB, dtype=float).tolist()
-    ox, oy, oz = np.asarray(omega_B, dtype=float).tolist()
-    ax, ay, az = tau * ox, tau * oy, tau * oz
-    angle = math.sqrt(ax * ax + ay * ay + az * az)  # (np.linalg.norm's bits: a test checks)
-    if angle < SMALL_ANGLE:
-        bw, bx, by, bz = 1.0, 0.5 * ax, 0.5 * ay, 0.5 * az
-        n = math.sqrt(bw * bw + bx * bx + by * by + bz * bz)
-        bw, bx, by, bz = bw / n, bx / n, by / n, bz / n
-    else:
-        s = math.sin(0.5 * angle)
-        bw, bx, by, bz = math.cos(0.5 * angle), s * (ax / angle), s * (ay / angle), s * (az / angle)
-    qw = w * bw - x * bx - y * by - z * bz
-    qx = w * bx + x * bw + y * bz - z * by
-    qy = w * by - x * bz + y * bw + z * bx
-    qz = w * bz + x * by - y * bx + z * bw
-    n = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
-    return [qw / n, qx / n, qy / n, qz / n]
-
-
-def predicted_attitude_reference(q_WB: FloatArray, omega_B: FloatArray, tau: float) -> FloatArray:
-    """:func:`predicted_attitude` written plainly with the rotation helpers [-]."""
-    q = quat_multiply(q_WB, rotvec_to_quat(tau * np.asarray(omega_B, dtype=float)))
-    return q / np.linalg.norm(q)
+__all__ = ["GroundEffectCompensation", "predicted_attitude", "predicted_attitude_reference"]
 
 
 class GroundEffectCompensation:
@@ -80,22 +57,15 @@ class GroundEffectCompensation:
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         cmd = self.inner.update(t, estimate, reference)
-        w = np.asarray(cmd.rotor_speeds, dtype=float)
-        if not w.any():
-            return cmd
         b = estimate.body
-        tau = self.lead
-        # scalar form of the numpy reference below (a test checks the same bits):
-        # p = p_W + tau v_W, q = q_WB exp(tau omega_B / 2) normalised
-        px, py, pz = np.asarray(b.p_W, dtype=float).tolist()
-        vx, vy, vz = np.asarray(b.v_W, dtype=float).tolist()
-        px, py, pz = px + tau * vx, py + tau * vy, pz + tau * vz
-        ge = self.ground_effect
-        if ge._distance3(px, py, pz) > ge._far:
-            return cmd  # every believed factor is 1: the command as it is
-        k = ge.factors_at_pose([px, py, pz, *predicted_attitude(b.q_WB, b.omega_B, tau)])
+        w = np.empty(4)
+        if not ground_effect_speeds_into(
+            b.p_W, b.v_W, b.q_WB, b.omega_B, np.asarray(cmd.rotor_speeds, dtype=float),
+            self.lead, self.ground_effect.packed, w,
+        ):  # fmt: skip
+            return cmd  # motors off, or every believed factor 1: the command as it is
         # (the fields as dataclasses.replace would copy them, without its generic walk)
-        return Command(w / np.sqrt(k), cmd.thrust, cmd.torque_B, cmd.diagnostics)
+        return Command(w, cmd.thrust, cmd.torque_B, cmd.diagnostics)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.inner, name)

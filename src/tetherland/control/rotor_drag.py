@@ -30,66 +30,54 @@ rest), so the drag D of the reference velocity l (cos(delta) phi' z_L - delta' y
 cancelled by phi_d'' += -D.z_L / (m l cos(delta)) and delta_d'' += D.y_L / (m l).
 Without it the link integral absorbs the drag of the swing and carries that state into
 the touchdown (docs/aero.md).
+
+Each tick is one compiled call (:mod:`tetherland.control.kernels.aero`: the rows,
+:func:`~tetherland.control.kernels.aero.drag_rows_into`, or the link accelerations,
+:func:`~tetherland.control.kernels.aero.link_drag_into`), beside the plain forms
+:func:`drag_acceleration` and :func:`link_drag_acceleration` (defined there, and
+importable from here).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import replace
+import operator
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
 
-from tetherland import GRAVITY
 from tetherland.config import Scenario
 from tetherland.control.ground_effect import GroundEffectCompensation
-from tetherland.geometry import FloatArray, LandingGeometry, link_frame
+from tetherland.control.kernels.aero import (
+    drag_acceleration,
+    drag_rows_into,
+    link_drag_acceleration,
+    link_drag_into,
+    pack_drag,
+)
+from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, Controller, ControlMode, Reference, StateEstimate
-from tetherland.rotations import quat_to_rotmat
+
+__all__ = [
+    "RotorDragCompensation",
+    "drag_acceleration",
+    "link_drag_acceleration",
+    "replaced",
+    "with_aero_belief",
+]
+
+_FIELDS = tuple(f.name for f in fields(Reference))
+_VALUES = operator.attrgetter(*_FIELDS)
+_P_W, _OUTPUT = _FIELDS.index("p_W"), _FIELDS.index("output")
 
 
-def drag_acceleration(
-    R_WB: FloatArray, v_W: FloatArray, a_W: FloatArray, d_xy: FloatArray, mass: float
-) -> FloatArray:
-    """Acceleration [m/s^2] the thrust must add to fly at ``v_W`` [m/s] with acceleration
-    ``a_W`` [m/s^2] through the rotor drag diag(d_x, d_y, 0) [N s/m] (at the hover rotor
-    speed) of a vehicle of ``mass`` [kg] at attitude ``R_WB``.
-
-    The drag grows with the mean rotor speed, w / w_h = sqrt(f / (m g)) for the thrust
-    f = m ||a + g z_W|| that the acceleration needs.
-    """
-    v_B = R_WB.T @ np.asarray(v_W, dtype=float)
-    f_B = np.array([d_xy[0] * v_B[0], d_xy[1] * v_B[1], 0.0])
-    a = np.asarray(a_W, dtype=float).copy()
-    a[2] += GRAVITY
-    scale = math.sqrt(float(np.linalg.norm(a)) / GRAVITY)
-    return R_WB @ f_B * (scale / mass)
-
-
-def link_drag_acceleration(
-    R_WB: FloatArray, R_WA: FloatArray, Y: FloatArray, thrust: float, d_xy: FloatArray,
-    mass: float, length: float,
-) -> tuple[float, float]:  # fmt: skip
-    """(phi'', delta'') [rad/s^2] the tethered laws must add to fly the link reference
-    ``Y`` (rows y, y' of [phi, delta, ...]) through the rotor drag diag(d_x, d_y, 0)
-    [N s/m] at attitude ``R_WB``, for a vehicle of ``mass`` [kg] on a link of ``length``
-    [m] whose thrust is ``thrust`` [N] (the rotor-speed scale sqrt(thrust / (m g)); 0 or
-    less: the hover speed).
-
-    The centre of mass moves with the link end, v_A = l (cos(delta) phi' z_L - delta' y_L)
-    (the attachment offset's own motion is left out); the drag D = -R_WB diag(d) R_WB^T v
-    is cancelled across the link by phi'' += -D.z_L / (m l cos(delta)) and
-    delta'' += D.y_L / (m l).
-    """
-    phi, delta = float(Y[0, 0]), float(Y[0, 1])
-    R_AL = link_frame(phi, delta)
-    cd = math.cos(delta)
-    v_W = R_WA @ (length * (cd * float(Y[1, 0]) * R_AL[:, 2] - float(Y[1, 1]) * R_AL[:, 1]))
-    scale = math.sqrt(thrust / (mass * GRAVITY)) if thrust > 0.0 else 1.0
-    v_B = R_WB.T @ v_W
-    D_W = -(R_WB @ np.array([d_xy[0] * v_B[0], d_xy[1] * v_B[1], 0.0])) * scale
-    D_L = R_AL.T @ (R_WA.T @ D_W)
-    return -float(D_L[2]) / (mass * length * cd), float(D_L[1]) / (mass * length)
+def replaced(reference: Reference, field: int, value: Any) -> Reference:
+    """``dataclasses.replace(reference, <field>=value)`` for the field at position
+    ``field`` of :class:`Reference` (every other field copied), without replace's generic
+    walk of the fields (a control-rate path)."""
+    values = list(_VALUES(reference))
+    values[field] = value
+    return Reference(*values)
 
 
 class RotorDragCompensation:
@@ -111,6 +99,9 @@ class RotorDragCompensation:
         """Also the tethered references (``controller.rotor_drag_tethered``)."""
         geo = LandingGeometry.from_scenario(belief)
         self.R_WA, self.length = geo.R_WA, float(geo.link_length)
+        self.packed = pack_drag(self.d_xy, self.mass, self.length, self.R_WA)
+        """The drag packed for the compiled kernels
+        (:func:`~tetherland.control.kernels.aero.pack_drag`)."""
 
     def update(self, t: float, estimate: StateEstimate, reference: Reference) -> Command:
         if reference.drag_in_rows:  # a plan with the believed drag: its rows carry it
@@ -124,26 +115,15 @@ class RotorDragCompensation:
             ):  # fmt: skip
                 Y = np.array(Y, dtype=float)
                 thrust = reference.thrust_ff if reference.thrust_ff is not None else 0.0
-                a_phi, a_delta = link_drag_acceleration(
-                    quat_to_rotmat(estimate.body.q_WB), self.R_WA, Y, float(thrust), self.d_xy,
-                    self.mass, self.length,
-                )  # fmt: skip
+                a_phi, a_delta = link_drag_into(estimate.body.q_WB, Y, float(thrust), self.packed)
                 Y[2, 0] += a_phi
                 Y[2, 1] += a_delta
-                return self.inner.update(t, estimate, replace(reference, output=Y))
+                return self.inner.update(t, estimate, replaced(reference, _OUTPUT, Y))
             return self.inner.update(t, estimate, reference)
         rows = np.asarray(rows, dtype=float)
-        R_WB = quat_to_rotmat(estimate.body.q_WB)
-        a_W = rows[2] if len(rows) > 2 else np.zeros(3)
-        a_ff = drag_acceleration(R_WB, rows[1], a_W, self.d_xy, self.mass)
-        if len(rows) == 2:
-            rows = np.vstack((rows, a_ff))
-        else:
-            rows = rows.copy()
-            rows[2] += a_ff
-            if len(rows) > 3:  # its rate along the reference (attitude held): D a_ref / m
-                rows[3] += drag_acceleration(R_WB, a_W, a_W, self.d_xy, self.mass)
-        return self.inner.update(t, estimate, replace(reference, p_W=rows))
+        out = np.empty((max(len(rows), 3), 3))
+        drag_rows_into(estimate.body.q_WB, rows, self.packed, out)
+        return self.inner.update(t, estimate, replaced(reference, _P_W, out))
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.inner, name)
