@@ -162,6 +162,10 @@ def _plant():
         if i % 2 == 0:
             plant.command(commands[(i // 2) % 2])
         plant.step()
+
+    return call
+
+
 def _compensation():
     """The two controller wrappers of a mission (:func:`~tetherland.control.rotor_drag.
     with_aero_belief`) around a controller that returns fixed speeds: one control tick per
