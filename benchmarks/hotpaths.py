@@ -26,10 +26,11 @@ Measured (issue 25, exact culling in ``aero_into``, the same bits): ``aero`` 74.
 53.7k and ``believed`` 68.5k -> 56.1k instructions per call, main b01e26b -> i25-speed
 (the same workload file run against both source trees). The believed aerodynamics
 compiled (one call per wrapper per tick, the belief's one shape, the same bits):
-``compensation`` 255.9k -> 84.6k and ``believed`` 55.7k -> 26.6k instructions per call,
-main 2900ad9 -> s25-ctrl-aero. The plant's step (sim/step_kernel.py, no row views in the
-aero kernel's ray loop; the same bits): ``aero`` 53.7k -> 34.5k instructions per call and
-``plant`` 170.9k -> 136.0k per physics step, main 2900ad9 -> s25-plant.
+``compensation`` 255.9k -> 84.6k, ``believed`` 55.7k -> 26.6k and ``estimator`` 280.5k ->
+234.0k instructions per call, main 2900ad9 -> s25-ctrl-aero. The plant's step
+(sim/step_kernel.py, no row views in the aero kernel's ray loop; the same bits): ``aero``
+53.7k -> 34.5k instructions per call and ``plant`` 170.9k -> 136.0k per physics step, main
+2900ad9 -> s25-plant.
 """
 
 from __future__ import annotations
