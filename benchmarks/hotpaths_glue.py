@@ -17,7 +17,7 @@ Measured (issue 25, N = 2000, main 2900ad9 -> s25-mission 272a5f2, the same work
 against both source trees): ``rotation`` 20.8k -> 5.7k (compiled, the matrix allocated in
 Python), ``path`` 22.8k -> 11.5k (compiled rows), ``faults`` 21.8k -> 21.8k (a compiled
 attachment geometry measured 22.1k: its call costs what the arithmetic does, so it stays
-in Python).
+in Python), ``estimator`` 278.4k -> 265.6k.
 """
 
 from __future__ import annotations
