@@ -845,8 +845,8 @@ class MissionSupervisor:
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
         """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
         free clears the bar, then fly over it to the hooking start. If the hook still sits
-        on the bar, the climb draws the line taut: the measured tension shows it
-        (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
+        on the bar, the climb draws the line taut: the measured tension above
+        ``mission.stretch.tension_threshold`` for ``tension_dwell`` shows it (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
         wp, cfg = self.wp, self.cfg
         climb = np.array([*slack[:2], wp.hook_start[2]])
         self._path = (
@@ -855,6 +855,7 @@ class MissionSupervisor:
             .to(wp.hook_start, pause=cfg.settle_time)
         )
         self._climb_slack = slack.copy()
+        self._taut.reset()
         self._enter(Phase.UNHOOK, t, "cable slack: climbing clear of the bar")
         return self._free(t, est)
 
@@ -864,8 +865,11 @@ class MissionSupervisor:
             self._let_go_of_magnet(t, est)
             return self._free(t, est)
         slack = self._climb_slack
-        if slack is not None and (est.tension or 0.0) > cfg.stretch.tension_threshold:
-            # the hook still sits on the bar: back to slack and the reverse pass under it
+        if slack is not None and self._taut.update(t, est.tension or 0.0):
+            # the hook still sits on the bar (the tension held over the stretch's dwell: a
+            # hook that just fell off the bar snatches the line at the bottoms of its
+            # swing, 1.26 N for a few ms on slope50 seed 2, and was passed under the bar
+            # and caught again): back to slack and the reverse pass under it
             self._climb_slack = None
             *corners, last = unhooking_path(slack, wp.unhook_entry, wp.hook_start,
                                             back_off=False)  # fmt: skip
