@@ -3,6 +3,7 @@ and an anchoring cable on posts, in contact (docs/mechanism.md)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import mujoco
@@ -423,7 +424,7 @@ def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> Non
     x = np.array([*geo.R_WA[:2, 0], 0.0])
     x /= np.linalg.norm(x)
     np.testing.assert_allclose(mirror, wp.hook_end + 2.0 * m.pass_offset * x, atol=1e-12)
-    np.testing.assert_allclose(seat, mirror + [0.0, 0.0, m.pass_depth], atol=1e-12)
+    np.testing.assert_allclose(seat, mirror + m.pass_depth * np.array([0.0, 0.0, 1.0]), atol=1e-12)
     assert v0 is None and v1 == m.lift_speed
     # the seat: the attachment (l - (shank - hook_radius - bar_radius)) + shank above the
     # seated crown, i.e. l + hook_radius + bar_radius above the bar's axis, pass_offset aside
@@ -436,7 +437,7 @@ def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> Non
     for c, speed in arc:
         assert speed is None
         assert float(np.linalg.norm(c + wp.attachment_W - geo.p_A)) == pytest.approx(r, abs=1e-9)
-    for a, b in zip(corners[1:-1], corners[2:], strict=True):
+    for a, b in itertools.pairwise(corners):
         mid = 0.5 * (a + b) + wp.attachment_W - geo.p_A
         assert r - float(np.linalg.norm(mid)) <= m.hook_tip_length / 3.0 + 1e-12
     d_end = arc[-1][0] + wp.attachment_W - geo.p_A

@@ -846,7 +846,8 @@ class MissionSupervisor:
         """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
         free clears the bar, then fly over it to the hooking start. If the hook still sits
         on the bar, the climb draws the line taut: the measured tension above
-        ``mission.stretch.tension_threshold`` for ``tension_dwell`` shows it (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
+        ``mission.stretch.tension_threshold`` for ``tension_dwell`` shows it
+        (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
         wp, cfg = self.wp, self.cfg
         climb = np.array([*slack[:2], wp.hook_start[2]])
         self._path = (
