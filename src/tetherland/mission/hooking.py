@@ -346,3 +346,51 @@ def unhook_depth(scenario: Scenario) -> float:
     if scenario.mechanism.kind == "bar":
         return scenario.mechanism.release_depth
     return scenario.mission.hooking.unhook_depth
+
+
+def bar_seating_path(
+    scenario: Scenario, p_A_W: FloatArray, x_A_W: FloatArray, hook_end_W: FloatArray,
+    stretch_W: FloatArray, attachment_W: FloatArray,
+) -> list[tuple[FloatArray, float | None]]:  # fmt: skip
+    """The bar mechanism's take-up after the hooking pass, up to (not including) the
+    stretch: centre-of-mass corners F_W [m] with their speeds [m/s] (None: the take-up's).
+
+    1. Level to the pass's mirror across the bar (2 ``pass_offset`` along the horizontal
+       part of ``x_A_W``): the same distance from the bar, the line is not pulled and its
+       shank comes to lie against the bar, an arm under it.
+    2. Seat: climb ``pass_depth`` at ``lift_speed``. The crook reaches the bar's bottom
+       after ``pass_depth - hook_radius - bar_radius`` (the crown that far under the bar's
+       axis when seated); the rest lifts the hook by its crook against the bar, so that
+       the line comes just taut over a seated hook.
+    3. Swing down around the anchor at the radius where the crook just touches the bar
+       (the seat's distance from p_A less ``hook_radius + bar_radius``), to the
+       direction of the stretch point: the line stays nearly taut and rolls the seated
+       hook over the bar. Descending straight from the mirror slackened the line and
+       the hook dropped off the bar's side (slope50, seeds 0-3). The arc is flown as
+       chords whose sagitta is at most a third of ``hook_tip_length``, so that the hook
+       drops at most that much from its crook.
+
+    The stretch then goes straight out along that direction (no slack point inside
+    the cable length: moving in let a seated hook slide off when pulled again).
+    """
+    m = scenario.mechanism
+    x = np.array([x_A_W[0], x_A_W[1], 0.0])
+    mirror = np.asarray(hook_end_W, float) + 2.0 * m.pass_offset * x / np.linalg.norm(x)
+    seat = mirror + np.array([0.0, 0.0, m.pass_depth])
+    a0 = seat + attachment_W - p_A_W
+    a1 = np.asarray(stretch_W, float) + attachment_W - p_A_W
+    r = float(np.linalg.norm(a0)) - (m.hook_radius + m.bar_radius)
+    u0, u1 = a0 / np.linalg.norm(a0), a1 / np.linalg.norm(a1)
+    cos_ang = float(np.clip(u0 @ u1, -1.0, 1.0))
+    ang = math.acos(cos_ang)
+    path: list[tuple[FloatArray, float | None]] = [(mirror, None), (seat, m.lift_speed)]
+    if ang < 1e-9:
+        return path
+    w = u1 - cos_ang * u0
+    w /= np.linalg.norm(w)
+    chord = 2.0 * math.acos(1.0 - m.hook_tip_length / (3.0 * r))  # angle of one chord
+    n = max(1, math.ceil(ang / chord))
+    for k in range(1, n + 1):
+        th = ang * k / n
+        path.append((p_A_W + r * (math.cos(th) * u0 + math.sin(th) * w) - attachment_W, None))
+    return path

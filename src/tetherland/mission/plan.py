@@ -20,6 +20,7 @@ from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.geometry import FloatArray, LandingGeometry, link_direction
 from tetherland.mission.hooking import (
+    bar_seating_path,
     check_pass,
     hooking_pass,
     hooking_pass_for,
@@ -348,6 +349,21 @@ def unhook_reach(
     return geo.p_A - wp.attachment_W, scenario.tether.length - SLACK_MIN
 
 
+def take_up_path(
+    scenario: Scenario, geo: LandingGeometry, wp: Waypoints
+) -> list[tuple[FloatArray, float | None]]:
+    """The take-up after the hooking pass up to the stretch (not included): centre-of-mass
+    corners F_W [m] and their speeds [m/s] (None: the take-up's). The slack point, or with
+    the bar the seating path (:func:`tetherland.mission.hooking.bar_seating_path`); the
+    magnet's pull-out is left out (a few centimetres). The path of
+    :mod:`tetherland.mission.supervisor`."""
+    if scenario.mechanism.kind == "bar":
+        return bar_seating_path(
+            scenario, geo.p_A, geo.R_WA[:, 0], wp.hook_end, wp.stretch, wp.attachment_W
+        )
+    return [(wp.slack_out, None)]
+
+
 def free_flight_legs(
     scenario: Scenario, geo: LandingGeometry, wp: Waypoints, d_T_W: FloatArray
 ) -> dict[str, list[FloatArray]]:
@@ -365,7 +381,7 @@ def free_flight_legs(
     release = geo.p_A + wp.release_distance * d_T_W - wp.attachment_W
     return {
         "approach": [top, np.array([*top[:2], wp.z_safe]), over_hook, wp.hook_start],
-        "stretch": [wp.hook_end, wp.slack_out, wp.stretch],
+        "stretch": [wp.hook_end, *(c for c, _ in take_up_path(scenario, geo, wp)), wp.stretch],
         "release": unhooking_path(
             release, wp.unhook_entry, wp.hook_start, unhook_reach(scenario, geo, wp),
             back_off=scenario.mechanism.kind != "bar",
@@ -439,7 +455,12 @@ def mission_time_bound(
         ([wp.start, top], fly.cruise_speed),
         (legs["approach"], fly.cruise_speed),
         ([wp.hook_start, wp.hook_end], hook.speed),
-        ([wp.hook_end, wp.slack_out], take_up),
+        *(
+            ([a, b], speed or take_up)
+            for (a, _), (b, speed) in itertools.pairwise(
+                [(wp.hook_end, None), *take_up_path(scenario, geo, wp)]
+            )
+        ),
         (legs["release"], hook.speed),
         (legs["return"], fly.cruise_speed),
         ([top, pad], hook.speed),

@@ -59,6 +59,7 @@ from tetherland.mission.contact import (
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
     SHORTEST_LEG,
+    bar_seating_path,
     lift_off_band,
     magnet_drop_point,
     magnet_pull_out_path,
@@ -521,17 +522,21 @@ class MissionSupervisor:
             self._path = self._new_path(t, wp.hook_end, take_up)
             m = self.scenario.mechanism
             if m.kind == "bar":
-                # level first, to the mirror of the pass across the bar (same distance
-                # from it: the line is not pulled): the line meets the bar above the
-                # hook's eye before the vehicle descends (descending at once let the hook
-                # drop under the bar on pipe60)
-                x = np.array([*self.geo.R_WA[:2, 0], 0.0])
-                self._path.to(wp.hook_end + 2.0 * m.pass_offset * x / np.linalg.norm(x))
+                # level to the pass's mirror across the bar, climb to seat the hook in its
+                # crook, then swing down around the anchor with the line nearly taut
+                # (descending at once let the hook drop off the bar)
+                for corner, speed in bar_seating_path(
+                    self.scenario, self.geo.p_A, self.geo.R_WA[:, 0], wp.hook_end,
+                    wp.stretch, wp.attachment_W,
+                ):  # fmt: skip
+                    self._path.to(corner, speed=speed)
             if self._magnet:  # straight back first: out of the clip, not along the plate
                 for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
                     self._path.to(corner)
                 self._path.delay(m.epm_on_time)  # pressed on the plate while it switches on
-            self._path.to(wp.slack_out).to(wp.stretch, speed=cfg.stretch.speed)
+            if m.kind != "bar":  # the bar's seating swing ends nearly taut: no slack point
+                self._path.to(wp.slack_out)
+            self._path.to(wp.stretch, speed=cfg.stretch.speed)
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
@@ -840,7 +845,8 @@ class MissionSupervisor:
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
         """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
         free clears the bar, then fly over it to the hooking start. If the hook still sits
-        on the bar, the climb draws the line taut: the measured tension shows it
+        on the bar, the climb draws the line taut: the measured tension above
+        ``mission.stretch.tension_threshold`` for ``tension_dwell`` shows it
         (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
         wp, cfg = self.wp, self.cfg
         climb = np.array([*slack[:2], wp.hook_start[2]])
@@ -850,6 +856,7 @@ class MissionSupervisor:
             .to(wp.hook_start, pause=cfg.settle_time)
         )
         self._climb_slack = slack.copy()
+        self._taut.reset()
         self._enter(Phase.UNHOOK, t, "cable slack: climbing clear of the bar")
         return self._free(t, est)
 
@@ -859,8 +866,11 @@ class MissionSupervisor:
             self._let_go_of_magnet(t, est)
             return self._free(t, est)
         slack = self._climb_slack
-        if slack is not None and (est.tension or 0.0) > cfg.stretch.tension_threshold:
-            # the hook still sits on the bar: back to slack and the reverse pass under it
+        if slack is not None and self._taut.update(t, est.tension or 0.0):
+            # the hook still sits on the bar (the tension held over the stretch's dwell: a
+            # hook that just fell off the bar snatches the line at the bottoms of its
+            # swing, 1.26 N for a few ms on slope50 seed 2, and was passed under the bar
+            # and caught again): back to slack and the reverse pass under it
             self._climb_slack = None
             *corners, last = unhooking_path(slack, wp.unhook_entry, wp.hook_start,
                                             back_off=False)  # fmt: skip
