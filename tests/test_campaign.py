@@ -423,3 +423,23 @@ def test_a_record_keeps_the_cpu_time_of_its_run_alone(monkeypatch):
     monkeypatch.setattr(jobs, "_analysis_verdict", idle)
     record, _ = jobs.run_job(job)
     assert record["wall_time_s"] >= 0.3 > record["cpu_time_s"] + 0.2
+
+
+@pytest.mark.parametrize("e_h", [0.008, -0.009])
+def test_a_bar_anchor_height_error_moves_the_believed_bar_and_not_the_plants(e_h):
+    """mechanism.kind = "bar": the anchor is the bar's axis, so a height error e_h puts the
+    believed bar at standoff + e_h (0.15 m + e_h, well above bar_radius + 2 hook_radius);
+    the plant keeps the true bar at 0.15 m."""
+    from tetherland.config import scenario_from_dict
+
+    data = load_scenario("slope50").model_dump(mode="python")
+    data["mechanism"]["kind"], data["anchor"]["h_A"] = "bar", 0.0  # "on the surface"
+    truth = scenario_from_dict(data, "slope50")
+    standoff = truth.mechanism.standoff
+    assert truth.anchor.h_A == standoff
+    plant, belief = apply_perturbation(truth, Perturbation(anchor_error_S=(0.0, 0.0, e_h)))
+    assert belief.mechanism.standoff == pytest.approx(standoff + e_h, abs=1e-15)
+    assert belief.anchor.h_A == pytest.approx(standoff + e_h, abs=1e-15)
+    g_belief = LandingGeometry.from_scenario(belief)
+    assert g_belief.surface.height(g_belief.p_A) == pytest.approx(standoff + e_h, abs=1e-12)
+    assert plant.mechanism == truth.mechanism and plant.anchor == truth.anchor

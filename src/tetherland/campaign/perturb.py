@@ -20,6 +20,9 @@ from tetherland.geometry import LandingGeometry
 from tetherland.randomness import RandomSource
 from tetherland.surface import normal_from_slope, surface_frame
 
+BAR_STANDOFF_MARGIN = 1e-3
+"""Least believed clearance of the bar beyond ``bar_radius + 2 hook_radius`` [m]."""
+
 
 @dataclass(frozen=True)
 class Gust:
@@ -174,7 +177,9 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
     ``pipe_radius_error``, and the believed anchor is off along x_S and y_S and lies at
     h_A + ``anchor_error_S[2]`` above the believed surface. A believed anchor is never
     behind the believed surface (the mechanism stands on it): a height below zero is
-    believed zero.
+    believed zero. With ``mechanism.kind = "bar"`` the anchor is the bar's axis, so the
+    believed bar's ``standoff`` is the believed h_A (at least ``bar_radius + 2 hook_radius``
+    + 1 mm); the plant keeps the true bar.
     """
     plant = truth.model_dump(mode="python")
     sensors = plant["sensors"]
@@ -208,6 +213,12 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
     p_A = geo.p_A + geo.surface.x_S * e_x + geo.surface.y_S * e_y
     # the believed anchor at its believed height above the believed surface
     h_A = max(truth.anchor.h_A + e_h, 0.0)
+    if truth.mechanism.kind == "bar":
+        # the anchor is the bar's axis: the believed bar stands at the believed height, and
+        # never nearer the surface than its own geometry allows (the field's lower bound)
+        m = truth.mechanism
+        h_A = max(h_A, m.bar_radius + 2.0 * m.hook_radius + BAR_STANDOFF_MARGIN)
+        belief["mechanism"]["standoff"] = h_A
     p_A = p_A - (z_S @ (p_A - origin) - h_A) * z_S
     belief["anchor"] = {"position": tuple(p_A), "landing_point": None, "h_A": h_A}
     return scenario_from_dict(plant, truth.name), scenario_from_dict(belief, truth.name)
