@@ -443,3 +443,27 @@ def test_a_bar_anchor_height_error_moves_the_believed_bar_and_not_the_plants(e_h
     g_belief = LandingGeometry.from_scenario(belief)
     assert g_belief.surface.height(g_belief.p_A) == pytest.approx(standoff + e_h, abs=1e-12)
     assert plant.mechanism == truth.mechanism and plant.anchor == truth.anchor
+
+
+def test_hooking_counts_count_every_attempt_and_the_runs_lost_or_held():
+    """Three tethered runs at one point (a bounce then a catch that came off under load;
+    a catch never released; two misses) and a contact-free run without hooking."""
+    from tetherland.campaign.report import hooking_counts
+
+    def rec(method, value, hooking):
+        return {"run_id": "x", "method": method, "sweep_value": value, "status": "ok",
+                "verdict": {"success": False, "hooking": hooking}}  # fmt: skip
+
+    records = [
+        rec("tethered", 20.0, {"outcome": "caught", "release": "not_tried", "t_lost": 81.2,
+                               "attempts": ["bounced", "caught"]}),
+        rec("tethered", 20.0, {"outcome": "caught", "release": "not_released", "t_lost": None,
+                               "attempts": ["caught"]}),
+        rec("tethered", 20.0, {"outcome": "missed", "release": "not_tried", "t_lost": None,
+                               "attempts": ["missed", "missed"]}),
+        rec("free-flight", 20.0, None),
+    ]  # fmt: skip
+    (h,) = hooking_counts(records)
+    assert (h.method, h.sweep_value, h.runs) == ("tethered", 20.0, 3)
+    assert h.attempts == {"bounced": 1, "caught": 2, "missed": 2}
+    assert (h.lost, h.not_released) == (1, 1)

@@ -176,11 +176,23 @@ def campaign_fields(result: RunResult) -> dict[str, Any]:
         "failures": [f.to_dict() for f in explain(summary, result.log, result.record)],
         "landing": {k: landing.get(k) for k in _LANDING_KEYS}
         | {"conditions": landing.get("conditions")},
+        "hooking": _hooking_fields(summary.get("hooking")),
         "takeoff_completed": summary["takeoff"].get("completed", False),
         "return_completed": summary["return"].get("completed", False),
         "sim_time_s": summary["sim_time_s"],
         "real_time_factor": summary["real_time_factor"],
     }
+
+
+def _hooking_fields(hooking: dict[str, Any] | None) -> dict[str, Any] | None:
+    """A campaign record's hooking: the last attempt's outcome, the release, when a hook
+    caught for the landing came off (``t_lost``) and every attempt's outcome (the plant's
+    truth, :mod:`tetherland.verdict.hooking`)."""
+    if hooking is None:
+        return None
+    return {"outcome": hooking["outcome"], "release": hooking["release"],
+            "t_lost": hooking["t_lost"],
+            "attempts": [a["outcome"] for a in hooking["attempts"]]}  # fmt: skip
 
 
 def firmware_loop(firmware: str | None) -> InnerLoopFactory | None:

@@ -1,5 +1,6 @@
 """What a campaign directory says: success by point with 95 % intervals, failures by kind
-and phase, faults by phase, and the figures (``tetherland campaign report DIR``).
+and phase, hooking attempts by outcome, faults by phase, and the figures
+(``tetherland campaign report DIR``).
 
 The report is read from the directory alone (``campaign.json`` and ``results.jsonl``), so
 it can be made of a finished, interrupted or running campaign.
@@ -75,6 +76,55 @@ def failure_groups(records: list[dict[str, Any]]) -> list[FailureGroup]:
 
 
 @dataclass(frozen=True)
+class HookingCounts:
+    """The hooking attempts of one method at one point, on the plant's truth
+    (:mod:`tetherland.verdict.hooking`).
+
+    Attributes
+    ----------
+    method : str
+    sweep_value : float or None
+    runs : int
+        Runs that flew at least one hooking pass.
+    attempts : dict
+        Attempts by outcome (``caught``, ``bounced``, ``wrong_side``, ``tangled``,
+        ``missed``).
+    lost : int
+        Runs whose hook, caught for the landing, came off before the release.
+    not_released : int
+        Runs whose hook was still caught after the robot's release.
+    """
+
+    method: str
+    sweep_value: float | None
+    runs: int
+    attempts: dict[str, int]
+    lost: int
+    not_released: int
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def hooking_counts(records: list[dict[str, Any]]) -> list[HookingCounts]:
+    """Hooking attempts by outcome per method and point (runs without a hooking record,
+    e.g. contact-free, or from before it, are left out)."""
+    points: dict[tuple[str, float | None], list[dict[str, Any]]] = defaultdict(list)
+    for r in records:
+        h = (r.get("verdict") or {}).get("hooking") if r.get("status") == "ok" else None
+        if h and h.get("attempts"):
+            points[(r["method"], r.get("sweep_value"))].append(h)
+    out = []
+    for (method, value), hs in points.items():
+        counts = Counter(a for h in hs for a in h["attempts"])
+        out.append(HookingCounts(
+            method, value, len(hs), dict(counts), sum(h.get("t_lost") is not None for h in hs),
+            sum(h.get("release") == "not_released" for h in hs),
+        ))  # fmt: skip
+    return out
+
+
+@dataclass(frozen=True)
 class CampaignReport:
     """A campaign directory read back.
 
@@ -93,6 +143,8 @@ class CampaignReport:
         Fault campaigns: fault kind -> phase at the fault time -> outcome -> runs.
     lost : list of str
         Runs lost to the infrastructure (``--resume`` runs them).
+    hooking : list of HookingCounts
+        Hooking attempts by outcome per method and point (plant truth).
     """
 
     directory: Path
@@ -103,6 +155,7 @@ class CampaignReport:
     failures: list[FailureGroup]
     faults: dict[str, dict[str, dict[str, int]]] | None
     lost: list[str]
+    hooking: list[HookingCounts]
 
     @property
     def complete(self) -> bool:
@@ -134,6 +187,7 @@ class CampaignReport:
             directory=path, spec=spec, total=len(order), records=records,
             rates=summarize(records), failures=failure_groups(records),
             faults=fault_table(records) if spec.faults else None, lost=lost,
+            hooking=hooking_counts(records),
         )  # fmt: skip
 
     def outcomes(self) -> dict[str, int]:
@@ -167,6 +221,7 @@ class CampaignReport:
             "outcomes": self.outcomes(),
             "rates": [s.to_dict() for s in self.rates],
             "failures": [g.to_dict() for g in self.failures],
+            "hooking": [h.to_dict() for h in self.hooking],
             **({"faults": self.faults} if self.faults is not None else {}),
             "kept_runs": [r["run_id"] for r in self.records if r.get("run_dir")],
         }

@@ -269,6 +269,26 @@ def _failure_table(report: CampaignReport) -> Table:
     return table
 
 
+HOOKING_KINDS = ("caught", "bounced", "wrong_side", "tangled", "missed")
+
+
+def _hooking_table(report: CampaignReport) -> Table:
+    table = Table(title="Hooking attempts on the plant's truth (runs: lost = came off under "
+                        "load, held = not released)")  # fmt: skip
+    spec = report.spec
+    cols = ("method", spec.sweep.key if spec.sweep else "point", "runs", *HOOKING_KINDS,
+            "lost", "held")  # fmt: skip
+    for col in cols:
+        table.add_column(col.replace("_", " "))
+    for h in report.hooking:
+        table.add_row(
+            h.method, "-" if h.sweep_value is None else f"{h.sweep_value:g}", str(h.runs),
+            *(str(h.attempts.get(k, 0)) for k in HOOKING_KINDS), str(h.lost),
+            str(h.not_released),
+        )  # fmt: skip
+    return table
+
+
 def _fault_table(counts: dict[str, dict[str, dict[str, int]]]) -> Table:
     table = Table(title="Faults: phase at the fault time x outcome (runs)")
     for col in ("fault", "phase", "outcomes"):
@@ -285,6 +305,8 @@ def print_report(report: CampaignReport, *, figures: bool) -> dict[str, Path]:
     console.print(_rates_table(report))
     if report.failures:
         console.print(_failure_table(report))
+    if report.hooking:
+        console.print(_hooking_table(report))
     if report.faults is not None:
         console.print(_fault_table(report.faults))
     return report.draw() if figures and report.records else {}

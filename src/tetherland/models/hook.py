@@ -24,6 +24,7 @@ from tetherland.geometry import FloatArray
 
 if TYPE_CHECKING:
     from tetherland.config import Scenario
+    from tetherland.config.mechanism import MechanismConfig
 
 
 def hook_offset(n_W: FloatArray, hook_drop: float) -> FloatArray:
@@ -57,6 +58,15 @@ def bar_hook_offset(x_A_W: FloatArray, line_length: float, hook_shank: float,
     x = np.array([x_A_W[0], x_A_W[1], 0.0])
     x /= np.linalg.norm(x)
     return np.array([0.0, 0.0, -(line_length + hook_shank)]) + pass_offset * x
+
+
+def bar_near_distance(mechanism: MechanismConfig) -> float:
+    """Farthest the hook's crown can be from the bar's axis with a part of the hook still
+    touching the bar: the tips' reach from the shank (``outer_reach``) plus a tip's length
+    (the crown to a tip's end) plus the two radii [m]. The plant's catch rule and the
+    judge's hooking classification both use it."""
+    m = mechanism
+    return m.outer_reach + m.hook_tip_length + m.hook_radius + m.bar_radius
 
 
 def swing_period(line_length: float, hook_shank: float) -> float:

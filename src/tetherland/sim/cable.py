@@ -33,6 +33,7 @@ from scipy.optimize import least_squares
 
 from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray
+from tetherland.models.hook import bar_near_distance
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.mjcf import (
     CABLE_GROUP_HIDDEN,
@@ -600,7 +601,7 @@ class HangingLine:
         self._bar_mid: tuple[float, ...] = (0.0, 0.0, 0.0)
         self._bar_dir: tuple[float, ...] = (0.0, 1.0, 0.0)
         self._bar_half = 0.5 * mech.bar_length
-        near = mech.outer_reach + mech.hook_tip_length + mech.hook_radius + mech.bar_radius
+        near = bar_near_distance(mech)
         self._near2 = near * near
         self._set_armature(0.0)
 

@@ -57,6 +57,7 @@ from tetherland.geometry import LandingGeometry
 from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
 from tetherland.sim.log import RunStatus, SimLog
 from tetherland.sim.mjcf import FRAME_PARTS
+from tetherland.verdict.hooking import judge_hooking
 from tetherland.verdict.record import RunRecord
 from tetherland.verdict.touchdown import Touchdowns, find_touchdowns
 
@@ -482,6 +483,10 @@ def judge(log: SimLog, record: RunRecord) -> Verdict:
         "phases": [p.to_dict() for p in record.phases],
         "times": dict(record.times),
         "hook": _hook(log, record),
+        "hooking": (
+            None if record.hook_attempts is None or "hook_p_W" not in log
+            else judge_hooking(log, record, truth).to_dict()
+        ),
         "landing": landing,
         "takeoff": takeoff,
         "return": ret,
