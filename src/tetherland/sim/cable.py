@@ -35,6 +35,7 @@ from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray
 from tetherland.models.hook import bar_near_distance
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.line_drag import line_drag_into, link_drag_factor
 from tetherland.sim.mjcf import (
     CABLE_GROUP_HIDDEN,
     CABLE_GROUP_VISIBLE,
@@ -536,7 +537,10 @@ class HangingLine:
     armature follows the tension as the chain's does (:class:`ChainCable`): a few grams of
     line pulled by tens of newtons would swing faster than the step resolves. The line and
     hook get the vehicle's ``body_invweight0``, so that their contacts and joints are as
-    stiff as the vehicle's (the taut line's true inverse inertia is the vehicle's).
+    stiff as the vehicle's (the taut line's true inverse inertia is the vehicle's). The air
+    pushes on the links (:mod:`tetherland.sim.line_drag`, written into ``xfrc_applied``
+    before every step): without it a slack line whipped by a falling hook gained energy
+    from the integration until the simulation diverged.
 
     :attr:`caught` is the plant's truth for the log and the judge: set when the anchoring
     cable pushes on the line and the hook (net force, low-passed over
@@ -570,10 +574,14 @@ class HangingLine:
         self._vadr = [int(model.jnt_dofadr[j]) for j in joints]
         vehicle = mujoco.mj_name2id(model, body, "vehicle")
         self._vehicle_body = vehicle
-        for name in (f"line_link{i}" for i in range(n)):
-            model.body_invweight0[mujoco.mj_name2id(model, body, name)] = (
-                model.body_invweight0[vehicle]
-            )
+        links = [mujoco.mj_name2id(model, body, f"line_link{i}") for i in range(n)]
+        for b in links:
+            model.body_invweight0[b] = model.body_invweight0[vehicle]
+        self._links = np.array(links, dtype=np.int64)
+        self._drag_args = (self._links, int(model.body_rootid[links[0]]),
+                           link_drag_factor(self.spec.radius, self.spec.link_length),
+                           data.cvel, data.xipos, data.xmat, data.subtree_com,
+                           data.xfrc_applied)  # fmt: skip
         sensor = mujoco.mjtObj.mjOBJ_SENSOR
         adr = model.sensor_adr
         self._force = int(adr[mujoco.mj_name2id(model, sensor, "line_force")])
@@ -623,6 +631,7 @@ class HangingLine:
         return f
 
     def advance(self) -> None:
+        line_drag_into(*self._drag_args)  # the air's push on the links, at the step's start
         mujoco.mj_step(self._model, self._data)
         f = self._read()
         held = self._t_held * ARMATURE_DECAY
@@ -727,6 +736,7 @@ class HangingLine:
             d.qpos[a : a + 4] = qj
         for a in self._vadr:
             d.qvel[a : a + 3] = 0.0
+        d.xfrc_applied[self._links, 0:3] = 0.0  # at rest: no drag
 
 
 def make_cable(
