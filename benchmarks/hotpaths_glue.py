@@ -86,8 +86,46 @@ def workload(name: str) -> Callable[[], None]:
     elif name == "estimator":
         call = _estimator()
     else:
-        raise SystemExit(f"unknown workload {name!r}: rotation, path, faults or estimator")
+        raise SystemExit(f"unknown workload {name!r}: rotation, path, faults, estimator or tick")
     return call
+
+
+def climb_runner():
+    """The ``tick`` workload's closed loop: a runner composed as a mission's (the UKF, the
+    free-flight controller inside the believed-aero wrappers, the tethered method's
+    diagnostics), flying slope50's vehicle from the start pad up a free-flight path."""
+    from tetherland.control import FreeFlightController
+    from tetherland.control.rotor_drag import with_aero_belief
+    from tetherland.estimation import UkfEstimator
+    from tetherland.interfaces import Reference
+    from tetherland.methods.tethered import DIAGNOSTICS
+    from tetherland.sim.plant import Plant
+    from tetherland.sim.runner import Runner
+
+    sc = load_scenario("slope50")
+    plant = Plant(sc)
+    start = plant.start_state()
+    path = Path(0.0, start.p_W, 1.0, 1.0).to(start.p_W + np.array([0.6, 0.3, 1.2]))
+
+    class Climb:
+        def reference(self, t: float, estimate: StateEstimate) -> Reference:
+            return Reference(t=t, phase=int(Phase.TAKEOFF), p_W=path.sample(t), yaw=0.0)
+
+    controller = with_aero_belief(FreeFlightController(sc), sc)
+    hover = np.full(4, np.sqrt(sc.vehicle.mass * 9.81 / (4 * sc.vehicle.thrust_coefficient)))
+    estimator = UkfEstimator(sc, start, 0.0, rotor_speeds0=hover)
+    runner = Runner(sc, controller, estimator=estimator, reference=Climb(), plant=plant,
+                    diagnostic_keys=DIAGNOSTICS)  # fmt: skip
+    return runner, start, hover
+
+
+def _tick(n: int) -> None:
+    """``n`` control ticks of :func:`climb_runner`'s loop (one run, counted whole)."""
+    runner, start, hover = climb_runner()
+    runner.run(0.1, initial_state=start, rotor_speeds=hover)  # warm-up
+    logs = []
+    _counted(lambda: logs.append(runner.run(n * 2e-3, initial_state=start, rotor_speeds=hover)))
+    print(f"ticks={len(logs[0])} status={logs[0].status.value}")
 
 
 def _repeat(call: Callable[[], None], n: int) -> None:
@@ -97,6 +135,9 @@ def _repeat(call: Callable[[], None], n: int) -> None:
 
 def main() -> None:
     name, n = sys.argv[1], int(sys.argv[2])
+    if name == "tick":
+        _tick(n)
+        return
     call = workload(name)
     _repeat(call, 100)  # warm-up: compiled kernels loaded, caches filled
     _counted(lambda: _repeat(call, n))

@@ -354,14 +354,15 @@ class LogWriter:
         view.setflags(write=False)
         return view
 
-    def write(self, parts: list[FloatArray]) -> None:
-        """Append one row made of ``parts`` (1-D arrays concatenated in schema order)."""
-        if self._n == self._matrix.shape[0]:
-            grown = np.empty((2 * self._n, self._width))
-            grown[: self._n] = self._matrix
+    def write(self, row: FloatArray) -> None:
+        """Append one row (a copy of ``row``, the schema's width, in schema order)."""
+        n = self._n
+        if n == self._matrix.shape[0]:
+            grown = np.empty((2 * n, self._width))
+            grown[:n] = self._matrix
             self._matrix = grown
-        np.concatenate(parts, out=self._matrix[self._n])
-        self._n += 1
+        self._matrix[n] = row
+        self._n = n + 1
 
     def finish(self, metadata: Mapping[str, Any], derived: bool = True, **geometry: Any) -> SimLog:
         """The log of the rows written so far (derived link angles added if ``derived``).
