@@ -310,8 +310,9 @@ class Runner:
         if reference is None:
             reference = ConstantReference(p_W=plant.qpos[0:3].copy())
         estimator, controller = self.estimator, self.controller
-        command_aware = isinstance(estimator, CommandAware)
-        reference_aware = isinstance(reference, CommandAware)  # e.g. a fault monitor
+        # told each command sent (CommandAware): e.g. tension estimation, a fault monitor
+        estimator_sent = estimator.command_sent if isinstance(estimator, CommandAware) else None
+        reference_sent = reference.command_sent if isinstance(reference, CommandAware) else None
         # the robot's EPM command (the magnet mechanism), passed on at every control tick
         magnet = reference if plant.has_magnet and isinstance(reference, MagnetCommander) else None
 
@@ -412,16 +413,16 @@ class Runner:
                 else:
                     inner.setpoint(t_k, est, ref, cmd)
                     cmd = inner.applied(cmd)
-                if command_aware:
-                    estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
-                if reference_aware:
-                    reference.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
+                if estimator_sent is not None:
+                    estimator_sent(t_k + dt, cmd)
+                if reference_sent is not None:
+                    reference_sent(t_k + dt, cmd)
                 imu_f[...] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
                 imu_w[...] = sample.omega_B
                 bias_into(bias_buf)
                 contact_peaks_into(contact_buf)
                 if diag_keys:
-                    diag_buf[:] = list(map(cmd.diagnostics.get, diag_keys, nans))
+                    diag_buf[...] = list(map(cmd.diagnostics.get, diag_keys, nans))
                 write_row(writer, specific_force, sd_rest, t_k, est, ref, cmd, hook.engaged,
                           mocap_t, mocap_valid)  # fmt: skip
                 for observer in observers:
