@@ -101,7 +101,7 @@ def _robot_side(columns: tuple[Column, ...]) -> tuple[Column, ...]:
     )
 
 
-# Row layout. The runner fills a row from parts in exactly this order.
+# Row layout, in matrix order: sim/log_row.py (LogRow) checks the groups it fills as one.
 SCALARS: tuple[Column, ...] = (
     _c("t", 1, "s", "time of the control tick"),
     _c("phase", 1, "-", "mission phase code from the reference", True),
