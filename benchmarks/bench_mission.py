@@ -28,8 +28,8 @@ from tetherland.estimation import UkfEstimator
 from tetherland.methods import Planners
 from tetherland.mission import MissionSupervisor
 from tetherland.runs import run_mission
+from tetherland.sim.log_row import LogRow
 from tetherland.sim.plant import Plant
-from tetherland.sim.runner import Runner
 from tetherland.sim.sensors import Imu, Mocap
 
 BEFORE_COMMIT = "d57bf1a"
@@ -62,7 +62,7 @@ ROLES = (
     (Plant, "step", "plant (2 MuJoCo steps, rotors, hook)"),
     (Imu, "sample", "sensors (2 IMU samples, mocap)"),
     (Mocap, "measure", "sensors (2 IMU samples, mocap)"),
-    (Runner, "_write_row", "log row"),
+    (LogRow, "write", "log row"),
 )
 
 

@@ -26,6 +26,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from tetherland.geometry import FloatArray
+from tetherland.records import fast_init
 from tetherland.state import LinkState, RigidBodyState
 
 _EMPTY: Mapping[str, float] = MappingProxyType({})
@@ -35,6 +36,7 @@ def _no_diagnostics() -> Mapping[str, float]:
     return _EMPTY
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class ImuSample:
     """One IMU reading (strapdown, body frame).
@@ -54,6 +56,7 @@ class ImuSample:
     omega_B: FloatArray
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class MocapSample:
     """One motion-capture pose of the body, delivered after a latency.
@@ -79,6 +82,7 @@ class MocapSample:
     valid: bool = True
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class StateEstimate:
     """What an estimator knows at time ``t``.
@@ -123,6 +127,7 @@ class ControlMode(IntEnum):
     """Rotors commanded to zero speed (landed, deploying: t_G to t_T)."""
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class Feedforward:
     """Nominal values along a planned tethered trajectory (flatness), for feed-forward.
@@ -145,6 +150,7 @@ class Feedforward:
     tension: float = 0.0
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class Reference:
     """What the supervisor asks of the controller at time ``t``.
@@ -208,6 +214,7 @@ class Reference:
     drag_in_rows: bool = False
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class Command:
     """What a controller sends to the ESCs (chapter 6.6.4) and what it meant by it.

@@ -12,9 +12,11 @@ import numpy as np
 from numba import njit
 
 from tetherland.geometry import FloatArray
+from tetherland.records import fast_init
 from tetherland.rotations import quat_to_rotmat
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class RigidBodyState:
     """Pose and twist of the vehicle's centre of mass.
@@ -57,6 +59,7 @@ class RigidBodyState:
         )
 
 
+@fast_init
 @dataclass(frozen=True, slots=True)
 class LinkState:
     """Taut-link configuration q = (phi, delta) and its rates (section 6.2.2) [rad, rad/s]."""

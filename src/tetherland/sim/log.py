@@ -101,7 +101,7 @@ def _robot_side(columns: tuple[Column, ...]) -> tuple[Column, ...]:
     )
 
 
-# Row layout. The runner fills a row from parts in exactly this order.
+# Row layout, in matrix order: sim/log_row.py (LogRow) checks the groups it fills as one.
 SCALARS: tuple[Column, ...] = (
     _c("t", 1, "s", "time of the control tick"),
     _c("phase", 1, "-", "mission phase code from the reference", True),
@@ -354,14 +354,15 @@ class LogWriter:
         view.setflags(write=False)
         return view
 
-    def write(self, parts: list[FloatArray]) -> None:
-        """Append one row made of ``parts`` (1-D arrays concatenated in schema order)."""
-        if self._n == self._matrix.shape[0]:
-            grown = np.empty((2 * self._n, self._width))
-            grown[: self._n] = self._matrix
+    def write(self, row: FloatArray) -> None:
+        """Append one row (a copy of ``row``, the schema's width, in schema order)."""
+        n = self._n
+        if n == self._matrix.shape[0]:
+            grown = np.empty((2 * n, self._width))
+            grown[:n] = self._matrix
             self._matrix = grown
-        np.concatenate(parts, out=self._matrix[self._n])
-        self._n += 1
+        self._matrix[n] = row
+        self._n = n + 1
 
     def finish(self, metadata: Mapping[str, Any], derived: bool = True, **geometry: Any) -> SimLog:
         """The log of the rows written so far (derived link angles added if ``derived``).

@@ -49,15 +49,11 @@ from tetherland.randomness import RandomSource
 from tetherland.sim.baselines import ConstantReference, TruthEstimator
 from tetherland.sim.faults import FaultInjector, mocap_outage
 from tetherland.sim.log import BASE_COLUMNS, LogWriter, RunStatus, SimLog, diagnostic_columns
+from tetherland.sim.log_row import LogRow
 from tetherland.sim.mjcf import FRAME_PARTS, SENSOR_SLICES
-from tetherland.sim.plant import CONTACT_PEAK_WIDTH, ROTOR_STATE_WIDTH, Plant, link_state_of
+from tetherland.sim.plant import Plant, link_state_of
 from tetherland.sim.sensors import Imu, Mocap
 from tetherland.state import RigidBodyState
-
-_NAN3 = np.full(3, np.nan)
-_NAN3.setflags(write=False)
-_NAN4 = np.full(4, np.nan)
-_NAN4.setflags(write=False)
 
 Observer = Callable[[float, Plant], None]
 """Called at every control tick after the command, with (t_k, plant); e.g. a video recorder."""
@@ -314,8 +310,9 @@ class Runner:
         if reference is None:
             reference = ConstantReference(p_W=plant.qpos[0:3].copy())
         estimator, controller = self.estimator, self.controller
-        command_aware = isinstance(estimator, CommandAware)
-        reference_aware = isinstance(reference, CommandAware)  # e.g. a fault monitor
+        # told each command sent (CommandAware): e.g. tension estimation, a fault monitor
+        estimator_sent = estimator.command_sent if isinstance(estimator, CommandAware) else None
+        reference_sent = reference.command_sent if isinstance(reference, CommandAware) else None
         # the robot's EPM command (the magnet mechanism), passed on at every control tick
         magnet = reference if plant.has_magnet and isinstance(reference, MagnetCommander) else None
 
@@ -327,15 +324,17 @@ class Runner:
         sd = plant.sensordata
         imu_truth = sd[0:6]
         sd_rest = sd[SENSOR_SLICES["cable_force"].start : SENSOR_SLICES["lander3_touch"].stop]
-        qpos, qvel, snap = plant.qpos, plant.qvel, self._snap
-        rotor_buf, scalars = np.zeros(ROTOR_STATE_WIDTH), np.zeros(9)
-        contact_buf = np.zeros(CONTACT_PEAK_WIDTH)  # contact peaks, every physics step
-        hook_buf = np.zeros(3)
+        # the row of the next control tick, its fixed parts refilled in place (views of it)
+        row = LogRow(columns)
+        qpos, qvel = plant.qpos, plant.qvel
+        self._snap = snap = row.truth_state
+        # (``view[...] = values`` is numpy's cheapest copy into a view from Python)
+        snap_q, snap_v, snap_p, snap_att = snap[0:7], snap[7:13], snap[0:3], snap[3:7]
+        rotor_buf, contact_buf, hook_buf = row.rotor_state, row.contact_peaks, row.hook_point
         hook_point_into = plant.hook_point_into
-        # the measurement columns, contiguous in the row: last IMU sample, its true biases,
-        # last delivered mocap pose
-        meas = np.full(19, np.nan)
-        imu_y, bias_buf, mocap_pq = meas[0:6], meas[6:12], meas[12:19]
+        # last IMU sample, its true biases, last delivered mocap pose
+        imu_y, bias_buf, mocap_pq = row.imu, row.imu_bias, row.mocap_pose
+        imu_f, imu_w, mocap_p, mocap_q = imu_y[0:3], imu_y[3:6], mocap_pq[0:3], mocap_pq[3:7]
         mocap_t, mocap_valid = math.nan, math.nan
         queue: deque[tuple[int, MocapSample]] = deque()
         j_mocap, next_mocap = 0, 0
@@ -357,7 +356,7 @@ class Runner:
         )
         command, mocap_measure, mocap_tick = plant.command, mocap.measure, sched.mocap_tick
         write_row, rotor_state_into, bias_into, contact_peaks_into = (
-            self._write_row,
+            row.write,
             plant.rotor_state_into,
             imu.bias_into,
             plant.contact_peaks_into,
@@ -367,13 +366,7 @@ class Runner:
             if isinstance(observer, BoundObserver):
                 observer.bind(self, writer)
         hook = plant.hook
-        # the row's parts, in schema order: fixed buffers refilled in place every tick and
-        # slots for the estimate, reference and command (see _write_row)
-        parts: list[FloatArray] = [scalars, snap, sd[0:3], sd_rest, rotor_buf, contact_buf,
-                                   hook_buf, meas, *([_NAN3] * 11)]  # fmt: skip
-        diag_buf = np.empty(len(diag_keys))
-        if diag_keys:
-            parts.append(diag_buf)
+        specific_force, diag_buf = sd[0:3], row.diagnostics
         nans = [math.nan] * len(diag_keys)
         inner = self.inner_loop
         wall0 = time.perf_counter()
@@ -383,8 +376,8 @@ class Runner:
             for k in range(n_ticks):
                 control_tick = k % n_ctrl == 0
                 if control_tick or k == next_mocap:
-                    snap[0:7] = qpos
-                    snap[7:13] = qvel
+                    snap_q[...] = qpos
+                    snap_v[...] = qvel
                     self._t_snap = k * dt
                     if control_tick:
                         rotor_state_into(rotor_buf)
@@ -397,7 +390,7 @@ class Runner:
                         command(inner.step(sample))
                 if k == next_mocap:
                     t_del = k + lat
-                    queue.append((t_del, mocap_measure(k * dt, snap[0:3], snap[3:7], t_del * dt)))
+                    queue.append((t_del, mocap_measure(k * dt, snap_p, snap_att, t_del * dt)))
                     j_mocap += 1
                     next_mocap = mocap_tick(j_mocap)
                 if queue and queue[0][0] <= k:
@@ -405,8 +398,8 @@ class Runner:
                         m = queue.popleft()[1]
                         update(m)
                     mocap_t, mocap_valid = m.t_measured, float(m.valid)
-                    mocap_pq[0:3] = m.p_W
-                    mocap_pq[3:7] = m.q_WB
+                    mocap_p[...] = m.p_W
+                    mocap_q[...] = m.q_WB
                 if not control_tick:
                     continue
                 t_k = k * dt
@@ -420,19 +413,18 @@ class Runner:
                 else:
                     inner.setpoint(t_k, est, ref, cmd)
                     cmd = inner.applied(cmd)
-                if command_aware:
-                    estimator.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
-                if reference_aware:
-                    reference.command_sent(t_k + dt, cmd)  # type: ignore[attr-defined]
-                imu_y[0:3] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
-                imu_y[3:6] = sample.omega_B
+                if estimator_sent is not None:
+                    estimator_sent(t_k + dt, cmd)
+                if reference_sent is not None:
+                    reference_sent(t_k + dt, cmd)
+                imu_f[...] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
+                imu_w[...] = sample.omega_B
                 bias_into(bias_buf)
                 contact_peaks_into(contact_buf)
                 if diag_keys:
-                    diag_buf[:] = list(map(cmd.diagnostics.get, diag_keys, nans))
-                write_row(
-                    writer, parts, t_k, est, ref, cmd, hook.engaged, mocap_t, mocap_valid
-                )
+                    diag_buf[...] = list(map(cmd.diagnostics.get, diag_keys, nans))
+                write_row(writer, specific_force, sd_rest, t_k, est, ref, cmd, hook.engaged,
+                          mocap_t, mocap_valid)  # fmt: skip
                 for observer in observers:
                     observer(t_k, plant)
                 if ref.terminate:
@@ -453,47 +445,6 @@ class Runner:
             R_WA=self._R_WA,
             r_att_B=self._r_att,
         )
-
-    @staticmethod
-    def _write_row(
-        writer: LogWriter,
-        parts: list[FloatArray],
-        t_k: float,
-        est: StateEstimate,
-        ref: Reference,
-        cmd: Command,
-        engaged: bool,
-        mocap_t: float,
-        mocap_valid: float,
-    ) -> None:
-        """One log row: the scalars, then the estimate, reference and command into their
-        slots of ``parts`` (the fixed buffers before them are already filled)."""
-        parts[0][:] = (
-            t_k,
-            ref.phase,
-            ref.mode,
-            engaged,
-            mocap_t,
-            mocap_valid,
-            math.nan if est.tension is None else est.tension,
-            ref.yaw,
-            math.nan if cmd.thrust is None else cmd.thrust,
-        )
-        b = est.body
-        parts[8:19] = (
-            b.p_W,
-            b.v_W,
-            b.q_WB,
-            b.omega_B,
-            _NAN3 if est.accel_bias_B is None else est.accel_bias_B,
-            _NAN3 if est.gyro_bias_B is None else est.gyro_bias_B,
-            _NAN4 if est.link is None else est.link.as_array(),
-            _NAN3 if ref.p_W is None else ref.p_W[0],
-            _NAN4 if ref.output is None else ref.output[0],
-            cmd.rotor_speeds,
-            _NAN3 if cmd.torque_B is None else cmd.torque_B,
-        )
-        writer.write(parts)
 
     def _metadata(
         self,
