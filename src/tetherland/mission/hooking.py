@@ -326,13 +326,14 @@ def lift_off_band(scenario: Scenario) -> tuple[float, float] | None:
 
 def pass_overshoot(scenario: Scenario) -> float:
     """Hook-point distance beyond the anchor where the hooking pass ends [m]:
-    ``mission.hooking.overshoot``, or ``mechanism.pass_depth`` for the bar (the crown that
-    little below the bar's axis, the line meets the bar above the hook's eye as soon as
-    the vehicle flies toward the landing point, and the hook's arm passes under it), or
+    ``mission.hooking.overshoot``, or ``mechanism.pass_depth + pass_margin`` for the bar
+    (the crown that far below the believed bar's axis: the tips pass under a bar up to
+    ``pass_margin`` lower than believed, the shank then lying against it; a bar where
+    believed meets the line above the eye), or
     ``mechanism.press_depth`` for the magnet (its face pressed on the plate, the boom
     folding by about that much)."""
     if scenario.mechanism.kind == "bar":
-        return scenario.mechanism.pass_depth
+        return scenario.mechanism.pass_depth + scenario.mechanism.pass_margin
     if scenario.mechanism.kind == "magnet":
         return scenario.mechanism.press_depth
     return scenario.mission.hooking.overshoot
@@ -356,12 +357,17 @@ def bar_seating_path(
     stretch: centre-of-mass corners F_W [m] with their speeds [m/s] (None: the take-up's).
 
     1. Level to the pass's mirror across the bar (2 ``pass_offset`` along the horizontal
-       part of ``x_A_W``): the same distance from the bar, the line is not pulled and its
-       shank comes to lie against the bar, an arm under it.
-    2. Seat: climb ``pass_depth`` at ``lift_speed``. The crook reaches the bar's bottom
-       after ``pass_depth - hook_radius - bar_radius`` (the crown that far under the bar's
-       axis when seated); the rest lifts the hook by its crook against the bar, so that
-       the line comes just taut over a seated hook.
+       part of ``x_A_W``): the same distance from the bar, the line is not pulled and the
+       hook's shank (a bar ``pass_margin`` lower than believed) or the line just above its
+       eye (the bar where believed) comes to lie against the bar, the arms under it.
+    2. Seat: climb ``pass_depth`` at ``lift_speed``. Under a bar ``pass_margin`` lower
+       than believed, the crook reaches the bar's bottom after ``pass_depth -
+       hook_radius - bar_radius`` and the rest lifts the hook by its crook, so that the
+       line comes just taut over a seated hook; under a bar where believed the crown
+       stays ``pass_margin`` lower, and the swing drags the hook up into the bar. Not the
+       whole depth: over a hook seated early the rest of the climb would pull the line
+       taut before the stretch (3.2-4.4 N, slope 20 deg, the bar 1-3 cm lower than
+       believed, the vehicle driven by a 1 Hz position loop).
     3. Swing down around the anchor at the radius where the crook just touches the bar
        (the seat's distance from p_A less ``hook_radius + bar_radius``), to the
        direction of the stretch point: the line stays nearly taut and rolls the seated
