@@ -78,10 +78,12 @@ class MechanismConfig(Section):
     hook_tip_length + hook_radius + bar_radius: an arm passes under the bar) [m]."""
     pass_margin: float = Field(0.03, ge=0, le=0.5)
     """Extra depth of the hooking pass below the believed bar, for the error of the bar's
-    believed height: the pass ends with the crown ``pass_depth + pass_margin`` below the
-    believed axis, so that the tips pass under a bar up to ``pass_margin`` lower than
-    believed (then the line meets the bar above the eye, and the take-up drags the hook
-    up into it); the hook's bottom stays above the surface (pass_depth + pass_margin +
+    believed height (the campaign's default belief errors, a 1 deg slope error about the
+    surface origin 1.2 m from the anchor and 1 cm of anchor height, reach about 3 cm):
+    the pass ends with the crown ``pass_depth + pass_margin`` below the believed axis, so
+    that the tips pass under a bar up to ``pass_margin`` lower than believed; a bar where
+    believed meets the line just above the eye, and the take-up drags the hook up into
+    it. The hook's bottom stays above the surface (pass_depth + pass_margin +
     hook_radius < standoff - pass_offset) [m]."""
     swing_periods: float = Field(2.0, ge=0, le=10)
     """Shortest free-flight leg of the mission, in swing periods of the hanging hook
