@@ -420,10 +420,11 @@ def test_slope50_mission_hooks_lands_and_releases_through_contact() -> None:
 
 
 def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> None:
-    """The bar's take-up (the path the supervisor flies after the hooking pass): level to
-    the pass's mirror, a climb of ``pass_depth`` at ``lift_speed`` that lifts the crook
-    into the bar, then chords around p_A at the radius where the crook just touches the
-    bar (the cable length, up to the pass's offset), ending on the stretch direction,
+    """The bar's take-up as planned (the supervisor swings from where the climb left the
+    vehicle): level to the pass's mirror, a climb of the pass's depth ``pass_depth +
+    pass_margin`` at ``lift_speed`` that lifts the crook into the bar, then chords
+    around p_A at the radius where the crook just touches the bar (the cable length, up
+    to the pass's offset), ending on the stretch direction,
     none of them sagging more than a third of a tip below the arc; the plan (its leg
     clearances and time bound) accepts it."""
     from tetherland.mission.plan import plan_mission, take_up_path
@@ -437,17 +438,17 @@ def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> Non
     x = np.array([*geo.R_WA[:2, 0], 0.0])
     x /= np.linalg.norm(x)
     np.testing.assert_allclose(mirror, wp.hook_end + 2.0 * m.pass_offset * x, atol=1e-12)
-    np.testing.assert_allclose(seat, mirror + m.pass_depth * np.array([0.0, 0.0, 1.0]), atol=1e-12)
+    climb = m.pass_depth + m.pass_margin  # the pass's depth
+    np.testing.assert_allclose(seat, mirror + climb * np.array([0.0, 0.0, 1.0]), atol=1e-12)
     assert v0 is None and v1 == m.lift_speed
     # the seat: the attachment (l - (shank - hook_radius - bar_radius)) + shank above the
-    # crown seated under a bar pass_margin lower than believed, i.e. l + hook_radius +
-    # bar_radius - pass_margin above the believed bar's axis, pass_offset aside
+    # seated crown, i.e. l + hook_radius + bar_radius above the bar's axis, pass_offset aside
     gap = m.hook_radius + m.bar_radius
     a_seat = seat + wp.attachment_W - geo.p_A
     assert float(a_seat @ x) == pytest.approx(m.pass_offset, abs=1e-9)
-    assert float(a_seat[2]) == pytest.approx(l + gap - m.pass_margin, abs=1e-9)
-    r = math.hypot(l + gap - m.pass_margin, m.pass_offset) - gap
-    assert 0.0 < r - (l - m.pass_margin) < m.pass_offset**2 / l
+    assert float(a_seat[2]) == pytest.approx(l + gap, abs=1e-9)
+    r = math.hypot(l + gap, m.pass_offset) - gap
+    assert 0.0 < r - l < m.pass_offset**2 / l
     corners = [seat, *(c for c, _ in arc)]
     for c, speed in arc:
         assert speed is None
@@ -465,29 +466,32 @@ def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> Non
 def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
     """Fly the bar's hooking pass and take-up as the supervisor does, planned on
     ``belief``, in ``plant`` (the truth): the hooking pass at ``mission.hooking.speed``
-    with its settle pause, the take-up (:func:`take_up_path`) at the take-up speed, then
-    the stretch. The vehicle, level, is driven by an applied force reproducing the
-    robot's free-flight position loop (PID with the ``controller.free_flight`` gains and
-    clamp, the path's acceleration fed forward, the believed weight compensated) with the
-    rotors off. Stops once the line pulls more than ``mission.stretch.tension_threshold``
-    for ``tension_dwell`` (the supervisor's taut rule) or ``timeout`` after the stretch.
-    Returns (time the line came taut or inf, end of the take-up) [s, s]."""
-    from tetherland.mission.hooking import shortest_leg
+    with its settle pause, the level move and the seat's climb (:func:`bar_climb_path`)
+    at the take-up speed, and after ``settle_time`` the swing (:func:`bar_swing_path`)
+    from where the vehicle then is, then the stretch. The vehicle, level, is driven by an
+    applied force reproducing the robot's free-flight position loop (PID with the
+    ``controller.free_flight`` gains and clamp, the path's acceleration fed forward, the
+    believed weight compensated) with the rotors off. Stops once the line pulls more than
+    ``mission.stretch.tension_threshold`` for ``tension_dwell`` (the supervisor's taut
+    rule, from the pass's end) or ``timeout`` after the stretch. Returns (time the line
+    came taut or inf, end of the swing) [s, s]."""
+    from tetherland.mission.hooking import bar_climb_path, bar_swing_path, shortest_leg
     from tetherland.mission.paths import Path
-    from tetherland.mission.plan import plan_mission, take_up_path
+    from tetherland.mission.plan import plan_mission
 
     cfg, gains = belief.mission, belief.controller.free_flight
     plan = plan_mission(belief, plant.start_state())
     geo, wp = plan.geometry, plan.waypoints
     legs = shortest_leg(belief)
+    take_up_speed = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
     hooking = Path(1.0, wp.hook_start, cfg.hooking.speed, cfg.flight.cruise_accel, legs)
     hooking.to(wp.hook_end, pause=cfg.settle_time)
-    take_up = Path(hooking.t_end, wp.hook_end, cfg.stretch.take_up_speed_factor
-                   * cfg.flight.cruise_speed, cfg.flight.cruise_accel, legs)  # fmt: skip
-    for corner, speed in take_up_path(belief, geo, wp):
-        take_up.to(corner, speed=speed)
-    t_seated = take_up.t_end
-    take_up.to(wp.stretch, speed=cfg.stretch.speed)
+    t_pass = hooking.t_end
+    climb = Path(t_pass, wp.hook_end, take_up_speed, cfg.flight.cruise_accel, legs)
+    for corner, speed in bar_climb_path(belief, geo.R_WA[:, 0], wp.hook_end):
+        climb.to(corner, speed=speed)
+    t_swing = climb.t_end + cfg.settle_time
+    swing, t_seated, t_end = None, math.inf, math.inf
     m, d = plant.model, plant.data
     vehicle = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "vehicle")
     M = float(m.body_mass[vehicle])
@@ -496,10 +500,18 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
     wn, k_i = gains.position_frequency, gains.position_integral
     k_x, k_v = wn * wn, 2.0 * gains.position_damping * wn
     bound = gains.integral_force_max * GRAVITY / k_i  # the clamp, m g / (m k_i) [m s]
-    integral, dwell = np.zeros(3), 0.0
-    for i in range(round((take_up.t_end + cfg.stretch.timeout) / plant.dt)):
-        t = i * plant.dt
-        path = hooking if t < hooking.t_end else take_up
+    integral, dwell, i = np.zeros(3), 0.0, 0
+    while (t := i * plant.dt) <= t_end:
+        i += 1
+        if swing is None and t >= t_swing:  # the swing from where the climb left it
+            seat = d.qpos[0:3].copy()
+            swing = Path(t, seat, take_up_speed, cfg.flight.cruise_accel, legs)
+            for corner, _ in bar_swing_path(belief, geo.p_A, seat, wp.stretch, wp.attachment_W):
+                swing.to(corner)
+            t_seated = swing.t_end
+            swing.to(wp.stretch, speed=cfg.stretch.speed)
+            t_end = swing.t_end + cfg.stretch.timeout
+        path = hooking if t < t_pass else climb if swing is None else swing
         p, v, a = path.sample(t)
         e = d.qpos[0:3] - p
         integral = np.clip(integral + e * plant.dt, -bound, bound)
@@ -507,7 +519,7 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
         d.xfrc_applied[vehicle, 0:3] = belief.vehicle.mass * acc + [0.0, 0.0, M * GRAVITY]
         d.qpos[3:7], d.qvel[3:6] = q0, 0.0
         plant.step(1)
-        if t > hooking.t_end:  # the supervisor's taut rule runs from the pass's end
+        if t > t_pass:  # the supervisor's taut rule runs from the pass's end
             dwell = dwell + plant.dt if plant.tension > cfg.stretch.tension_threshold else 0.0
             if dwell > cfg.stretch.tension_dwell:
                 return t, t_seated
