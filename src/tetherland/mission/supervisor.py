@@ -560,7 +560,13 @@ class MissionSupervisor:
                                             wp.attachment_W):  # fmt: skip
                 self._path.to(corner)
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
-        if self._taut.update(t, est.tension or 0.0) and est.link is not None:
+            self._taut.reset()
+        # not during the bar's climb: a hook seated early holds the vehicle under the
+        # climb's top, and the line pulls (1.24 N estimated for 0.2 s on a 20 deg pilot
+        # draw, the bar 1.4 cm lower than believed: read as taut, the tethered landing
+        # began from the seat and lost the tension)
+        if (self._swing_at is None and self._taut.update(t, est.tension or 0.0)
+                and est.link is not None):  # fmt: skip
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
