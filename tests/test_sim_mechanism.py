@@ -473,7 +473,8 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
     ``controller.free_flight`` gains and clamp, the path's acceleration fed forward, the
     believed weight compensated) with the rotors off. Stops once the line pulls more than
     ``mission.stretch.tension_threshold`` for ``tension_dwell`` (the supervisor's taut
-    rule, from the pass's end) or ``timeout`` after the stretch. Returns (time the line
+    rule, read here from the pass's end: stricter than the supervisor, which does not
+    read it during the climb) or ``timeout`` after the stretch. Returns (time the line
     came taut or inf, end of the swing) [s, s]."""
     from tetherland.mission.hooking import bar_climb_path, bar_swing_path, shortest_leg
     from tetherland.mission.paths import Path
