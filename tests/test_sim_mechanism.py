@@ -527,8 +527,17 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
     return math.inf, t_seated
 
 
-@pytest.mark.parametrize(("slope", "e_h"), [(20.0, 0.018), (50.0, -0.02)])
-def test_bar_take_up_catches_a_bar_off_its_believed_height(slope: float, e_h: float) -> None:
+_PILOT = ["tether.length=1.2", "tether.hook_drop=1.0"]  # the pilot campaign's cable
+
+
+@pytest.mark.parametrize(("name", "sets", "e_h"), [
+    ("slope50", [*_PILOT, "surface.slope_deg=20"], 0.018),
+    ("slope50", [*_PILOT, "surface.slope_deg=50"], -0.02),
+    ("pipe60", [], 0.0),
+])  # fmt: skip
+def test_bar_take_up_catches_a_bar_off_its_believed_height(
+    name: str, sets: list[str], e_h: float
+) -> None:
     """The robot plans the pass on its belief, and a campaign's belief puts the bar up to
     2 cm off its height (the slope error about the surface origin times the anchor's
     distance from it, plus the anchor's height error): a bar 1.8 cm lower than believed
@@ -537,21 +546,24 @@ def test_bar_take_up_catches_a_bar_off_its_believed_height(slope: float, e_h: fl
     (``pass_depth`` below the believed bar, without ``pass_margin``) would end with the
     tips' tops above the true bar's bottom (derived below; they met its near side and the
     climb lifted the hook over it). Flown in the true plant (slope 20 deg, the pilot's
-    1.2 m cable; and a bar 2 cm higher than believed on 50 deg), the hook is caught
-    through contact: the line comes taut (the supervisor's rule) on the stretch, not
-    before the take-up ends, with the plant's truth saying caught and the crown within
-    the hook's size of the true axis."""
+    1.2 m cable; a bar 2 cm higher than believed on 50 deg; pipe60 with the bar where
+    believed, where a climb of ``pass_depth`` alone left the hook unseated), the hook is
+    caught through contact: the line comes taut (the supervisor's rule) on the stretch,
+    not before the swing ends, with the plant's truth saying caught and the bar in an
+    arm's crook (the crown within ``hook_reach`` of the true axis)."""
     from tetherland.campaign.perturb import Perturbation, apply_perturbation
 
-    truth = load_scenario("slope50", ["mechanism.kind=bar", "tether.length=1.2",
-                                      "tether.hook_drop=1.0", f"surface.slope_deg={slope}"])
-    _, belief = apply_perturbation(truth, Perturbation(anchor_error_S=(0.0, 0.0, e_h)))
+    truth = load_scenario(name, ["mechanism.kind=bar", *sets])
+    belief = truth
+    if e_h != 0.0:
+        _, belief = apply_perturbation(truth, Perturbation(anchor_error_S=(0.0, 0.0, e_h)))
     plant = Plant(truth)
     m = truth.mechanism
     p_A = plant.layout.geometry.p_A
     believed = LandingGeometry.from_scenario(belief).p_A
     low = float(believed[2] - p_A[2])  # the true bar this much lower than believed [m]
-    assert abs(low) == pytest.approx(abs(e_h) * math.cos(math.radians(slope)), rel=1e-6)
+    slope = LandingGeometry.from_scenario(truth).surface.slope
+    assert abs(low) == pytest.approx(abs(e_h) * math.cos(slope), rel=1e-6, abs=1e-12)
     tips = m.hook_tip_length + m.hook_radius  # tips' tops above the crown [m]
     if e_h > 0.0:  # without the margin the tips would end beside the true bar, not under it
         assert low - m.pass_depth + tips > -m.bar_radius
@@ -562,5 +574,4 @@ def test_bar_take_up_catches_a_bar_off_its_believed_height(slope: float, e_h: fl
     assert plant.hook.engaged
     assert [e.kind.name for e in plant.hook.events] == ["ENGAGED"]
     off = plant.layout.geometry.R_WA.T @ (plant.hook_point_W - p_A)
-    size = m.outer_reach + m.hook_tip_length + m.hook_radius + m.bar_radius
-    assert math.hypot(off[0], off[2]) < size
+    assert math.hypot(off[0], off[2]) < m.hook_reach
