@@ -13,8 +13,9 @@ import scipy.linalg
 
 from prescribed import drive
 from tetherland import GRAVITY
-from tetherland.config import load_scenario
+from tetherland.config import Scenario, load_scenario
 from tetherland.errors import ConfigError
+from tetherland.geometry import LandingGeometry
 from tetherland.mission.hooking import hooking_pass, scenario_hook_offset
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
@@ -60,14 +61,22 @@ def test_bar_config_needs_a_standoff_and_a_vertical_pass() -> None:
     for depth in (0.02, 0.04):  # tips at the bar / eye under the bar
         with pytest.raises(ConfigError, match="pass_depth"):
             load_scenario("slope50", ["mechanism.kind=bar", f"mechanism.pass_depth={depth}"])
+    # the pass's deepest point (pass_depth + pass_margin + hook_radius) must stay above the
+    # surface: standoff - pass_offset = 0.10 m bounds it on any slope
+    load_scenario("slope50", ["mechanism.kind=bar", "mechanism.pass_margin=0.06"])
+    with pytest.raises(ConfigError, match="pass_margin"):
+        load_scenario("slope50", ["mechanism.kind=bar", "mechanism.pass_margin=0.07"])
     with pytest.raises(ConfigError, match="approach_direction"):
         load_scenario("slope50", ["mechanism.kind=bar", "tether.approach_direction=[1, 0, -1]"])
 
 
 def test_hooking_pass_puts_the_resting_hook_beside_the_bar(bar_plant: Plant) -> None:
     """The plan's pass and the plant's hook are one geometry: at the pass's end, the hook
-    body hanging at rest is ``pass_offset`` from the bar's axis, ``pass_depth`` below it;
-    its eye is then above the bar's top and its tips' tops under the bar's bottom."""
+    body hanging at rest is ``pass_offset`` from the bar's axis, ``pass_depth +
+    pass_margin`` below it. Its eye and tips are then under the bar (the line above the
+    eye meets it); beside a bar ``pass_margin`` lower than believed (the height error
+    the margin allows for) the eye is above that bar's top and the tips' tops under its
+    bottom, as at ``pass_depth`` below the believed bar."""
     s, plant = bar_plant.scenario, bar_plant
     geo = plant.layout.geometry
     hp = hooking_pass(s, geo)
@@ -75,14 +84,18 @@ def test_hooking_pass_puts_the_resting_hook_beside_the_bar(bar_plant: Plant) -> 
                 rotor_speeds=[_hover_speed(plant)] * 4)  # fmt: skip
     crown = plant.hook_point_W
     x_A = geo.R_WA[:, 0]
-    expected = geo.p_A - s.mechanism.pass_depth * Z - s.mechanism.pass_offset * x_A
-    np.testing.assert_allclose(crown, expected, atol=2e-3)
     m = s.mechanism
-    top = geo.p_A[2] + m.bar_radius
+    depth = m.pass_depth + m.pass_margin
+    expected = geo.p_A - depth * Z - m.pass_offset * x_A
+    np.testing.assert_allclose(crown, expected, atol=2e-3)
     eye = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SITE, "hook_eye")
-    assert plant.data.site_xpos[eye][2] - m.line_radius > top
+    eye_z = plant.data.site_xpos[eye][2]
     tips = crown[2] + m.hook_tip_length + m.hook_radius
-    assert tips < geo.p_A[2] - m.bar_radius
+    bottom = geo.p_A[2] - m.bar_radius
+    assert eye_z + m.line_radius < bottom and tips < bottom
+    low = geo.p_A[2] - m.pass_margin  # the axis of a bar pass_margin lower
+    assert eye_z - m.line_radius > low + m.bar_radius
+    assert tips < low - m.bar_radius
     # and the offset the planner uses is the plant's crown minus attachment, less the pass offset
     off = scenario_hook_offset(s, geo)
     np.testing.assert_allclose(crown - plant.attachment_point(),
@@ -407,10 +420,11 @@ def test_slope50_mission_hooks_lands_and_releases_through_contact() -> None:
 
 
 def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> None:
-    """The bar's take-up (the path the supervisor flies after the hooking pass): level to
-    the pass's mirror, a climb of ``pass_depth`` at ``lift_speed`` that lifts the crook
-    into the bar, then chords around p_A at the radius where the crook just touches the
-    bar (the cable length, up to the pass's offset), ending on the stretch direction,
+    """The bar's take-up as planned (the supervisor swings from where the climb left the
+    vehicle): level to the pass's mirror, a climb of the pass's depth ``pass_depth +
+    pass_margin`` at ``lift_speed`` that lifts the crook into the bar, then chords
+    around p_A at the radius where the crook just touches the bar (the cable length, up
+    to the pass's offset), ending on the stretch direction,
     none of them sagging more than a third of a tip below the arc; the plan (its leg
     clearances and time bound) accepts it."""
     from tetherland.mission.plan import plan_mission, take_up_path
@@ -424,13 +438,15 @@ def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> Non
     x = np.array([*geo.R_WA[:2, 0], 0.0])
     x /= np.linalg.norm(x)
     np.testing.assert_allclose(mirror, wp.hook_end + 2.0 * m.pass_offset * x, atol=1e-12)
-    np.testing.assert_allclose(seat, mirror + m.pass_depth * np.array([0.0, 0.0, 1.0]), atol=1e-12)
+    climb = m.pass_depth + m.pass_margin  # the pass's depth
+    np.testing.assert_allclose(seat, mirror + climb * np.array([0.0, 0.0, 1.0]), atol=1e-12)
     assert v0 is None and v1 == m.lift_speed
     # the seat: the attachment (l - (shank - hook_radius - bar_radius)) + shank above the
     # seated crown, i.e. l + hook_radius + bar_radius above the bar's axis, pass_offset aside
     gap = m.hook_radius + m.bar_radius
     a_seat = seat + wp.attachment_W - geo.p_A
     assert float(a_seat @ x) == pytest.approx(m.pass_offset, abs=1e-9)
+    assert float(a_seat[2]) == pytest.approx(l + gap, abs=1e-9)
     r = math.hypot(l + gap, m.pass_offset) - gap
     assert 0.0 < r - l < m.pass_offset**2 / l
     corners = [seat, *(c for c, _ in arc)]
@@ -445,3 +461,117 @@ def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> Non
     cos = float(d_end @ d_stretch) / (np.linalg.norm(d_end) * np.linalg.norm(d_stretch))
     assert cos == pytest.approx(1.0, abs=1e-12)
     assert len(arc) >= 2  # the swing from above the bar down to the landing side is an arc
+
+
+def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
+    """Fly the bar's hooking pass and take-up as the supervisor does, planned on
+    ``belief``, in ``plant`` (the truth): the hooking pass at ``mission.hooking.speed``
+    with its settle pause, the level move and the seat's climb (:func:`bar_climb_path`)
+    at the take-up speed, and after ``settle_time`` the swing (:func:`bar_swing_path`)
+    from where the vehicle then is, then the stretch. The vehicle, level, is driven by an
+    applied force reproducing the robot's free-flight position loop (PID with the
+    ``controller.free_flight`` gains and clamp, the path's acceleration fed forward, the
+    believed weight compensated) with the rotors off. Stops once the line pulls more than
+    ``mission.stretch.tension_threshold`` for ``tension_dwell`` (the supervisor's taut
+    rule, read here from the pass's end: stricter than the supervisor, which does not
+    read it during the climb) or ``timeout`` after the stretch. Returns (time the line
+    came taut or inf, end of the swing) [s, s]."""
+    from tetherland.mission.hooking import bar_climb_path, bar_swing_path, shortest_leg
+    from tetherland.mission.paths import Path
+    from tetherland.mission.plan import plan_mission
+
+    cfg, gains = belief.mission, belief.controller.free_flight
+    plan = plan_mission(belief, plant.start_state())
+    geo, wp = plan.geometry, plan.waypoints
+    legs = shortest_leg(belief)
+    take_up_speed = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
+    hooking = Path(1.0, wp.hook_start, cfg.hooking.speed, cfg.flight.cruise_accel, legs)
+    hooking.to(wp.hook_end, pause=cfg.settle_time)
+    t_pass = hooking.t_end
+    climb = Path(t_pass, wp.hook_end, take_up_speed, cfg.flight.cruise_accel, legs)
+    for corner, speed in bar_climb_path(belief, geo.R_WA[:, 0], wp.hook_end):
+        climb.to(corner, speed=speed)
+    t_swing = climb.t_end + cfg.settle_time
+    swing, t_seated, t_end = None, math.inf, math.inf
+    m, d = plant.model, plant.data
+    vehicle = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "vehicle")
+    M = float(m.body_mass[vehicle])
+    plant.reset(RigidBodyState.at_rest(wp.hook_start, plant.start_state().q_WB))
+    q0 = d.qpos[3:7].copy()
+    wn, k_i = gains.position_frequency, gains.position_integral
+    k_x, k_v = wn * wn, 2.0 * gains.position_damping * wn
+    bound = gains.integral_force_max * GRAVITY / k_i  # the clamp, m g / (m k_i) [m s]
+    integral, dwell, i = np.zeros(3), 0.0, 0
+    while (t := i * plant.dt) <= t_end:
+        i += 1
+        if swing is None and t >= t_swing:  # the swing from where the climb left it
+            seat = d.qpos[0:3].copy()
+            swing = Path(t, seat, take_up_speed, cfg.flight.cruise_accel, legs)
+            for corner, _ in bar_swing_path(belief, geo.p_A, seat, wp.stretch, wp.attachment_W):
+                swing.to(corner)
+            t_seated = swing.t_end
+            swing.to(wp.stretch, speed=cfg.stretch.speed)
+            t_end = swing.t_end + cfg.stretch.timeout
+        path = hooking if t < t_pass else climb if swing is None else swing
+        p, v, a = path.sample(t)
+        e = d.qpos[0:3] - p
+        integral = np.clip(integral + e * plant.dt, -bound, bound)
+        acc = a - k_x * e - k_v * (d.qvel[0:3] - v) - k_i * integral
+        d.xfrc_applied[vehicle, 0:3] = belief.vehicle.mass * acc + [0.0, 0.0, M * GRAVITY]
+        d.qpos[3:7], d.qvel[3:6] = q0, 0.0
+        plant.step(1)
+        if t > t_pass:  # the supervisor's taut rule runs from the pass's end
+            dwell = dwell + plant.dt if plant.tension > cfg.stretch.tension_threshold else 0.0
+            if dwell > cfg.stretch.tension_dwell:
+                return t, t_seated
+    return math.inf, t_seated
+
+
+_PILOT = ["tether.length=1.2", "tether.hook_drop=1.0"]  # the pilot campaign's cable
+
+
+@pytest.mark.parametrize(("name", "sets", "e_h"), [
+    ("slope50", [*_PILOT, "surface.slope_deg=20"], 0.018),
+    ("slope50", [*_PILOT, "surface.slope_deg=50"], -0.02),
+    ("pipe60", [], 0.0),
+])  # fmt: skip
+def test_bar_take_up_catches_a_bar_off_its_believed_height(
+    name: str, sets: list[str], e_h: float
+) -> None:
+    """The robot plans the pass on its belief, and a campaign's belief puts the bar up to
+    2 cm off its height (the slope error about the surface origin times the anchor's
+    distance from it, plus the anchor's height error): a bar 1.8 cm lower than believed
+    (e_h along z_S, as `apply_perturbation`; the pilot campaign's slope 20 and 35 draws
+    that missed 3 times had the believed bar 0.9-2 cm high). The plan's pass alone
+    (``pass_depth`` below the believed bar, without ``pass_margin``) would end with the
+    tips' tops above the true bar's bottom (derived below; they met its near side and the
+    climb lifted the hook over it). Flown in the true plant (slope 20 deg, the pilot's
+    1.2 m cable; a bar 2 cm higher than believed on 50 deg; pipe60 with the bar where
+    believed, where a climb of ``pass_depth`` alone left the hook unseated), the hook is
+    caught through contact: the line comes taut (the supervisor's rule) on the stretch,
+    not before the swing ends, with the plant's truth saying caught and the bar in an
+    arm's crook (the crown within ``hook_reach`` of the true axis)."""
+    from tetherland.campaign.perturb import Perturbation, apply_perturbation
+
+    truth = load_scenario(name, ["mechanism.kind=bar", *sets])
+    belief = truth
+    if e_h != 0.0:
+        _, belief = apply_perturbation(truth, Perturbation(anchor_error_S=(0.0, 0.0, e_h)))
+    plant = Plant(truth)
+    m = truth.mechanism
+    p_A = plant.layout.geometry.p_A
+    believed = LandingGeometry.from_scenario(belief).p_A
+    low = float(believed[2] - p_A[2])  # the true bar this much lower than believed [m]
+    slope = LandingGeometry.from_scenario(truth).surface.slope
+    assert abs(low) == pytest.approx(abs(e_h) * math.cos(slope), rel=1e-6, abs=1e-12)
+    tips = m.hook_tip_length + m.hook_radius  # tips' tops above the crown [m]
+    if e_h > 0.0:  # without the margin the tips would end beside the true bar, not under it
+        assert low - m.pass_depth + tips > -m.bar_radius
+    # with it they pass under it
+    assert low - m.pass_depth - m.pass_margin + tips < -m.bar_radius
+    t_taut, t_seated = _fly_take_up(plant, belief)
+    assert t_seated < t_taut < math.inf
+    assert plant.hook.engaged
+    assert [e.kind.name for e in plant.hook.events] == ["ENGAGED"]
+    off = plant.layout.geometry.R_WA.T @ (plant.hook_point_W - p_A)
+    assert math.hypot(off[0], off[2]) < m.hook_reach

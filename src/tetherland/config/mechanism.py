@@ -70,11 +70,21 @@ class MechanismConfig(Section):
     """Horizontal distance of the hook's vertical hooking pass from the bar's axis, on the
     side away from the landing point (the line then drapes over the bar) [m]."""
     pass_depth: float = Field(0.03, ge=0.005, le=0.5)
-    """Depth of the hook's crown below the bar's axis where the hooking pass ends
-    (replaces ``mission.hooking.overshoot`` for the bar): the hook's eye must be above the
+    """Depth of the hook's crown below the bar's axis where the hooking pass ends, less
+    ``pass_margin`` (with it, replaces ``mission.hooking.overshoot`` for the bar); also the
+    take-up's climb: at this depth the hook's eye must be above the
     bar (hook_shank - pass_depth > bar_radius + line_radius: the line meets the bar when
     the vehicle flies toward the landing point) and the tips under it (pass_depth >
     hook_tip_length + hook_radius + bar_radius: an arm passes under the bar) [m]."""
+    pass_margin: float = Field(0.03, ge=0, le=0.5)
+    """Extra depth of the hooking pass below the believed bar, for the error of the bar's
+    believed height (the campaign's default belief errors, a 1 deg slope error about the
+    surface origin 1.2 m from the anchor and 1 cm of anchor height, reach about 3 cm):
+    the pass ends with the crown ``pass_depth + pass_margin`` below the believed axis, so
+    that the tips pass under a bar up to ``pass_margin`` lower than believed; a bar where
+    believed meets the line just above the eye, and the take-up drags the hook up into
+    it. The hook's bottom stays above the surface (pass_depth + pass_margin +
+    hook_radius < standoff - pass_offset) [m]."""
     swing_periods: float = Field(2.0, ge=0, le=10)
     """Shortest free-flight leg of the mission, in swing periods of the hanging hook
     (2 pi sqrt(L/g)): a smooth rest-to-rest leg that long leaves the hook almost still
@@ -207,6 +217,14 @@ class MechanismConfig(Section):
                 f"mechanism.pass_depth = {self.pass_depth:g} m must be in ({lo:g}, {hi:g}) m: "
                 "the tips under the bar (> tip height + hook_radius + bar_radius) and the "
                 "eye above it (< hook_shank - bar_radius - line_radius)"
+            )
+        deepest = self.pass_depth + self.pass_margin + self.hook_radius
+        if deepest >= self.standoff - self.pass_offset:
+            raise ValueError(
+                f"mechanism.pass_margin = {self.pass_margin:g} m must be < standoff - "
+                f"pass_offset - pass_depth - hook_radius = "
+                f"{self.standoff - self.pass_offset - self.pass_depth - self.hook_radius:g} m "
+                "(the hook's bottom above the surface at the pass's end, any slope)"
             )
         if self.standoff <= self.bar_radius + 2.0 * self.hook_radius:
             raise ValueError(

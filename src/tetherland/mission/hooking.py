@@ -326,13 +326,14 @@ def lift_off_band(scenario: Scenario) -> tuple[float, float] | None:
 
 def pass_overshoot(scenario: Scenario) -> float:
     """Hook-point distance beyond the anchor where the hooking pass ends [m]:
-    ``mission.hooking.overshoot``, or ``mechanism.pass_depth`` for the bar (the crown that
-    little below the bar's axis, the line meets the bar above the hook's eye as soon as
-    the vehicle flies toward the landing point, and the hook's arm passes under it), or
+    ``mission.hooking.overshoot``, or ``mechanism.pass_depth + pass_margin`` for the bar
+    (the crown that far below the believed bar's axis: the tips pass under a bar up to
+    ``pass_margin`` lower than believed, the shank then lying against it; a bar where
+    believed meets the line above the eye), or
     ``mechanism.press_depth`` for the magnet (its face pressed on the plate, the boom
     folding by about that much)."""
     if scenario.mechanism.kind == "bar":
-        return scenario.mechanism.pass_depth
+        return scenario.mechanism.pass_depth + scenario.mechanism.pass_margin
     if scenario.mechanism.kind == "magnet":
         return scenario.mechanism.press_depth
     return scenario.mission.hooking.overshoot
@@ -353,37 +354,70 @@ def bar_seating_path(
     stretch_W: FloatArray, attachment_W: FloatArray,
 ) -> list[tuple[FloatArray, float | None]]:  # fmt: skip
     """The bar mechanism's take-up after the hooking pass, up to (not including) the
-    stretch: centre-of-mass corners F_W [m] with their speeds [m/s] (None: the take-up's).
+    stretch, as planned: centre-of-mass corners F_W [m] with their speeds [m/s] (None:
+    the take-up's). The climb (:func:`bar_climb_path`), then the swing from its top
+    (:func:`bar_swing_path`); the supervisor swings from where the climb left the
+    vehicle instead (a hook seated early holds it lower)."""
+    path = bar_climb_path(scenario, x_A_W, hook_end_W)
+    return path + bar_swing_path(scenario, p_A_W, path[-1][0], stretch_W, attachment_W)
+
+
+def bar_climb_path(
+    scenario: Scenario, x_A_W: FloatArray, hook_end_W: FloatArray
+) -> list[tuple[FloatArray, float | None]]:
+    """The bar's take-up after the hooking pass, its first two legs: corners F_W [m] and
+    speeds [m/s] (None: the take-up's).
 
     1. Level to the pass's mirror across the bar (2 ``pass_offset`` along the horizontal
-       part of ``x_A_W``): the same distance from the bar, the line is not pulled and its
-       shank comes to lie against the bar, an arm under it.
-    2. Seat: climb ``pass_depth`` at ``lift_speed``. The crook reaches the bar's bottom
-       after ``pass_depth - hook_radius - bar_radius`` (the crown that far under the bar's
-       axis when seated); the rest lifts the hook by its crook against the bar, so that
-       the line comes just taut over a seated hook.
+       part of ``x_A_W``): the same distance from the bar, the line is not pulled and the
+       hook's shank (a bar ``pass_margin`` lower than believed) or the line just above its
+       eye (the bar where believed) comes to lie against the bar, the arms under it.
+    2. Seat: climb ``pass_depth + pass_margin`` (the pass's depth) at ``lift_speed``. The
+       crook reaches the bar's bottom after ``hook_radius + bar_radius`` less than the
+       crown's true depth under the bar (``pass_depth`` to ``pass_depth + 2
+       pass_margin``); from there the seated hook holds the line, and the line the
+       vehicle: the climb ends where the hook seats, up to ``pass_depth + pass_margin -
+       hook_radius - bar_radius`` higher for the bar where believed, and the line just
+       taut over a seated hook. Climbing only ``pass_depth`` left the hook unseated,
+       ``pass_margin`` under the bar (pipe60, the line taut only on the stretch, with a
+       31 N snatch, and the hook slipped).
+    """
+    m = scenario.mechanism
+    x = np.array([x_A_W[0], x_A_W[1], 0.0])
+    mirror = np.asarray(hook_end_W, float) + 2.0 * m.pass_offset * x / np.linalg.norm(x)
+    seat = mirror + np.array([0.0, 0.0, m.pass_depth + m.pass_margin])
+    return [(mirror, None), (seat, m.lift_speed)]
+
+
+def bar_swing_path(
+    scenario: Scenario, p_A_W: FloatArray, seat_W: FloatArray, stretch_W: FloatArray,
+    attachment_W: FloatArray,
+) -> list[tuple[FloatArray, float | None]]:  # fmt: skip
+    """The bar's take-up from the seat (the top of the climb, or where the seated hook
+    held the vehicle) to the direction of the stretch: corners F_W [m] (the take-up's
+    speed, None).
+
     3. Swing down around the anchor at the radius where the crook just touches the bar
        (the seat's distance from p_A less ``hook_radius + bar_radius``), to the
        direction of the stretch point: the line stays nearly taut and rolls the seated
        hook over the bar. Descending straight from the mirror slackened the line and
-       the hook dropped off the bar's side (slope50, seeds 0-3). The arc is flown as
-       chords whose sagitta is at most a third of ``hook_tip_length``, so that the hook
-       drops at most that much from its crook.
+       the hook dropped off the bar's side (slope50, seeds 0-3). Swinging at the
+       planned seat's radius when a hook seated early held the vehicle lower pulled the
+       line taut in the swing (slope 20 deg, the bar 1.7 cm lower than believed). The
+       arc is flown as chords whose sagitta is at most a third of ``hook_tip_length``,
+       so that the hook drops at most that much from its crook.
 
     The stretch then goes straight out along that direction (no slack point inside
     the cable length: moving in let a seated hook slide off when pulled again).
     """
     m = scenario.mechanism
-    x = np.array([x_A_W[0], x_A_W[1], 0.0])
-    mirror = np.asarray(hook_end_W, float) + 2.0 * m.pass_offset * x / np.linalg.norm(x)
-    seat = mirror + np.array([0.0, 0.0, m.pass_depth])
-    a0 = seat + attachment_W - p_A_W
+    a0 = np.asarray(seat_W, float) + attachment_W - p_A_W
     a1 = np.asarray(stretch_W, float) + attachment_W - p_A_W
     r = float(np.linalg.norm(a0)) - (m.hook_radius + m.bar_radius)
     u0, u1 = a0 / np.linalg.norm(a0), a1 / np.linalg.norm(a1)
     cos_ang = float(np.clip(u0 @ u1, -1.0, 1.0))
     ang = math.acos(cos_ang)
-    path: list[tuple[FloatArray, float | None]] = [(mirror, None), (seat, m.lift_speed)]
+    path: list[tuple[FloatArray, float | None]] = []
     if ang < 1e-9:
         return path
     w = u1 - cos_ang * u0

@@ -59,7 +59,8 @@ from tetherland.mission.contact import (
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
     SHORTEST_LEG,
-    bar_seating_path,
+    bar_climb_path,
+    bar_swing_path,
     lift_off_band,
     magnet_drop_point,
     magnet_pull_out_path,
@@ -160,6 +161,9 @@ class MissionSupervisor:
             self._hanging = (self._min_leg, self._shaper)
             self._min_leg, self._shaper = SHORTEST_LEG, None
         self._climb_slack: np.ndarray | None = None
+        # the bar's take-up: when the swing starts from where the seat's climb left the
+        # vehicle (the end of the climb plus the settle time) [s]
+        self._swing_at: float | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
         self._takeoff_height = takeoff_height(scenario)
         self.yaw = wp.yaw
@@ -522,20 +526,22 @@ class MissionSupervisor:
             self._path = self._new_path(t, wp.hook_end, take_up)
             m = self.scenario.mechanism
             if m.kind == "bar":
-                # level to the pass's mirror across the bar, climb to seat the hook in its
-                # crook, then swing down around the anchor with the line nearly taut
-                # (descending at once let the hook drop off the bar)
-                for corner, speed in bar_seating_path(
-                    self.scenario, self.geo.p_A, self.geo.R_WA[:, 0], wp.hook_end,
-                    wp.stretch, wp.attachment_W,
-                ):  # fmt: skip
+                # level to the pass's mirror across the bar and climb to seat the hook in
+                # its crook; the swing down around the anchor (descending at once let the
+                # hook drop off the bar) starts, in _stretch, from where the climb left the
+                # vehicle: a hook seated early holds it lower
+                for corner, speed in bar_climb_path(self.scenario, self.geo.R_WA[:, 0],
+                                                    wp.hook_end):  # fmt: skip
                     self._path.to(corner, speed=speed)
+                self._swing_at = self._path.t_end + cfg.settle_time
+                self._taut.reset()
+                self._enter(Phase.STRETCH, t, "hooking pass done")
+                return self._free(t, est)
             if self._magnet:  # straight back first: out of the clip, not along the plate
                 for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
                     self._path.to(corner)
                 self._path.delay(m.epm_on_time)  # pressed on the plate while it switches on
-            if m.kind != "bar":  # the bar's seating swing ends nearly taut: no slack point
-                self._path.to(wp.slack_out)
+            self._path.to(wp.slack_out)
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
             self._taut.reset()
@@ -544,7 +550,23 @@ class MissionSupervisor:
 
     def _stretch(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
-        if self._taut.update(t, est.tension or 0.0) and est.link is not None:
+        if self._swing_at is not None and t >= self._swing_at:
+            # the bar: swing from the estimated position at the end of the seat's climb
+            self._swing_at = None
+            take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
+            seat = est.body.p_W.copy()
+            self._path = self._new_path(t, seat, take_up)
+            for corner, _ in bar_swing_path(self.scenario, self.geo.p_A, seat, wp.stretch,
+                                            wp.attachment_W):  # fmt: skip
+                self._path.to(corner)
+            self._path.to(wp.stretch, speed=cfg.stretch.speed)
+            self._taut.reset()
+        # not during the bar's climb: a hook seated early holds the vehicle under the
+        # climb's top, and the line pulls (1.24 N estimated for 0.2 s on a 20 deg pilot
+        # draw, the bar 1.4 cm lower than believed: read as taut, the tethered landing
+        # began from the seat and lost the tension)
+        if (self._swing_at is None and self._taut.update(t, est.tension or 0.0)
+                and est.link is not None):  # fmt: skip
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
@@ -556,7 +578,7 @@ class MissionSupervisor:
                 f"for {cfg.stretch.tension_dwell} s: cable taut, tethered control",
             )  # fmt: skip
             return self._track.reference(t, self.phase)
-        if t > self._path.t_end + cfg.stretch.timeout:
+        if self._swing_at is None and t > self._path.t_end + cfg.stretch.timeout:
             self._event(t, "hook", f"missed hook (attempt {self.hook_attempts}): no tension")
             if self.hook_attempts >= cfg.hooking.max_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
