@@ -161,6 +161,9 @@ class MissionSupervisor:
             self._min_leg, self._shaper = SHORTEST_LEG, None
         self._climb_slack: np.ndarray | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
+        self._stretch_leg: int | None = None
+        """Bar mechanism: index in the take-up path of the stretch leg, before whose start
+        a taut cable does not hand over to tethered control (:meth:`_stretch`)."""
         self._takeoff_height = takeoff_height(scenario)
         self.yaw = wp.yaw
         # state
@@ -530,6 +533,7 @@ class MissionSupervisor:
                     wp.stretch, wp.attachment_W,
                 ):  # fmt: skip
                     self._path.to(corner, speed=speed)
+                self._stretch_leg = len(self._path.segments)  # the next move is the stretch
             if self._magnet:  # straight back first: out of the clip, not along the plate
                 for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
                     self._path.to(corner)
@@ -544,7 +548,12 @@ class MissionSupervisor:
 
     def _stretch(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
-        if self._taut.update(t, est.tension or 0.0) and est.link is not None:
+        if self._swinging(t):
+            # the bar's take-up swings the nearly taut line over the bar: a belief error of
+            # the anchor (or the tension estimate's bias) reads taut there, far above the
+            # direction where the landing plan, its thrust and tension start
+            self._taut.reset()
+        elif self._taut.update(t, est.tension or 0.0) and est.link is not None:
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
@@ -570,6 +579,13 @@ class MissionSupervisor:
             )
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t, est)
+
+    def _swinging(self, t: float) -> bool:
+        """Whether the bar's take-up is still before its stretch leg at ``t`` [s]: the
+        seating swing around the anchor, where a taut cable does not start tethered
+        control (the landing plan and its feedforward start on the stretch direction)."""
+        k = self._stretch_leg
+        return k is not None and k < len(self._path.segments) and t < self._path.segments[k].t0
 
     def _contact(
         self, t: float, est: StateEstimate, ref: Reference, decision: ContactDecision, when: str
