@@ -161,10 +161,13 @@ class MissionSupervisor:
             self._hanging = (self._min_leg, self._shaper)
             self._min_leg, self._shaper = SHORTEST_LEG, None
         self._climb_slack: np.ndarray | None = None
-        # the bar's take-up: when the swing starts from where the seat's climb left the
-        # vehicle (the end of the climb plus the settle time) [s]
-        self._swing_at: float | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
+        self._swing_at: float | None = None
+        """Bar mechanism: when the take-up's swing starts from where the seat's climb left
+        the vehicle (the end of the climb plus the settle time) [s]."""
+        self._stretch_leg: int | None = None
+        """Bar mechanism: index in the take-up path of the stretch leg, before whose start
+        a taut cable does not hand over to tethered control (:meth:`_stretch`)."""
         self._takeoff_height = takeoff_height(scenario)
         self.yaw = wp.yaw
         # state
@@ -559,14 +562,18 @@ class MissionSupervisor:
             for corner, _ in bar_swing_path(self.scenario, self.geo.p_A, seat, wp.stretch,
                                             wp.attachment_W):  # fmt: skip
                 self._path.to(corner)
+            self._stretch_leg = len(self._path.segments)  # the next move is the stretch
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
             self._taut.reset()
-        # not during the bar's climb: a hook seated early holds the vehicle under the
-        # climb's top, and the line pulls (1.24 N estimated for 0.2 s on a 20 deg pilot
-        # draw, the bar 1.4 cm lower than believed: read as taut, the tethered landing
-        # began from the seat and lost the tension)
-        if (self._swing_at is None and self._taut.update(t, est.tension or 0.0)
-                and est.link is not None):  # fmt: skip
+        if self._swing_at is not None or self._swinging(t):
+            # the bar: not during the seat's climb (a hook seated early holds the vehicle
+            # under the climb's top and the line pulls: 1.24 N estimated for 0.2 s on a
+            # 20 deg pilot draw, the bar 1.4 cm lower than believed, read as taut began the
+            # tethered landing from the seat), nor during the swing over the bar (a belief
+            # error of the anchor, or the tension estimate's bias, reads taut there, far
+            # above the direction where the landing plan, its thrust and tension start)
+            self._taut.reset()
+        elif self._taut.update(t, est.tension or 0.0) and est.link is not None:
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
@@ -592,6 +599,13 @@ class MissionSupervisor:
             )
             self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
         return self._free(t, est)
+
+    def _swinging(self, t: float) -> bool:
+        """Whether the bar's take-up is still before its stretch leg at ``t`` [s]: the
+        seating swing around the anchor, where a taut cable does not start tethered
+        control (the landing plan and its feedforward start on the stretch direction)."""
+        k = self._stretch_leg
+        return k is not None and k < len(self._path.segments) and t < self._path.segments[k].t0
 
     def _contact(
         self, t: float, est: StateEstimate, ref: Reference, decision: ContactDecision, when: str
