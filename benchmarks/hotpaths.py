@@ -25,6 +25,12 @@ vehicle, the 20-link hanging line and the hook): the hook hanging and swinging u
 vehicle hovering at 1.5 m (no contact), and the hook seated on the bar with the line
 pulled to 3 N by a vehicle driven over the bar as in the catch test (contacts of the line
 and the hook with the bar, elliptic cones), each restarted every 64 steps from its state.
+Measured (issue 25, s25-barstep against 2291551, the same workload file): ``bar_free``
+788.1k -> 759.6k instructions per physics step (the line's armature and crown checks
+skipped when they cannot change anything; the same bits); ``bar_seated`` not counted yet
+(its warm-up, the catch, takes many minutes under valgrind): MuJoCo's step alone,
+replayed from contact states of a slope50 bar mission, 2.59M -> 2.07M with the sparse
+Jacobian.
 ``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
 
 Measured (issue 25, exact culling in ``aero_into``, the same bits): ``aero`` 74.6k ->
