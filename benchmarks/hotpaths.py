@@ -20,6 +20,17 @@ moving, with free-flight references of 2 to 4 rows and tethered ones in turn) an
 ``plant`` (one physics step of the slope50 plant, :meth:`Plant.step`, as the runner calls
 it: the command changed every second step, cycling over 16 starts near the slope with the
 cable engaged, each held for 64 steps; counted per physics step, the restarts included).
+``bar_free`` and ``bar_seated`` are the same with the bar mechanism (a 69-dof tree: the
+vehicle, the 20-link hanging line and the hook): the hook hanging and swinging under the
+vehicle hovering at 1.5 m (no contact), and the hook seated on the bar with the line
+pulled to 3 N by a vehicle driven over the bar as in the catch test (contacts of the line
+and the hook with the bar, elliptic cones), each restarted every 64 steps from its state.
+Measured (issue 25, s25-barstep against 2291551, the same workload file): ``bar_free``
+788.1k -> 759.6k instructions per physics step (the line's armature and crown checks
+skipped when they cannot change anything; the same bits); ``bar_seated`` not counted yet
+(its warm-up, the catch, takes many minutes under valgrind): MuJoCo's step alone,
+replayed from contact states of a slope50 bar mission, 2.59M -> 2.07M with the sparse
+Jacobian.
 ``benchmarks/bench_callgrind.sh`` runs them all and prints instructions per call.
 
 Measured (issue 25, exact culling in ``aero_into``, the same bits): ``aero`` 74.6k ->
@@ -39,6 +50,7 @@ import functools
 import math
 import sys
 
+import mujoco
 import numpy as np
 
 from tetherland.config import load_scenario
@@ -169,6 +181,74 @@ def _plant():
     return call
 
 
+def _bar_plant(seated: bool):
+    """One :meth:`Plant.step` of the slope50 bar plant per call (see the module doc)."""
+    from tetherland import GRAVITY
+    from tetherland.mission.hooking import scenario_hook_offset
+    from tetherland.sim.plant import Plant
+    from tetherland.state import RigidBodyState
+
+    sc = load_scenario("slope50", ["mechanism.kind=bar"])
+    plant = Plant(sc)
+    m, d = plant.model, plant.data
+    line_mass = float(m.body_subtreemass[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY,
+                                                           "line_link0")])  # fmt: skip
+    w_h = math.sqrt((sc.vehicle.mass + line_mass) * GRAVITY / (4.0 * sc.vehicle.thrust_coefficient))
+    geo = plant.layout.geometry
+    p_A, x_A, z = geo.p_A, geo.R_WA[:, 0], np.array([0.0, 0.0, 1.0])
+    q0 = plant.start_state().q_WB
+    if not seated:  # hanging under the hovering vehicle, swinging (moved at 0.3 m/s)
+        p0 = plant.start_state().p_W + 1.5 * z
+        plant.reset(RigidBodyState.at_rest(p0, q0), rotor_speeds=[w_h] * 4)
+        d.qvel[0:3] = 0.3 * x_A
+    else:  # lowered beside the bar, flown over it and pulled until the line holds 3 N
+        shift = scenario_hook_offset(sc, geo) + np.asarray(sc.vehicle.cable_attachment)
+        start, low = p_A + 0.3 * z - shift, p_A - 0.1 * z - shift
+        plant.reset(RigidBodyState.at_rest(start, q0), rotor_speeds=[w_h] * 4)
+        over = low + 0.45 * x_A
+        e = (x_A - 0.8 * z) / np.linalg.norm(x_A - 0.8 * z)
+        pos = start
+
+        def move(v: np.ndarray, n: int, until: float = math.inf) -> None:
+            nonlocal pos
+            for _ in range(n):
+                pos = pos + v * plant.dt
+                d.qpos[0:3], d.qpos[3:7], d.qvel[0:3], d.qvel[3:6] = pos, q0, v, 0.0
+                plant.step()
+                if plant.tension > until:
+                    return
+
+        for a, b in ((start, low), (low, over)):  # at 0.2 m/s, then held for 0.5 s
+            n = round(float(np.linalg.norm(b - a)) / 0.2 / plant.dt)
+            move((b - a) / (n * plant.dt), n)
+            move(0.0 * e, round(0.5 / plant.dt))
+        move(0.1 * e, round(5.0 / plant.dt), 1.0)  # the take-up: to 1 N, then gently to 3 N
+        move(0.005 * e, round(100.0 / plant.dt), 3.0)
+        d.qvel[0:6] = 0.0
+        assert plant.tension > 2.0 and plant.cable.caught, "the hook is not seated"
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    state = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, d, state, spec)
+    armature = m.dof_armature.copy()
+    line = plant.cable
+    held = (line._t_held, line._t_set, line._push, line.caught, line._apart)
+    commands = (np.full(4, w_h + 0.5), np.full(4, w_h - 0.5))
+    k = [0]
+
+    def call() -> None:
+        i = k[0]
+        k[0] = i + 1
+        if i % 64 == 0:
+            mujoco.mj_setState(m, d, state, spec)
+            m.dof_armature[:] = armature
+            line._t_held, line._t_set, line._push, line.caught, line._apart = held
+        if i % 2 == 0:
+            plant.command(commands[(i // 2) % 2])
+        plant.step()
+
+    return call
+
+
 def _compensation():
     """The two controller wrappers of a mission (:func:`~tetherland.control.rotor_drag.
     with_aero_belief`) around a controller that returns fixed speeds: one control tick per
@@ -261,6 +341,8 @@ def main() -> None:
         call = _aero(name)
     elif name == "plant":
         call = _plant()
+    elif name in ("bar_free", "bar_seated"):
+        call = _bar_plant(name == "bar_seated")
     elif name == "compensation":
         call = _compensation()
     else:

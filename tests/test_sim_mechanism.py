@@ -17,6 +17,8 @@ from tetherland.config import Scenario, load_scenario
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry
 from tetherland.mission.hooking import hooking_pass, scenario_hook_offset
+from tetherland.sim.cable import ARMATURE_DECAY, LINE_TENSION_FLOOR, HangingLine
+from tetherland.sim.mjcf import chain_armature
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
@@ -174,6 +176,55 @@ def test_hanging_hook_swings_with_its_pendulum_period() -> None:
     assert len(crossings) >= 3
     measured = float(np.mean(np.diff(crossings)))
     assert measured == pytest.approx(predicted, rel=0.005)
+
+
+def test_line_armature_follows_the_held_tension_at_every_step(bar_plant: Plant) -> None:
+    """The line's ball-joint armature after every step is chain_armature(T_set) with
+    T_set = max(T_held, floor), reset whenever the held tension (2 f, decaying by
+    ARMATURE_DECAY per step) leaves [0.8 T_set, T_set]: the rule recomputed here from the
+    measured tension, bit for bit, for a slack line on the pad (at the floor) and a
+    heavy hook swinging down from level under the hovering vehicle (above it)."""
+    plant = bar_plant
+    line = plant.cable
+    assert isinstance(line, HangingLine)
+    spec = line.spec
+    dofs = slice(line._vadr[0], line._vadr[0] + 3 * spec.segments)
+    sets: list[float] = []
+    held = t_set = 0.0
+
+    def each(p: Plant) -> None:
+        nonlocal held, t_set
+        decayed = held * ARMATURE_DECAY
+        held = decayed if decayed > 2.0 * p.tension else 2.0 * p.tension
+        if not (t_set * 0.8 <= held <= t_set):
+            t_set = max(held, LINE_TENSION_FLOOR)
+        sets.append(t_set)
+        a = chain_armature(t_set, spec.link_length, spec.link_mass, p.dt)
+        assert np.array_equal(p.model.dof_armature[dofs], np.full(3 * spec.segments, a))
+
+    def fly(seconds: float) -> None:
+        for _ in range(round(seconds / plant.dt)):  # (plant: the one flown now)
+            plant.step(1)
+            each(plant)
+
+    plant.reset()  # on the pad, motors off: the line lies slack on the ground
+    held, t_set = line._t_held, line._t_set  # after the reset's settling
+    fly(0.3)
+    assert max(sets) == LINE_TENSION_FLOOR
+    # a 200 g hook (2 N hanging, above the floor) swinging down from level under the
+    # hovering vehicle
+    plant = Plant(load_scenario("slope50", ["mechanism.kind=bar", "mechanism.hook_mass=0.2"]))
+    line = plant.cable
+    assert isinstance(line, HangingLine)
+    up = plant.start_state().p_W + np.array([0.0, 0.0, 2.5])
+    plant.reset(RigidBodyState.at_rest(up, plant.start_state().q_WB),
+                rotor_speeds=[_hover_speed(plant)] * 4)  # fmt: skip
+    line.lay_out(toward_W=plant.attachment_point() + np.array([1.0, 0.0, 0.0]))
+    plant.forward()
+    held, t_set = line._t_held, line._t_set
+    sets.clear()
+    fly(1.0)
+    assert max(sets) > 2.0 * LINE_TENSION_FLOOR and len(set(sets)) > 3  # set again and again
 
 
 def test_takeoff_lifts_the_hook_without_a_swing_that_reaches_the_bar() -> None:

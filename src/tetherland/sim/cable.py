@@ -633,23 +633,30 @@ class HangingLine:
     def advance(self) -> None:
         line_drag_into(*self._drag_args)  # the air's push on the links, at the step's start
         mujoco.mj_step(self._model, self._data)
-        f = self._read()
+        d = self._sensordata
+        i = self._force
+        f = math.sqrt(d[i] * d[i] + d[i + 1] * d[i + 1] + d[i + 2] * d[i + 2])  # (_read)
+        d[self._slot] = f
         held = self._t_held * ARMATURE_DECAY
-        self._t_held = held if held > 2.0 * f else 2.0 * f
-        if not (self._t_set * 0.8 <= self._t_held <= self._t_set):
-            self._set_armature(self._t_held)
-        d, c = self._sensordata, self._contact
+        held = self._t_held = held if held > 2.0 * f else 2.0 * f
+        t_set = self._t_set
+        # (a held tension under the floor keeps the floor's armature: nothing to set)
+        if not (t_set * 0.8 <= held <= t_set) and (
+            held > LINE_TENSION_FLOOR or t_set != LINE_TENSION_FLOOR
+        ):
+            self._set_armature(held)
+        c = self._contact
         touching = d[c] > 0.0
         raw = (math.sqrt(d[c + 1] ** 2 + d[c + 2] ** 2 + d[c + 3] ** 2) if touching
                else 0.0)  # fmt: skip
         push = self._push = self._push + (raw - self._push) * self._alpha
         was = self.caught
-        near = self._near_bar()
         if was:
             self._apart = 0 if touching else self._apart + 1
-            self.caught = near and self._apart < self._release_steps
+            self.caught = self._apart < self._release_steps and self._near_bar()
         else:
-            self.caught = near and push > self._catch
+            # (the crown's distance matters only once the push would catch)
+            self.caught = push > self._catch and self._near_bar()
             self._apart = 0
         self.changed = was != self.caught
 

@@ -421,7 +421,9 @@ def add_options_and_assets(scene: SceneXml) -> None:
         integrator=sim.integrator,
         cone="elliptic",
         impratio=f"{sim.impratio:.12g}",
-        jacobian="dense",
+        # the bar's hanging line: sparse (the same equations; a contact on a line link
+        # has Jacobian entries only on the link's ancestors' dofs, docs/mechanism.md)
+        jacobian="sparse" if scene.scenario.mechanism.kind == "bar" else "dense",
         solver="Newton",
         gravity=_fmt((0.0, 0.0, -GRAVITY)),
     )
