@@ -230,10 +230,12 @@ def test_line_armature_follows_the_held_tension_at_every_step(bar_plant: Plant) 
 def test_takeoff_lifts_the_hook_without_a_swing_that_reaches_the_bar() -> None:
     """The mission's takeoff (the supervisor's path, shaped) lifts the hanging hook off
     the ground at ``mechanism.lift_speed``. Snatched off the ground at the cruise climb
-    (lift_band = 0) at v, the hook's kinetic energy m v^2 / 2 alone, put into its swing
-    (m g A^2 / 2L), is a swing of A = v sqrt(L/g): the measured swing over the two swing
-    periods after the climb exceeds it (the falling line adds to it), and lifted slowly
-    the hook swings less than that."""
+    (lift_band = 0) at v, the hook's kinetic energy m v^2 / 2, put into its swing
+    (m g A^2 / 2L), would be a swing of A = v sqrt(L/g): lifted slowly, the hook swings
+    less than that over the two swing periods after the climb, and less than the
+    snatched hook does. (How much of the snatch goes into the swing is chaotic: the
+    folded line falls and whips; equivalent plants, the constraint Jacobian summed dense
+    or sparse, with and without the line's air drag, measured 0.07-0.97 m for it.)"""
     from tetherland.mission.hooking import (
         lift_off_band,
         shortest_leg,
@@ -264,7 +266,7 @@ def test_takeoff_lifts_the_hook_without_a_swing_that_reaches_the_bar() -> None:
                         for t in np.linspace(0.0, path.t_end, 2001))  # fmt: skip
             L = plant.cable.spec.line_length + s.mechanism.hook_shank / 2
             snatch = climb * math.sqrt(L / GRAVITY)
-    assert swing[None] < snatch < swing[0.0]
+    assert swing[None] < snatch and swing[None] < swing[0.0]
 
 
 def _heavy_vehicle(plant: Plant) -> int:
