@@ -169,9 +169,8 @@ def judge_hooking(log: SimLog, record: RunRecord, scenario: Scenario) -> Hooking
     caught = np.asarray(log["hook"]).reshape(-1) > 0
     tension = np.asarray(log["tension"], dtype=float).reshape(-1)
     mech = scenario.mechanism
-    bar = mech.kind == "bar"
     geo = LandingGeometry.from_scenario(scenario)
-    dist = _bar_distance(log, geo, scenario) if bar else None
+    dist = _bar_distance(log, geo, scenario) if mech.kind == "bar" else None
     near = bar_near_distance(mech)
     load = mech.catch_threshold * mech.hook_mass * GRAVITY
     attempts = []
@@ -181,21 +180,20 @@ def judge_hooking(log: SimLog, record: RunRecord, scenario: Scenario) -> Hooking
         c = caught[w]
         free = ~c
         t_caught = float(t[w][np.argmax(c)]) if c.any() else None
-        free_t = tension[w][free] if free.any() else np.zeros(0)
-        max_free = float(free_t.max()) if free_t.size else 0.0
+        max_free = float(tension[w][free].max(initial=0.0))
         d_min = float(dist[w].min()) if dist is not None else None
         end_caught = bool(caught[min(max(i1, i0 + 1), len(t)) - 1])
         if end_caught:
             outcome = HookingOutcome.CAUGHT
         elif c.any():
             outcome = HookingOutcome.BOUNCED
-        elif bar and dist is not None:
+        elif dist is not None and d_min is not None:  # the bar (both, or neither)
             loaded = free & (tension[w] > load)
             if (loaded & (dist[w] > near)).any():
                 outcome = HookingOutcome.WRONG_SIDE
             elif loaded.any():
                 outcome = HookingOutcome.TANGLED
-            elif d_min is not None and d_min <= near:
+            elif d_min <= near:
                 outcome = HookingOutcome.BOUNCED
             else:
                 outcome = HookingOutcome.MISSED
