@@ -157,6 +157,7 @@ def verify(
     model = spec.model
     tension = np.asarray(model.tension(x.T))
     thrusts = model.rotor_thrusts(x.T, tension).T  # with the offset's b f_L
+    thrusts = spec.rotor_commands(thrusts, x[:, 0], x[:, 1])  # (f / k: the ground effect)
     return _check(
         spec, tol, times, x[:, 0], tension, times, thrusts, _final_error(spec, x_end),
         CheckScope.RESIMULATION,
@@ -209,7 +210,11 @@ def verify_nodes(
     share = spec.model.rotor_thrusts(X.T, tension).T - X[:, 4:8]  # the offset's G [0, b f_L]
     f0, df0 = X[:-1, 4:8] + share[:-1], X[:-1, 8:12]
     arcs = np.stack((f0, f0 + 0.5 * h[:, None] * df0, X[1:, 4:8] + share[1:]), axis=1)
+    # (with the believed ground effect: the commands f / k, k of each interval's first node)
+    arcs = spec.rotor_commands(
+        arcs.reshape(-1, 4), np.repeat(X[:-1, 0], 3), np.repeat(X[:-1, 1], 3)
+    )
     return _check(
-        spec, tol, times, X[:, 0], tension, np.repeat(times[:-1], 3), arcs.reshape(-1, 4),
+        spec, tol, times, X[:, 0], tension, np.repeat(times[:-1], 3), arcs,
         _final_error(spec, X[-1]), CheckScope.NODES, extra=gap_issue,
     )  # fmt: skip
