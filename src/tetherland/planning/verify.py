@@ -43,7 +43,8 @@ class Tolerances:
     rate : float
         Final |phi'| and |theta_A'| [rad/s].
     thrust : float
-        Rotor thrusts beyond the planned bounds [f_min + margin, f_max - margin] [N]
+        Rotor thrusts (or commands, see :class:`Verification`) beyond the planned bounds
+        [f_min + margin, f_max - margin] [N]
         (the vehicle's own limits [f_min, f_max] are never exceeded by more than this).
     tension : float
         Tension below the bound f_L_min(t) [N].
@@ -75,7 +76,8 @@ class Verification(CheckResult):
     tension_margin : float
         min over t of f_L(t) - f_L_min(t) [N] (negative: the bound is violated).
     min_rotor_thrust, max_rotor_thrust : float
-        Extreme rotor thrusts [N].
+        Extreme rotor thrusts [N]: what the rotor bounds hold, the commands f_i / k_i
+        when the plan models the believed ground effect (``planner.model_ground_effect``).
     surface_margin : float
         min over t of phi - phi* [rad].
 
