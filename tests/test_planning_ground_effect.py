@@ -149,9 +149,8 @@ def test_plan_lets_the_acting_thrust_exceed_the_ceiling_by_k():
     base, ceiling = ceiling_between(scenario)
     spec = replace(base, f_hi=ceiling)
     assert not precheck(spec)
-    solution = OcpSolver(
-        MultipleShooting(12, "rk4", 2), SolverSettings("ipopt", tol=1e-8)
-    ).solve(build_ocp(spec))
+    solver = OcpSolver(MultipleShooting(12, "rk4", 2), SolverSettings("ipopt", tol=1e-8))
+    solution = solver.solve(build_ocp(spec))
     assert solution.success
     X = spec.model.from_wrench_form(solution.X[1:-1].T).T  # the path: the open interval
     acting = spec.model.rotor_thrusts(X.T, spec.model.tension(X.T)).T
