@@ -503,17 +503,22 @@ _ROTOR_REASONS = (
 )
 
 
-def landed_hover_rotor_reason(scenario: Scenario, g: float = GRAVITY) -> str | None:
+def landed_hover_rotor_reason(
+    scenario: Scenario, g: float = GRAVITY, rotor_bounds: bool = True
+) -> str | None:
     """Why the rotors cannot hold the landed inclined hover (cable torque included), or None.
 
     The rotor checks of :func:`landed_hover` (hover in free flight, no inclined hover,
     rotor floor and ceiling, offset torque), without the slope search: used by the
-    planner so that planning and analysis agree on what is feasible.
+    planner so that planning and analysis agree on what is feasible. ``rotor_bounds``
+    false leaves out the floor and the ceiling (a planner that bounds the rotor commands
+    under the believed ground effect checks them itself).
     """
     geometry = LandingGeometry.from_scenario(scenario)
     hover = landed_hover(geometry.surface, geometry.c, VehicleLimits.from_scenario(scenario), g)
+    reasons = _ROTOR_REASONS if rotor_bounds else _ROTOR_REASONS[:2] + _ROTOR_REASONS[4:]
     for check in hover.findings:
-        if check.reason in _ROTOR_REASONS:
+        if check.reason in reasons:
             return check.message
     return None
 

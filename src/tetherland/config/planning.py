@@ -81,5 +81,12 @@ class PlannerConfig(Section):
     mu_init: float = Field(1e-2, gt=0, le=10)
     """Initial barrier parameter of the interior-point solvers; the default suits the
     cold start from the spline reference (the solvers' own default is 0.1) [-]."""
+    model_ground_effect: bool = False
+    """Bound the rotor *commands* f_i / k_i rather than the acting thrusts f_i, with k_i
+    the believed ground-effect factor of rotor i along the planned path (believed surface
+    and rotor radius, as ``estimator.ground_effect_belief``; a plane or pipe surface;
+    :mod:`tetherland.planning.ground_effect`). Off: the plan bounds the acting thrusts,
+    which ``controller.ground_effect_compensation`` makes the commands divided by k
+    (docs/aero.md) [-]."""
     weights: PlannerWeights = PlannerWeights()
     """Cost gains of J1..J5 and the bump width."""

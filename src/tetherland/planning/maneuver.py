@@ -49,6 +49,8 @@ from tetherland.models.planar import (
     wrench_form_rhs,
     wrench_form_terms,
 )
+from tetherland.planning.ground_effect import SIZE as GROUND_EFFECT_SIZE
+from tetherland.planning.ground_effect import PlannedGroundEffect, factors_expr
 from tetherland.planning.ocp import OcpProblem
 
 StateForm = Literal["wrench", "rotor"]
@@ -100,6 +102,10 @@ class ManeuverSpec:
     start_state : (12,) array or None
         Rotor-form extended state the maneuver starts from when it is not the start
         hover: the rest of a maneuver re-planned from the current state (:meth:`remainder`).
+    ground_effect : PlannedGroundEffect or None
+        The believed ground effect whose factors k_i divide the rotor thrusts in the
+        rotor bounds (``planner.model_ground_effect``): the bounds hold the commands
+        f_i / k_i. None: they hold the acting thrusts f_i (the default).
     """
 
     maneuver: Maneuver
@@ -122,6 +128,7 @@ class ManeuverSpec:
     weights: PlannerWeights
     bump_width: float
     start_state: FloatArray | None = None
+    ground_effect: PlannedGroundEffect | None = None
 
     @classmethod
     def from_scenario(
@@ -162,6 +169,11 @@ class ManeuverSpec:
             tension_ramp=cfg.tension_ramp,
             weights=cfg.weights,
             bump_width=math.radians(cfg.weights.bump_width_deg),
+            ground_effect=PlannedGroundEffect.from_scenario(
+                scenario, geo, params.length, params.heading
+            )
+            if cfg.model_ground_effect
+            else None,
         )
 
     @property
@@ -218,23 +230,21 @@ class ManeuverSpec:
         """Rotor-form extended state of the final hover (12,)."""
         return self.model.hover_state(self.phi_final, self.theta_final)
 
+    def outputs(self, which: Literal["start", "final"]) -> tuple[float, float]:
+        """(phi, theta_A) of the start or final hover [rad]."""
+        if which == "start":
+            return self.phi_start, self.theta_start
+        return self.phi_final, self.theta_final
+
     def hover(self, which: Literal["start", "final"]) -> tuple[float, float]:
         """(f_R, f_L) of the start or final inclined hover [N]."""
-        phi, theta = (
-            (self.phi_start, self.theta_start)
-            if which == "start"
-            else (self.phi_final, self.theta_final)
-        )
+        phi, theta = self.outputs(which)
         return inclined_hover(phi, theta, self.params.mass, self.params.gravity)
 
     def hover_torque(self, which: Literal["start", "final"]) -> float:
         """Rotor torque tau_y about y_A of the start or final hover: it holds the cable
         torque of the attachment offset, b f_L (docs/theory.md (4.17)) [N m]."""
-        phi, theta = (
-            (self.phi_start, self.theta_start)
-            if which == "start"
-            else (self.phi_final, self.theta_final)
-        )
+        phi, theta = self.outputs(which)
         return hover_torque(phi, theta, self.hover(which)[1], self.params)
 
     def hover_rotor_thrusts(self, which: Literal["start", "final"]) -> FloatArray:
@@ -242,11 +252,7 @@ class ManeuverSpec:
         planar G [f_R, tau_y] plus the torque about x_A and z_A of an offset across the
         plane (docs/theory.md (4.18)) [N]."""
         p = self.params
-        phi, theta = (
-            (self.phi_start, self.theta_start)
-            if which == "start"
-            else (self.phi_final, self.theta_final)
-        )
+        phi, theta = self.outputs(which)
         f_R, f_L = self.hover(which)
         f = p.G @ np.array([f_R, self.hover_torque(which)])  # net torque 0, rotors b f_L
         if p.offset_across != 0.0:
@@ -263,6 +269,14 @@ class ManeuverSpec:
             tau_B = R_AB.T @ np.array([t_x, 0.0, t_z])
             f = f + np.linalg.inv(p.allocation)[:, 1:4] @ tau_B
         return f
+
+    def rotor_commands(self, thrusts: FloatArray, phi: ArrayLike, theta_A: ArrayLike) -> FloatArray:
+        """What the rotor bounds hold of acting rotor ``thrusts`` (n, 4) [N] at the planar
+        states (phi, theta_A) (n,) [rad]: the commands f_i / k_i with
+        :attr:`ground_effect`, else ``thrusts`` themselves (the same array) [N]."""
+        if self.ground_effect is None:
+            return thrusts
+        return self.ground_effect.commands(thrusts, phi, theta_A)
 
     def tension_floor(self, t: FloatArray | float) -> FloatArray:
         """Lower bound on f_L at time ``t`` [N]: f_L_min, ramped near a boundary whose
@@ -282,7 +296,8 @@ def precheck(spec: ManeuverSpec) -> list[str]:
     """Reasons why the maneuver is infeasible before any solve (empty list: none found).
 
     Checks the boundary hovers exist with a non-negative tension and rotor thrusts in
-    [f_min + margin, f_max - margin], that the start elevation is below the vertical,
+    [f_min + margin, f_max - margin] (the commands f_i / k_i with
+    :attr:`ManeuverSpec.ground_effect`), that the start elevation is below the vertical,
     and that the tension bound is not beyond what the rotors and the swing can hold.
     """
     reasons: list[str] = []
@@ -304,7 +319,9 @@ def precheck(spec: ManeuverSpec) -> list[str]:
         except SingularityError as err:
             reasons.append(f"{names[which]}: {err}")
             continue
-        per_rotor = spec.hover_rotor_thrusts(which)
+        phi, theta = spec.outputs(which)
+        per_rotor = spec.rotor_commands(spec.hover_rotor_thrusts(which)[None, :], phi, theta)[0]
+        command = "rotor command (believed ground effect) " if spec.ground_effect else ""
         torque = spec.hover_torque(which)
         why = (
             f" (with the cable-offset torque {torque:+.3f} N m the rotors hold: too steep for "
@@ -317,13 +334,13 @@ def precheck(spec: ManeuverSpec) -> list[str]:
         elif per_rotor.max() > spec.f_hi + 1e-9:
             reasons.append(
                 f"rotor f_max too low for this slope: the {names[which]} needs f_R = {f_R:.2f} N, "
-                f"{per_rotor.max():.2f} N per rotor > vehicle.f_max - control_margin = "
+                f"{per_rotor.max():.2f} N {command}per rotor > vehicle.f_max - control_margin = "
                 f"{spec.f_max:g} - {margin:g} N{why}"
             )
         elif per_rotor.min() < spec.f_lo - 1e-9:
             reasons.append(
                 f"rotor f_min too high for this slope: the {names[which]} needs f_R = {f_R:.2f} N, "
-                f"{per_rotor.min():.2f} N per rotor < vehicle.f_min + control_margin = "
+                f"{per_rotor.min():.2f} N {command}per rotor < vehicle.f_min + control_margin = "
                 f"{spec.f_min:g} + {margin:g} N{why}"
             )
     # Tension bound: f_L <= f_R + m g + m l phi'^2 with f_R <= 4 f_hi. On the middle part of
@@ -383,6 +400,8 @@ def _numbers(spec: ManeuverSpec, form: StateForm) -> dict[str, object]:
     x0 = spec.model.to_wrench_form(spec.x_start) if form == "wrench" else spec.x_start
     values = _param_values(spec)
     p_value = [np.atleast_1d(np.asarray(values[n], dtype=float)) for n in _PARAM_NAMES]
+    if spec.ground_effect is not None:  # appended: the offsets of the others stay
+        p_value.append(spec.ground_effect.values)
     return {
         "duration": spec.duration,
         "x0": x0,
@@ -411,8 +430,9 @@ def build_ocp(
         their rates instead of the four thrusts, f = G [f_R, tau_y]. Both state the same
         problem; the rotor bounds become linear path constraints in the wrench form.
     template : OcpProblem, optional
-        A problem previously built for the same ``form``: its symbolic statement is
-        reused (every number of ``spec`` enters as data), which skips rebuilding it.
+        A problem previously built for the same ``form`` and the same
+        :func:`statement_key` of ``spec``: its symbolic statement is reused (every number
+        of ``spec`` enters as data), which skips rebuilding it.
 
     Cost (section 6.5.2), with h(phi) = exp(-((phi - phi*)/w)^4):
       J1 = k_phi (phi - phi_f)^2 + k_theta (theta_A - theta_A,f)^2 + k_phi' phi'^2
@@ -424,6 +444,10 @@ def build_ocp(
     Constraints: (6.20) dynamics, initial hover, f_L >= f_L_min(t) (6.21d), rotor thrusts
     in [f_min + margin, f_max - margin] at the nodes and between them (6.21c),
     phi* <= phi <= pi - gamma - beta (above the surface), terminal hover.
+    With ``spec.ground_effect`` the rotor bounds hold the commands (f_i + share_i) / k_i,
+    k_i the believed ground-effect factor at the node (on an interval's Bernstein middle
+    coefficient too, the factor of its first node: between the nodes the fine check
+    :func:`~tetherland.planning.verify.verify` holds them with the factor of each time).
     """
     if form not in ("wrench", "rotor"):
         raise ValueError(f"form must be 'wrench' or 'rotor', got {form!r}")
@@ -431,8 +455,18 @@ def build_ocp(
     if template is not None:
         if template.nx != (8 if form == "wrench" else 12):
             raise ValueError(f"template is not a {form}-form problem")
+        if template.p.numel() != numbers["p_value"].size:  # type: ignore[union-attr]
+            raise ValueError("template is a problem with another ground-effect model")
         return template.with_numbers(**numbers)
-    return OcpProblem(**_statement(form), **numbers)
+    effect = spec.ground_effect
+    return OcpProblem(**_statement(form, None if effect is None else effect.key), **numbers)
+
+
+def statement_key(spec: ManeuverSpec) -> tuple[str, bytes] | None:
+    """What the statement of ``spec`` depends on beyond the state form: None, or the
+    believed ground effect's surface kind and disk samples (:attr:`PlannedGroundEffect.
+    key`). Problems of equal keys (and form) share a statement and a compiled solver."""
+    return None if spec.ground_effect is None else spec.ground_effect.key
 
 
 def remainder_ocp(problem: OcpProblem, spec: ManeuverSpec) -> OcpProblem:
@@ -450,10 +484,17 @@ def remainder_ocp(problem: OcpProblem, spec: ManeuverSpec) -> OcpProblem:
     return problem.with_numbers(duration=spec.duration, x0=x0, p_value=p_value)
 
 
-def _statement(form: StateForm) -> dict[str, object]:
-    """The symbolic statement of (6.21) in the given state coordinates."""
+def _statement(
+    form: StateForm, ground_effect: tuple[str, bytes] | None = None
+) -> dict[str, object]:
+    """The symbolic statement of (6.21) in the given state coordinates; ``ground_effect``:
+    the believed ground effect's :attr:`PlannedGroundEffect.key` (the rotor bounds then
+    hold the commands), None for the acting thrusts."""
     s = {name: ca.SX.sym(name, _PARAM_SIZES.get(name, 1)) for name in _PARAM_NAMES}
     P = ca.vertcat(*s.values())
+    if ground_effect is not None:
+        g = ca.SX.sym("ground_effect", GROUND_EFFECT_SIZE)
+        P = ca.vertcat(P, g)
     c = _Coefficients(s)
     t, T, h = ca.SX.sym("t"), ca.SX.sym("T"), ca.SX.sym("h")
     G = ca.reshape(s["G"], 2, 4).T  # (4, 2), row-major values
@@ -509,6 +550,11 @@ def _statement(form: StateForm) -> dict[str, object]:
     # added, from the node, to the interval's Bernstein middle coefficient).
     share = G[:, 1] * (offset_arms(phi, theta, c.offset, CASADI)[1] * terms["tension"])
     path = [terms["tension"] - floor, thrusts_mid + share, thrusts + share]
+    if ground_effect is not None:  # the commands f_i / k_i (the interval's first node's k)
+        kind, samples = ground_effect
+        pts = np.frombuffer(samples, dtype=float).reshape(-1, 2)
+        k = factors_expr(phi, theta, g, kind, pts)  # type: ignore[arg-type]
+        path = [path[0], path[1] / k, path[2] / k]
     terminal = ca.vertcat(phi - s["phi_f"], theta - s["theta_f"], dphi, dtheta, terminal_wrench)
     return {
         "x": x, "u": u, "p": P, "t": t, "T": T, "h": h,

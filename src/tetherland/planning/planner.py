@@ -57,6 +57,7 @@ from tetherland.planning.maneuver import (
     build_ocp,
     precheck,
     remainder_ocp,
+    statement_key,
 )
 from tetherland.planning.ocp import OcpProblem
 from tetherland.planning.solvers import (
@@ -295,7 +296,9 @@ class Planner:
         self.form: StateForm = form
         self.tolerances = tolerances or Tolerances()
         self.driver = OcpDriver()
-        self._template: OcpProblem | None = None
+        self._templates: dict[tuple[str, bytes] | None, OcpProblem] = {}
+        """The statements built so far, the last of each :func:`statement_key` (None: the
+        acting thrusts bounded; else the believed ground effect's kind and samples)."""
         self.simulator = PlanarSimulator()
 
     def ocp_solver(self, transcription: MultipleShooting, settings: SolverSettings) -> OcpSolver:
@@ -310,8 +313,9 @@ class Planner:
 
     def _problem(self, spec: ManeuverSpec) -> OcpProblem:
         # The statement holds no numbers: build it once, then only swap the data.
-        problem = build_ocp(spec, self.form, self._template)
-        self._template = problem
+        key = statement_key(spec)
+        problem = build_ocp(spec, self.form, self._templates.get(key))
+        self._templates[key] = problem
         return problem
 
     def plan(
@@ -342,7 +346,9 @@ class Planner:
             status=PlanStatus.FAILED, message="", maneuver=spec.maneuver, method=method, spec=spec
         )
         reasons = precheck(spec)
-        landed = landed_hover_rotor_reason(scenario)
+        # (with the believed ground effect, precheck holds the landed hover's rotor
+        # commands; the analysis' floor and ceiling hold the acting thrusts)
+        landed = landed_hover_rotor_reason(scenario, rotor_bounds=spec.ground_effect is None)
         if landed is not None and not reasons:
             reasons.append(landed)
         if reasons:
@@ -418,9 +424,8 @@ class Planner:
         if prev.X.shape[1] != (8 if self.form == "wrench" else 12):
             raise PlanningError("replan: the plan was made by a planner of another state form")
         # The statement and all numbers but x0, T and the tension ramp are the plan's.
-        problem = self._problem(spec) if self._template is None else remainder_ocp(
-            self._template, spec
-        )  # fmt: skip
+        template = self._templates.get(statement_key(spec))
+        problem = self._problem(spec) if template is None else remainder_ocp(template, spec)
         # Node times of the re-plan on the previous plan's clock; its nodes interpolated
         # there (inputs held) start the solver; the first node is the new initial state.
         t_new = into + np.linspace(0.0, spec.duration, N + 1)

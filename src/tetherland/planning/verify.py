@@ -43,7 +43,8 @@ class Tolerances:
     rate : float
         Final |phi'| and |theta_A'| [rad/s].
     thrust : float
-        Rotor thrusts beyond the planned bounds [f_min + margin, f_max - margin] [N]
+        Rotor thrusts (or commands, see :class:`Verification`) beyond the planned bounds
+        [f_min + margin, f_max - margin] [N]
         (the vehicle's own limits [f_min, f_max] are never exceeded by more than this).
     tension : float
         Tension below the bound f_L_min(t) [N].
@@ -75,7 +76,8 @@ class Verification(CheckResult):
     tension_margin : float
         min over t of f_L(t) - f_L_min(t) [N] (negative: the bound is violated).
     min_rotor_thrust, max_rotor_thrust : float
-        Extreme rotor thrusts [N].
+        Extreme rotor thrusts [N]: what the rotor bounds hold, the commands f_i / k_i
+        when the plan models the believed ground effect (``planner.model_ground_effect``).
     surface_margin : float
         min over t of phi - phi* [rad].
 
@@ -157,6 +159,7 @@ def verify(
     model = spec.model
     tension = np.asarray(model.tension(x.T))
     thrusts = model.rotor_thrusts(x.T, tension).T  # with the offset's b f_L
+    thrusts = spec.rotor_commands(thrusts, x[:, 0], x[:, 1])  # (f / k: the ground effect)
     return _check(
         spec, tol, times, x[:, 0], tension, times, thrusts, _final_error(spec, x_end),
         CheckScope.RESIMULATION,
@@ -209,7 +212,11 @@ def verify_nodes(
     share = spec.model.rotor_thrusts(X.T, tension).T - X[:, 4:8]  # the offset's G [0, b f_L]
     f0, df0 = X[:-1, 4:8] + share[:-1], X[:-1, 8:12]
     arcs = np.stack((f0, f0 + 0.5 * h[:, None] * df0, X[1:, 4:8] + share[1:]), axis=1)
+    # (with the believed ground effect: the commands f / k, k of each interval's first node)
+    arcs = spec.rotor_commands(
+        arcs.reshape(-1, 4), np.repeat(X[:-1, 0], 3), np.repeat(X[:-1, 1], 3)
+    )
     return _check(
-        spec, tol, times, X[:, 0], tension, np.repeat(times[:-1], 3), arcs.reshape(-1, 4),
+        spec, tol, times, X[:, 0], tension, np.repeat(times[:-1], 3), arcs,
         _final_error(spec, X[-1]), CheckScope.NODES, extra=gap_issue,
     )  # fmt: skip
