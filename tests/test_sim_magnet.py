@@ -357,3 +357,18 @@ def test_wall90_mission_with_the_magnet() -> None:
     assert bool(np.all(log["hook"][held] > 0.5))
     assert not bool(log["hook"][-1])
     assert_nothing_behind_surfaces(log, s)
+
+
+def test_the_point_hooks_drop_does_not_bind_the_magnet() -> None:
+    """tether.hook_drop + capture_radius < length is the point hook's (the cable slack when
+    the disk catches): a cable shortened for overhang93 with the magnet needs no hook_drop
+    of its own, while the disk on the same cable is refused, and the magnet's own check
+    (a boom shorter than the cable) still holds."""
+    short = ["tether.length=0.32", "mechanism.boom_length=0.3"]
+    s = load_scenario("overhang93", ["mechanism.kind=magnet", *short])
+    assert s.tether.hook_drop + s.tether.capture_radius >= s.tether.length
+    with pytest.raises(ConfigError, match=r"tether\.hook_drop \+ capture_radius"):
+        load_scenario("overhang93", short)
+    with pytest.raises(ConfigError, match=r"boom_length = 0\.32 m must be < tether\.length"):
+        load_scenario("overhang93", ["mechanism.kind=magnet", "tether.length=0.32",
+                                     "mechanism.boom_length=0.32"])  # fmt: skip
