@@ -156,6 +156,7 @@ class MissionSupervisor:
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._magnet = scenario.mechanism.kind == "magnet"
         self._magnet_on = False
+        self._on_since = 0.0  # when the EPM command last changed [s]
         self._magnet_moves: list[tuple[float, MagnetWhere]] = [(0.0, "clipped")]
         """Magnet mechanism: from when the robot believes its magnet clipped on the boom,
         held on the plate or hanging on the cable (its EPM commands and switching times),
@@ -165,6 +166,8 @@ class MissionSupervisor:
             if self._magnet else {}
         )  # fmt: skip
         self._torque_ff: np.ndarray | None = None
+        self._epm_on_at: float | None = None
+        """Magnet mechanism: when the hooking pass switches the EPM on (:meth:`_epm_switch`)."""
         """The weight's torque fed forward at the last tick, F_B [N m]."""
         self._min_leg = shortest_leg(scenario)
         self._shaper = swing_shaper(scenario)
@@ -258,6 +261,7 @@ class MissionSupervisor:
     def _switch_magnet(self, t: float, on: bool, why: str) -> None:
         if self._magnet and on != self._magnet_on:
             self._magnet_on = on
+            self._on_since = t
             self._event(t, "magnet", f"EPM {'on' if on else 'off'}: {why}")
 
     def _event(self, t: float, kind: str, message: str) -> None:
@@ -559,13 +563,45 @@ class MissionSupervisor:
                 wp.hook_end, pause=cfg.settle_time
             )
             self.hook_attempts += 1
+            if self._magnet:
+                self._epm_on_at = self._epm_switch(self._path)
             self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
         elif t > self._path.t_end + cfg.detection.leg_timeout:
             self.abort(t, est, "fault: hooking start not reached")
         return self._free(t, est)
 
+    def _epm_switch(self, path: Path) -> float:
+        """Magnet mechanism: when to switch the EPM on during the hooking pass ``path``
+        [s]: ``epm_on_time`` before the reference's eye is ``epm_lead`` short of the
+        believed anchor (the face short of the believed plate), so that the energised
+        magnet is pulled across the last millimetres onto the plate and out of its clip
+        (on against the plate, nothing opens the clip); at the pass's start if it is
+        shorter."""
+        m = self.scenario.mechanism
+        seg = path.segments[0]
+        n = seg.p1 - seg.p0
+        length = float(np.linalg.norm(n))
+        left = m.press_depth + m.epm_lead  # reference to the pass's end, when on [m]
+        if length <= left:
+            return seg.t0
+        n /= length
+        lo, hi = seg.t0, seg.t_end  # the smooth move's distance to go falls monotonically
+        probe = Path(seg.t0, seg.p0, path.speed, path.accel, path.min_duration).to(seg.p1)
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            if float((seg.p1 - probe.sample(mid)[0]) @ n) > left:
+                lo = mid
+            else:
+                hi = mid
+        return max(seg.t0, hi - m.epm_on_time)
+
     def _hooking(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
+        if self._epm_on_at is not None and t >= self._epm_on_at and t < self._path.t_end:
+            self._epm_on_at = None
+            lead = self.scenario.mechanism.epm_lead
+            self._switch_magnet(t, True, f"{lead:g} m before the believed plate once on: it "
+                                "pulls the magnet off its clip onto the plate")  # fmt: skip
         if t >= self._path.t_end:
             take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
             self._path = self._new_path(t, wp.hook_end, take_up)
@@ -585,12 +621,16 @@ class MissionSupervisor:
             if self._magnet:  # straight back first: out of the clip, not along the plate
                 for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
                     self._path.to(corner)
-                self._path.delay(m.epm_on_time)  # pressed on the plate while it switches on
+                # (switched on during the pass; at its end if it was not)
+                on_at = t if self._epm_on_at is not None else self._on_since
+                self._epm_on_at = None
+                switching = max(0.0, on_at + m.epm_on_time - t)
+                self._path.delay(switching)  # at the plate while it switches on
+                # from the pull-out on, the robot believes its magnet on the plate
+                self._magnet_moves.append((t + switching, "held"))
             self._path.to(wp.slack_out)
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
-            if self._magnet:  # the pull-out (after the EPM's switching time) unclips it
-                self._magnet_moves.append((t + m.epm_on_time, "held"))
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
