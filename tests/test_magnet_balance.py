@@ -15,7 +15,13 @@ from tetherland.control.switching import with_torque
 from tetherland.geometry import link_angles
 from tetherland.interfaces import Command, StateEstimate
 from tetherland.mission import MissionSupervisor, Phase, plan_mission
-from tetherland.models.hook import MAGNET_BALANCE, magnet_centre_B, magnet_load, weight_torque_B
+from tetherland.models.hook import (
+    MAGNET_BALANCE,
+    magnet_boom,
+    magnet_centre_B,
+    magnet_load,
+    weight_torque_B,
+)
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import quat_to_rotmat, rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.mjcf import SOCKET_MASS
@@ -109,18 +115,22 @@ def test_with_torque_adds_the_torque_and_keeps_the_thrust() -> None:
     assert float(np.min(c_f * np.asarray(out.rotor_speeds) ** 2)) >= layout.f_min - 1e-12
 
 
-def test_the_supervisor_feeds_the_believed_moment_forward() -> None:
-    """Flown with perfect tracking (the estimate is the last reference), the supervisor's
-    references carry the clipped magnet's weight torque up to the end of the hooking pass
-    and the EPM's switching time after it (the pull-out takes the magnet off the clip),
-    the held one from there; the fault monitor is told the law's own torque, the command
-    less that feed-forward."""
+def test_the_supervisor_switches_on_before_the_plate_and_feeds_the_moment_forward() -> None:
+    """Flown with perfect tracking (the estimate is the last reference): the EPM is
+    commanded on during the hooking pass so that it is on (``epm_on_time`` later) while
+    the reference's eye is still ``epm_lead`` short of the believed anchor (the face short
+    of the believed plate); the references carry the clipped magnet's weight torque until
+    the pull-out starts (the pass's end, or the end of the switching), the held one from
+    there; the fault monitor is told the law's own torque, the command less that
+    feed-forward."""
     s = load_scenario("wall90", ["mechanism.kind=magnet"])
+    m = s.mechanism
     plan = plan_mission(s, Plant(s).start_state())
     sup = MissionSupervisor(s, plan)
     told: list[np.ndarray] = []
     sup.monitor.command_sent = lambda t, c: told.append(np.asarray(c.torque_B))
-    geo = plan.geometry
+    geo, wp = plan.geometry, plan.waypoints
+    n_W = geo.R_WA @ magnet_boom(s).n_B
     dt = 1.0 / s.controller.rate_hz
     rows = np.zeros((3, 3))
     rows[0] = plan.start.p_W
@@ -129,10 +139,11 @@ def test_the_supervisor_feeds_the_believed_moment_forward() -> None:
     clipped = weight_torque_B(*magnet_load(s, "clipped"), R)
     held = weight_torque_B(*magnet_load(s, "held"), R)
     # the two differ by the magnet's moment m g |r_m x z_W| (0.08 N m): not a rounding
-    assert np.linalg.norm(held - clipped) > 0.5 * s.mechanism.magnet_mass * GRAVITY * float(
+    assert np.linalg.norm(held - clipped) > 0.5 * m.magnet_mass * GRAVITY * float(
         np.linalg.norm(np.cross(magnet_centre_B(s), [0.0, 0.0, 1.0]))
     )
-    t_on = None
+    t_on = t_end = None
+    refs: list[tuple[float, np.ndarray]] = []
     for k in range(round(25.0 / dt)):
         t = k * dt
         phi, delta = link_angles(geo.R_WA.T @ (rows[0] - geo.p_A))
@@ -142,12 +153,21 @@ def test_the_supervisor_feeds_the_believed_moment_forward() -> None:
         ref = sup.reference(t, est)
         if t_on is None and sup.magnet_on:
             t_on = t
-        switched = t_on is not None and t >= t_on + s.mechanism.epm_on_time - 1e-9
-        np.testing.assert_allclose(ref.torque_ff_B, held if switched else clipped, atol=1e-12)
+            assert sup.phase == Phase.HOOKING
+        if t_end is None and sup.phase == Phase.STRETCH:
+            t_end = t
+        pulling = t_end is not None and t >= max(t_end, t_on + m.epm_on_time) - 1e-9
+        np.testing.assert_allclose(ref.torque_ff_B, held if pulling else clipped, atol=1e-12)
         law = np.array([0.01, -0.02, 0.003])
         sup.command_sent(t + dt, Command(np.zeros(4), 9.0, law + ref.torque_ff_B))
         np.testing.assert_allclose(told[-1], law, atol=1e-15)
-        if switched and t > t_on + s.mechanism.epm_on_time + 1.0:
+        refs.append((t, np.asarray(ref.p_W)[0].copy()))
+        if pulling and t > t_end + 1.0:
             break
         rows = np.asarray(ref.p_W)[:3]
-    assert t_on is not None and sup.phase == Phase.STRETCH
+    assert t_on is not None and t_end is not None and sup.phase == Phase.STRETCH
+    # on before the face reaches the believed plate: the reference then still the lead
+    # (and the press) short of the pass's end, the end one control tick or more later
+    at_on = next(p for t, p in refs if t >= t_on + m.epm_on_time - 1e-9)
+    assert float((wp.hook_end - at_on) @ n_W) >= m.press_depth + m.epm_lead - 1e-3
+    assert t_on + m.epm_on_time < t_end
