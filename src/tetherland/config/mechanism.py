@@ -163,20 +163,6 @@ class MechanismConfig(Section):
     """Depth of the magnet's eye beyond the anchor where the hooking pass ends (replaces
     ``mission.hooking.overshoot`` for the magnet): the position loop presses the magnet on
     the plate; the boom folds only if the vehicle pushes harder than its preload [m]."""
-    epm_lead: float = Field(0.03, ge=0, le=0.5)
-    """Magnet mechanism: the hooking pass stops with the magnet's face this far short of
-    the believed plate, settles, and creeps on at ``press_speed`` with the EPM on (the
-    robot commands it ``epm_on_time`` before the creep): energised before the face
-    touches, the magnet is pulled across the last millimetres onto the plate with the
-    holding force and out of its clip (``clip_force < magnet_force``); switched on against
-    the plate it holds the magnet but nothing pulls the clip open, and the position
-    loop's pull-out cannot (wall90: the vehicle stayed tied to the wall by its boom). More
-    than the belief's error of the plate's position along the pass (about 2 cm in a
-    campaign) [m]."""
-    press_speed: float = Field(0.02, gt=0, le=1)
-    """Peak speed of the magnet's creep from ``epm_lead`` short of the believed plate to
-    the hooking pass's end: met at the pass's own speed (0.25 m/s) the energised magnet
-    was caught tilted, 1.3 cm below the anchor on wall90 [m/s]."""
     catch_time: float = Field(0.05, gt=0, le=1)
     """The plant records the magnet as caught (log column ``hook``) once it has touched
     the plate energised for this long, and as released as soon as it is off or does not

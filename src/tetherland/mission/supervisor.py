@@ -73,7 +73,7 @@ from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
 from tetherland.mission.release import ReleasePull
-from tetherland.models.hook import MagnetWhere, magnet_boom, magnet_load, weight_torque_B
+from tetherland.models.hook import MagnetWhere, magnet_load, weight_torque_B
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
 
@@ -156,7 +156,6 @@ class MissionSupervisor:
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._magnet = scenario.mechanism.kind == "magnet"
         self._magnet_on = False
-        self._on_since = 0.0  # when the EPM command last changed [s]
         self._magnet_moves: list[tuple[float, MagnetWhere]] = [(0.0, "clipped")]
         """Magnet mechanism: from when the robot believes its magnet clipped on the boom,
         held on the plate or hanging on the cable (its EPM commands and switching times),
@@ -166,8 +165,6 @@ class MissionSupervisor:
             if self._magnet else {}
         )  # fmt: skip
         self._torque_ff: np.ndarray | None = None
-        self._epm_on_at: float | None = None
-        """Magnet mechanism: when the hooking pass switches the EPM on (:meth:`_magnet_pass`)."""
         """The weight's torque fed forward at the last tick, F_B [N m]."""
         self._min_leg = shortest_leg(scenario)
         self._shaper = swing_shaper(scenario)
@@ -261,7 +258,6 @@ class MissionSupervisor:
     def _switch_magnet(self, t: float, on: bool, why: str) -> None:
         if self._magnet and on != self._magnet_on:
             self._magnet_on = on
-            self._on_since = t
             self._event(t, "magnet", f"EPM {'on' if on else 'off'}: {why}")
 
     def _event(self, t: float, kind: str, message: str) -> None:
@@ -559,43 +555,17 @@ class MissionSupervisor:
     def _approach(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end and self._close(est, wp.hook_start, cfg.hooking.start_tolerance):
-            if self._magnet:
-                self._path = self._magnet_pass(t)
-            else:
-                self._path = self._new_path(t, wp.hook_start, cfg.hooking.speed).to(
-                    wp.hook_end, pause=cfg.settle_time
-                )
+            self._path = self._new_path(t, wp.hook_start, cfg.hooking.speed).to(
+                wp.hook_end, pause=cfg.settle_time
+            )
             self.hook_attempts += 1
             self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
         elif t > self._path.t_end + cfg.detection.leg_timeout:
             self.abort(t, est, "fault: hooking start not reached")
         return self._free(t, est)
 
-    def _magnet_pass(self, t: float) -> Path:
-        """Magnet mechanism: the hooking pass from ``t`` [s], in two legs along the same
-        line. The first stops with the face ``epm_lead`` short of the believed plate and
-        settles there; the EPM is commanded on ``epm_on_time`` before that settling ends
-        (:attr:`_epm_on_at`), so that it is on before the face touches; the second creeps
-        at ``press_speed`` to the pass's end (``press_depth`` beyond). Energised before the
-        touch, the magnet is pulled across the last millimetres onto the plate and out of
-        its clip (switched on against the plate, nothing opens the clip); met at the
-        creep's speed with the vehicle level, it is caught flat where the pass aims (met
-        at the pass's 0.25 m/s, it was caught tilted and 1.3 cm low on wall90, and the
-        landing point moved with it)."""
-        wp, cfg, m = self.wp, self.cfg, self.scenario.mechanism
-        n_W = self.geo.R_WA @ magnet_boom(self.scenario).n_B
-        short = wp.hook_end - (m.press_depth + m.epm_lead) * n_W
-        path = self._new_path(t, wp.hook_start, cfg.hooking.speed).to(short, pause=cfg.settle_time)
-        self._epm_on_at = max(t, path.t_end - m.epm_on_time)
-        return path.to(wp.hook_end, speed=m.press_speed, pause=cfg.settle_time)
-
     def _hooking(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
-        if self._epm_on_at is not None and t >= self._epm_on_at and t < self._path.t_end:
-            self._epm_on_at = None
-            lead = self.scenario.mechanism.epm_lead
-            self._switch_magnet(t, True, f"{lead:g} m before the believed plate once on: it "
-                                "pulls the magnet off its clip onto the plate")  # fmt: skip
         if t >= self._path.t_end:
             take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
             self._path = self._new_path(t, wp.hook_end, take_up)
@@ -615,16 +585,12 @@ class MissionSupervisor:
             if self._magnet:  # straight back first: out of the clip, not along the plate
                 for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
                     self._path.to(corner)
-                # (switched on during the pass; at its end if it was not)
-                on_at = t if self._epm_on_at is not None else self._on_since
-                self._epm_on_at = None
-                switching = max(0.0, on_at + m.epm_on_time - t)
-                self._path.delay(switching)  # at the plate while it switches on
-                # from the pull-out on, the robot believes its magnet on the plate
-                self._magnet_moves.append((t + switching, "held"))
+                self._path.delay(m.epm_on_time)  # pressed on the plate while it switches on
             self._path.to(wp.slack_out)
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
+            if self._magnet:  # the pull-out (after the EPM's switching time) unclips it
+                self._magnet_moves.append((t + m.epm_on_time, "held"))
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
