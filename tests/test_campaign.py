@@ -467,3 +467,25 @@ def test_hooking_counts_count_every_attempt_and_the_runs_lost_or_held():
     assert (h.method, h.sweep_value, h.runs) == ("tethered", 20.0, 3)
     assert h.attempts == {"bounced": 1, "caught": 2, "missed": 2}
     assert (h.lost, h.not_released) == (1, 1)
+
+
+@pytest.mark.parametrize("e_h", [0.008, -0.009])
+def test_a_magnet_anchor_height_error_moves_the_believed_plate_and_not_the_plants(e_h):
+    """mechanism.kind = "magnet": the anchor is the cable's eye on the held magnet,
+    plate_thickness + magnet_thickness above the surface; a height error e_h is the
+    plate's (the robot knows its magnet): the believed plate is max(0.005 + e_h, 1 mm)
+    thick and the believed anchor that plus the magnet's 1.5 cm; the plant keeps the
+    true plate."""
+    truth = load_scenario("wall90", ["mechanism.kind=magnet"])
+    m = truth.mechanism
+    assert truth.anchor.h_A == pytest.approx(m.plate_thickness + m.magnet_thickness, abs=1e-15)
+    plant, belief = apply_perturbation(truth, Perturbation(anchor_error_S=(0.0, 0.0, e_h)))
+    plate = max(m.plate_thickness + e_h, 1e-3)
+    assert belief.mechanism.plate_thickness == pytest.approx(plate, abs=1e-15)
+    assert belief.mechanism.magnet_thickness == m.magnet_thickness
+    assert belief.anchor.h_A == pytest.approx(plate + m.magnet_thickness, abs=1e-15)
+    g_belief = LandingGeometry.from_scenario(belief)
+    assert g_belief.surface.height(g_belief.p_A) == pytest.approx(
+        plate + m.magnet_thickness, abs=1e-12
+    )
+    assert plant.mechanism == truth.mechanism and plant.anchor == truth.anchor

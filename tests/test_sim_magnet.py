@@ -330,16 +330,42 @@ def test_released_magnet_swings_with_its_pendulum_period() -> None:
     assert period == pytest.approx(2 * math.pi * math.sqrt(L / GRAVITY), rel=0.03)
 
 
+OVERHANG93_MAGNET = [
+    "tether.length=0.36",
+    "mechanism.boom_length=0.30",
+    "mechanism.boom_angle_deg=20",
+    "mechanism.plate_thickness=0.003",
+    "mechanism.magnet_thickness=0.01",
+]
+"""overhang93's settings for the magnet (docs/mechanism.md): a shorter cable and boom and a
+thinner magnet and plate, for a landed hover above the rotor floor."""
+
+
+CLIP_SHUT = pytest.mark.xfail(strict=True, reason=(
+    "open (docs/mechanism.md, The clip): the face pressed flat on the plate when the EPM "
+    "came on, nothing opened the clip, the vehicle stayed tied to the wall by its boom"))
+
+
 @pytest.mark.slow
-def test_wall90_mission_with_the_magnet() -> None:
-    """Closed loop: the robot presses, switches on, lands, takes off and switches off on
-    what it measures only; the judge (truth) rules a success; the plant records the catch
-    and the release from the contact and the EPM. Seed 1: seed 0 lands with a bounce of
-    1.04 m/s^2 > 1 m/s^2 (condition 4, docs/mechanism.md, Results)."""
+@pytest.mark.parametrize(("name", "extra", "seed"), [
+    *[("wall90", [], s) for s in (0, 1, 3, 4)],
+    pytest.param("wall90", [], 2, marks=CLIP_SHUT),
+    *[("overhang93", OVERHANG93_MAGNET, s) for s in range(5)],
+])  # fmt: skip
+def test_the_mission_with_the_magnet(name: str, extra: list[str], seed: int) -> None:
+    """Closed loop, every seed of the issue's 0-4: the robot presses, switches on, lands,
+    takes off and switches off on what it measures only; the judge (truth) rules a
+    success; the plant records the catch and the release from the contact and the EPM.
+    The frame meets the surface square: the touchdown's attitude error is under half the
+    steady error the held magnet's moment would leave the attitude loop without the
+    feed-forward, |tau| / (J k_R) (1.2 deg on wall90: main's 1.0 deg, the landers one
+    after the other, bounced at 1.04 m/s^2 on seed 4)."""
+    from tetherland.control.attitude import AttitudeGains
+    from tetherland.models.hook import magnet_load, weight_torque_B
     from tetherland.runs import run_mission
 
-    s = load_scenario("wall90", ["mechanism.kind=magnet"])
-    r = run_mission(s, seed=1)
+    s = load_scenario(name, ["mechanism.kind=magnet", *extra])
+    r = run_mission(s, seed=seed)
     assert r.summary["success"], r.summary["reason"]
     assert [p["name"] for p in r.summary["phases"]].count("hooking") == 1
     log = r.log
@@ -357,3 +383,23 @@ def test_wall90_mission_with_the_magnet() -> None:
     assert bool(np.all(log["hook"][held] > 0.5))
     assert not bool(log["hook"][-1])
     assert_nothing_behind_surfaces(log, s)
+    # square on the surface: the held magnet's moment not left to the attitude error
+    k_R = AttitudeGains.from_config(s.controller.tethered).k_R
+    tau = weight_torque_B(*magnet_load(s, "held"), np.eye(3))  # level: the largest
+    steady = float(np.max(np.abs(tau) / (np.asarray(s.vehicle.inertia) * np.asarray(k_R))))
+    assert r.summary["landing"]["attitude_error_rad"] < 0.5 * steady
+
+
+def test_the_point_hooks_drop_does_not_bind_the_magnet() -> None:
+    """tether.hook_drop + capture_radius < length is the point hook's (the cable slack when
+    the disk catches): a cable shortened for overhang93 with the magnet needs no hook_drop
+    of its own, while the disk on the same cable is refused, and the magnet's own check
+    (a boom shorter than the cable) still holds."""
+    short = ["tether.length=0.32", "mechanism.boom_length=0.3"]
+    s = load_scenario("overhang93", ["mechanism.kind=magnet", *short])
+    assert s.tether.hook_drop + s.tether.capture_radius >= s.tether.length
+    with pytest.raises(ConfigError, match=r"tether\.hook_drop \+ capture_radius"):
+        load_scenario("overhang93", short)
+    with pytest.raises(ConfigError, match=r"boom_length = 0\.32 m must be < tether\.length"):
+        load_scenario("overhang93", ["mechanism.kind=magnet", "tether.length=0.32",
+                                     "mechanism.boom_length=0.32"])  # fmt: skip

@@ -197,6 +197,12 @@ class Reference:
         rotor drag (the drag of the planned motion and its rates are already in them), so
         the rotor-drag feed-forward (:mod:`tetherland.control.rotor_drag`) leaves them as
         they are; False: the rows are the flat outputs' (p and its derivatives).
+    torque_ff_B : (3,) array or None
+        A known body torque the controller adds to the one its law asks for, F_B [N m]:
+        the moment of a weight the vehicle carries off the body origin, where the
+        controllers put the centre of mass (the magnet mechanism's: its centre of mass
+        moves when the magnet leaves the boom, :func:`tetherland.models.hook.magnet_load`).
+        None: nothing added.
     """
 
     t: float
@@ -212,6 +218,7 @@ class Reference:
     thrust_scale: float = 1.0
     thrust_shed: float = 0.0
     drag_in_rows: bool = False
+    torque_ff_B: FloatArray | None = None
 
 
 @fast_init

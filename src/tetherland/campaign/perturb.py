@@ -22,6 +22,8 @@ from tetherland.surface import normal_from_slope, surface_frame
 
 BAR_STANDOFF_MARGIN = 1e-3
 """Least believed clearance of the bar beyond ``bar_radius + 2 hook_radius`` [m]."""
+MAGNET_PLATE_MIN = 1e-3
+"""Thinnest believed plate of the magnet mechanism (the field's lower bound) [m]."""
 
 
 @dataclass(frozen=True)
@@ -179,7 +181,11 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
     behind the believed surface (the mechanism stands on it): a height below zero is
     believed zero. With ``mechanism.kind = "bar"`` the anchor is the bar's axis, so the
     believed bar's ``standoff`` is the believed h_A (at least ``bar_radius + 2 hook_radius``
-    + 1 mm); the plant keeps the true bar.
+    + 1 mm); the plant keeps the true bar. With ``mechanism.kind = "magnet"`` the anchor is
+    the cable's eye on the held magnet, ``plate_thickness + magnet_thickness`` above the
+    surface: the robot knows its own magnet, so the error is the plate's, whose believed
+    thickness is the believed h_A less the magnet (at least 1 mm); the plant keeps the
+    true plate.
     """
     plant = truth.model_dump(mode="python")
     sensors = plant["sensors"]
@@ -219,6 +225,12 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
         m = truth.mechanism
         h_A = max(h_A, m.bar_radius + 2.0 * m.hook_radius + BAR_STANDOFF_MARGIN)
         belief["mechanism"]["standoff"] = h_A
+    elif truth.mechanism.kind == "magnet":
+        # the anchor is the eye on the magnet held on the plate: the plate's height is
+        # what the robot does not know (its own magnet's thickness it does)
+        m = truth.mechanism
+        h_A = max(h_A, m.magnet_thickness + MAGNET_PLATE_MIN)
+        belief["mechanism"]["plate_thickness"] = h_A - m.magnet_thickness
     p_A = p_A - (z_S @ (p_A - origin) - h_A) * z_S
     belief["anchor"] = {"position": tuple(p_A), "landing_point": None, "h_A": h_A}
     return scenario_from_dict(plant, truth.name), scenario_from_dict(belief, truth.name)

@@ -205,15 +205,6 @@ class TetherConfig(Section):
         return value
 
     @model_validator(mode="after")
-    def _hook_within_reach(self) -> TetherConfig:
-        if self.hook_drop + self.capture_radius >= self.length:
-            raise ValueError(
-                f"hook_drop + capture_radius = {self.hook_drop + self.capture_radius:g} m must "
-                f"be < length = {self.length} m (the cable must be slack when the hook catches)"
-            )
-        return self
-
-    @model_validator(mode="after")
     def _mass_needs_segments(self) -> TetherConfig:
         rho = self.linear_density
         if rho is not None and rho > 0 and self.segments == 0:

@@ -70,6 +70,18 @@ class Scenario(Section):
     """The hook and the anchoring mechanism (docs/mechanism.md)."""
 
     @model_validator(mode="after")
+    def _hook_within_reach(self) -> Scenario:
+        # the point hook's drop and capture disk (the disk and the bar's hook point); the
+        # magnet has neither: its boom is checked against the cable below
+        t = self.tether
+        if self.mechanism.kind != "magnet" and t.hook_drop + t.capture_radius >= t.length:
+            raise ValueError(
+                f"tether.hook_drop + capture_radius = {t.hook_drop + t.capture_radius:g} m must "
+                f"be < length = {t.length} m (the cable must be slack when the hook catches)"
+            )
+        return self
+
+    @model_validator(mode="after")
     def _magnet_mechanism(self) -> Scenario:
         m = self.mechanism
         if m.kind != "magnet":

@@ -21,7 +21,9 @@ from tetherland.config import Scenario
 from tetherland.control.dfl import DflController
 from tetherland.control.free_flight import FreeFlightController
 from tetherland.control.hierarchical import HierarchicalController
+from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command, Controller, ControlMode, Reference, StateEstimate
+from tetherland.models.quadrotor import RotorLayout
 
 
 @dataclass(frozen=True)
@@ -88,6 +90,25 @@ def shed(command: Command, fraction: float, thrust_coefficient: float) -> Comman
     )
 
 
+def with_torque(command: Command, torque_B: FloatArray, layout: RotorLayout) -> Command:
+    """``command`` with the body torque ``torque_B`` (F_B) [N m] added: each rotor's thrust
+    c_f w^2 changed by the allocation's Gamma^-1 [0, torque_B] (the total thrust kept),
+    then held within [f_min, f_max]; the wanted torque grows by ``torque_B``. Per rotor,
+    so the motor-lag lead already in the command's speeds stays
+    (``Reference.torque_ff_B``)."""
+    c_f = layout.thrust_coefficient
+    w = np.asarray(command.rotor_speeds, dtype=float)
+    tau = np.asarray(torque_B, dtype=float)
+    df = layout.allocation_inverse[:, 1:] @ tau
+    f = np.clip(c_f * w * w + df, layout.f_min, layout.f_max)
+    return Command(
+        rotor_speeds=np.sqrt(f / c_f),
+        thrust=command.thrust,
+        torque_B=tau if command.torque_B is None else np.asarray(command.torque_B) + tau,
+        diagnostics=command.diagnostics,
+    )
+
+
 class SwitchingController:
     """Dispatches to the free-flight or tethered controller by ``Reference.mode``.
 
@@ -105,6 +126,7 @@ class SwitchingController:
         self.free_flight = FreeFlightController(scenario)
         self.tethered = make_tethered_controller(scenario, tethered)
         self._c_f = scenario.vehicle.thrust_coefficient
+        self._layout = RotorLayout.from_config(scenario.vehicle)
         self.mode: ControlMode | None = None
         self.last: Command | None = None
         self.switches: list[SwitchRecord] = []
@@ -132,6 +154,8 @@ class SwitchingController:
             cmd = self.tethered.update(t, estimate, reference)
         else:
             cmd = self.free_flight.update(t, estimate, reference)
+        if reference.torque_ff_B is not None and mode != ControlMode.MOTORS_OFF:
+            cmd = with_torque(cmd, reference.torque_ff_B, self._layout)
         if reference.thrust_shed > 0.0 and mode != ControlMode.MOTORS_OFF:
             cmd = shed(cmd, reference.thrust_shed, self._c_f)
         if reference.thrust_scale < 1.0 and mode != ControlMode.MOTORS_OFF:

@@ -73,6 +73,7 @@ from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
 from tetherland.mission.release import ReleasePull
+from tetherland.models.hook import MagnetWhere, magnet_load, weight_torque_B
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
 
@@ -155,6 +156,16 @@ class MissionSupervisor:
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._magnet = scenario.mechanism.kind == "magnet"
         self._magnet_on = False
+        self._magnet_moves: list[tuple[float, MagnetWhere]] = [(0.0, "clipped")]
+        """Magnet mechanism: from when the robot believes its magnet clipped on the boom,
+        held on the plate or hanging on the cable (its EPM commands and switching times),
+        in time order (:meth:`_weight_torque`)."""
+        self._loads = (
+            {w: magnet_load(scenario, w) for w in ("clipped", "held", "hanging")}
+            if self._magnet else {}
+        )  # fmt: skip
+        self._torque_ff: np.ndarray | None = None
+        """The weight's torque fed forward at the last tick, F_B [N m]."""
         self._min_leg = shortest_leg(scenario)
         self._shaper = swing_shaper(scenario)
         if self._magnet:  # clipped on its boom until released: nothing swings before
@@ -395,8 +406,33 @@ class MissionSupervisor:
         return clearance < self.cfg.detection.away_distance
 
     def command_sent(self, t: float, command: Command) -> None:
-        """The runner tells each command sent (``CommandAware``): for the fault monitor."""
+        """The runner tells each command sent (``CommandAware``): for the fault monitor,
+        which reads the torque the control law asked for (the weight's torque fed
+        forward, :meth:`_weight_torque`, is known and not a rotor's fault)."""
+        ff = self._torque_ff
+        if ff is not None and command.torque_B is not None:
+            command = Command(command.rotor_speeds, command.thrust,
+                              np.asarray(command.torque_B) - ff, command.diagnostics)  # fmt: skip
         self.monitor.command_sent(t, command)
+
+    def _weight_torque(self, t: float, est: StateEstimate) -> np.ndarray | None:
+        """Magnet mechanism: the torque about the body origin that holds the vehicle's
+        weight where the robot believes its centre of mass (with the magnet clipped,
+        held or hanging: :func:`~tetherland.models.hook.magnet_load`), at the estimated
+        attitude, F_B [N m] (``Reference.torque_ff_B``). The frame balances the magnet
+        only in part, so its centre of mass moves by several millimetres when the magnet
+        leaves the boom; without this the attitude loop held the moment (0.065 N m for
+        the defaults) with a steady attitude error of about 1 deg, and the landers met
+        the wall one after the other (wall90: a bounce at the touchdown). None for the
+        other mechanisms."""
+        if not self._magnet:
+            return None
+        where: MagnetWhere = "clipped"
+        for t_from, w in self._magnet_moves:
+            if t >= t_from:
+                where = w
+        mass, c_B = self._loads[where]
+        return weight_torque_B(mass, c_B, est.body.R_WB)
 
     def _on_fault(self, t: float, est: StateEstimate, found: FaultDetection) -> None:
         """A measured-signal fault: log it and move to the safe state of its kind."""
@@ -472,7 +508,13 @@ class MissionSupervisor:
 
     # ------------------------------------------------------------------ ReferenceSource
     def reference(self, t: float, estimate: StateEstimate) -> Reference:
-        """Advance the state machine and return the reference for time ``t``."""
+        """Advance the state machine and return the reference for time ``t`` (with the
+        magnet, its weight's torque fed forward: :meth:`_weight_torque`)."""
+        ref = self._reference(t, estimate)
+        ff = self._torque_ff = self._weight_torque(t, estimate)
+        return ref if ff is None else dataclasses.replace(ref, torque_ff_B=ff)
+
+    def _reference(self, t: float, estimate: StateEstimate) -> Reference:
         if self._terminate_at is not None and t >= self._terminate_at:
             if self._final_mode == ControlMode.FREE_FLIGHT:
                 ref = self._free(t, estimate)
@@ -547,6 +589,8 @@ class MissionSupervisor:
             self._path.to(wp.slack_out)
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
+            if self._magnet:  # the pull-out (after the EPM's switching time) unclips it
+                self._magnet_moves.append((t + m.epm_on_time, "held"))
             self._taut.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
@@ -590,7 +634,9 @@ class MissionSupervisor:
             if self.hook_attempts >= cfg.hooking.max_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
                 return self._free(t, est)
-            self._switch_magnet(t, False, "no tension: the magnet did not hold, retrying")
+            if self._magnet:  # not held: still on the boom as far as the robot can tell
+                self._switch_magnet(t, False, "no tension: the magnet did not hold, retrying")
+                self._magnet_moves.append((t, "clipped"))
             above = np.array([*wp.hook_start[:2], wp.z_safe])
             self._path = (
                 self._new_path(t, est.body.p_W, free_hook=True)
@@ -871,6 +917,7 @@ class MissionSupervisor:
         no move adds to its swing."""
         wp, cfg = self.wp, self.cfg
         self._switch_magnet(t, False, "at the drop point: releasing the magnet")
+        self._magnet_moves.append((t + self.scenario.mechanism.epm_off_time, "hanging"))
         self._min_leg, self._shaper = self._hanging
         assert self._shaper is not None
         here = self._path.end

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -179,3 +179,74 @@ def swing_period_magnet(cable_length: float, magnet_thickness: float) -> float:
     """Swing period 2 pi sqrt(L/g) of the released magnet hanging on the cable, L the
     cable to the eye plus half the magnet's thickness (its centre of mass) [s]."""
     return 2.0 * math.pi * math.sqrt((cable_length + 0.5 * magnet_thickness) / GRAVITY)
+
+
+MAGNET_BALANCE = 0.75
+"""Fraction of the clipped magnet's moment about the centre of mass that the frame's
+counterweight balances (a design fact of the vehicle the plant builds,
+:mod:`tetherland.sim.mjcf`, and the robot's belief of its own mass distribution,
+:func:`magnet_load`): the rest is a steady torque on the approach (0.022 N m for the
+defaults), the balanced part one after the magnet has left the boom (0.065 N m) [-]."""
+
+MagnetWhere = Literal["clipped", "held", "hanging"]
+"""Where the magnet is, for :func:`magnet_load`: on the boom's clip, held on the plate at
+the anchor (the vehicle flies without it), or hanging on the cable under the vehicle."""
+
+
+def magnet_centre_B(scenario: Scenario) -> FloatArray:
+    """Centre of the clipped magnet in F_B, the eye plus half its thickness along the
+    approach direction [m]."""
+    boom = magnet_boom(scenario)
+    return boom.eye_B + 0.5 * scenario.mechanism.magnet_thickness * boom.n_B
+
+
+def magnet_load(scenario: Scenario, where: MagnetWhere) -> tuple[float, FloatArray]:
+    """The weight the vehicle carries and where it acts, with the magnet ``where`` is.
+
+    ``vehicle.mass`` M is the whole robot, boom and magnet (mass m, centre r_m in F_B)
+    included; the frame is balanced for the boom and :data:`MAGNET_BALANCE` (beta) of the
+    magnet's moment about the body origin (the rotors' centre, where the controllers put
+    the centre of mass). So the centre of mass c is, from the body origin,
+
+    - clipped: c = (1 - beta) m r_m / M, weight M g;
+    - held on the plate: c = -beta m r_m / (M - m), weight (M - m) g;
+    - hanging: the frame's as held, plus the magnet's weight pulling at the cable's
+      attachment r_att (its mean pull, the swing averaged out): c = (m r_att -
+      beta m r_m) / M, weight M g.
+
+    The rotors hold the weight's moment about the origin, m_c g c x z_W (z_W in F_B): the
+    torque a controller that assumes c = 0 must add (:mod:`tetherland.control.switching`).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The believed scenario (``mechanism.kind = "magnet"``).
+    where : {"clipped", "held", "hanging"}
+        Where the magnet is.
+
+    Returns
+    -------
+    mass : float
+        Mass whose weight the vehicle carries [kg].
+    c_B : (3,) array
+        Point where that weight acts, F_B from the body origin [m].
+    """
+    M = scenario.vehicle.mass
+    m = scenario.mechanism.magnet_mass
+    moment = m * magnet_centre_B(scenario)  # kg m
+    if where == "clipped":
+        return M, (1.0 - MAGNET_BALANCE) * moment / M
+    if where == "held":
+        return M - m, -MAGNET_BALANCE * moment / (M - m)
+    if where == "hanging":
+        r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+        return M, (m * r_att - MAGNET_BALANCE * moment) / M
+    raise ValueError(f"unknown magnet position {where!r} (clipped, held, hanging)")
+
+
+def weight_torque_B(mass: float, c_B: FloatArray, R_WB: FloatArray) -> FloatArray:
+    """Torque about the body origin that holds the weight ``mass`` g acting at ``c_B``
+    (F_B) at attitude ``R_WB``: mass g c_B x z_W, z_W in F_B the third row of R_WB,
+    F_B [N m]."""
+    R = np.asarray(R_WB, dtype=float)
+    return mass * GRAVITY * np.cross(np.asarray(c_B, dtype=float), R[2])

@@ -600,11 +600,6 @@ conaffinity (:func:`add_magnet`); the plate does not."""
 MAGNET_GAP = 0.002
 """Largest gap between the magnet's face and the plate across which the energised EPM
 still pulls (its force falls steeply with the gap; here it is all or nothing) [m]."""
-MAGNET_BALANCE = 0.75
-"""Fraction of the clipped magnet's moment about the centre of mass that the frame's
-counterweight balances: the rest is a steady torque on the approach (0.022 N m for the
-defaults), the balanced part one after the magnet has left the boom (0.065 N m), both
-under the robot's rotor fault threshold with room for the manoeuvres [-]."""
 BOOM_MASS = 0.01
 """Mass of the folding boom (a 4 mm carbon tube and its hinge) [kg]."""
 BOOM_RADIUS = 0.004
@@ -876,11 +871,11 @@ def add_vehicle(scene: SceneXml) -> None:
         # vehicle.mass is the whole flying robot, its boom and magnet included; the frame
         # is balanced (a counterweight) for the boom and MAGNET_BALANCE of the magnet's
         # moment about the centre of mass
-        from tetherland.models.hook import magnet_boom
+        from tetherland.models.hook import MAGNET_BALANCE, magnet_boom, magnet_centre_B
 
         boom = magnet_boom(scene.scenario)
         carried = BOOM_MASS + mech.magnet_mass
-        magnet_B = boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B
+        magnet_B = magnet_centre_B(scene.scenario)
         moment = (BOOM_MASS * 0.5 * (boom.hinge_B + boom.eye_B)
                   + MAGNET_BALANCE * mech.magnet_mass * magnet_B)  # fmt: skip
         com = -moment / (v.mass - carried)
@@ -888,7 +883,7 @@ def add_vehicle(scene: SceneXml) -> None:
         # clipped magnet's (points at their centres) and its own offset's
         inertia = np.diag(np.asarray(v.inertia, dtype=float))
         for mass, r in ((BOOM_MASS, 0.5 * (boom.hinge_B + boom.eye_B)),
-                        (mech.magnet_mass, boom.eye_B + 0.5 * mech.magnet_thickness * boom.n_B),
+                        (mech.magnet_mass, magnet_B),
                         (v.mass - carried, com)):  # fmt: skip
             inertia -= mass * (float(r @ r) * np.eye(3) - np.outer(r, r))
         # (the principal moments only: the frame alone cannot also cancel the boom's
