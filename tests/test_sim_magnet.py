@@ -348,12 +348,14 @@ CLIP_SHUT = pytest.mark.xfail(strict=True, reason=(
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("name", "extra", "seed"), [
-    *[("wall90", [], s) for s in (0, 1, 3, 4)],
+    ("wall90", [], 4),
     pytest.param("wall90", [], 2, marks=CLIP_SHUT),
-    *[("overhang93", OVERHANG93_MAGNET, s) for s in range(5)],
+    ("overhang93", OVERHANG93_MAGNET, 0),
 ])  # fmt: skip
 def test_the_mission_with_the_magnet(name: str, extra: list[str], seed: int) -> None:
-    """Closed loop, every seed of the issue's 0-4: the robot presses, switches on, lands,
+    """Closed loop (the suite flies wall90's seed that bounced before the feed-forward, the
+    open clip seed and one overhang93 seed; seeds 0-4 of both are the batch in
+    docs/mechanism.md, kept out of the suite for its time): the robot presses, switches on, lands,
     takes off and switches off on what it measures only; the judge (truth) rules a
     success; the plant records the catch and the release from the contact and the EPM.
     The frame meets the surface square: the touchdown's attitude error is under half the
