@@ -96,6 +96,14 @@ class StretchConfig(Section):
     to tethered control) and arms the anchor-belief check [N]."""
     tension_dwell: float = Field(0.2, ge=0, le=10)
     """Time the estimated tension must stay above the threshold [s]."""
+    tension_tare: bool | None = None
+    """Zero the tension estimate's bias on the line hanging free: over the hover at the
+    first hooking start the robot fits the estimate's bias along the thrust axis (the
+    believed thrust coefficient's and mass's errors) against the believed weight of what
+    hangs on the line, and every later reading of the supervisor and its fault rules
+    (taut, anchor belief, unhooking climb, hook jam, snap, slack) is taken less it
+    (:class:`tetherland.estimation.TensionTare`; the controllers keep the estimate as it
+    is). None: with the bar mechanism only (its hanging line and hook) [-]."""
 
 
 class TouchdownConfig(Section):

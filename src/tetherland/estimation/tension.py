@@ -201,6 +201,67 @@ class TensionEstimator:
         return self._filtered
 
 
+class TensionTare:
+    """The tension estimate's bias, measured on a line hanging free and taken off later
+    readings (docs/mechanism.md, *Tension, truth and belief*).
+
+    The estimate f_L = d_B . (f_R e3 - m f_B) (module docstring) is built on the believed
+    thrust coefficient c_f and mass m. With c_f believed (1 + e_c) times the true one
+    and m (1 + e_m) times, a hover that carries the weight reads about (e_c - e_m) m g
+    more along the thrust axis e3: 0.85 N in the pilot campaign's draw 50-00007 (+4.6 %,
+    -3.9 %), of the order of the tension threshold (1 N) and four times the hanging
+    line's weight. A line hanging free pulls the attachment point straight down with its
+    believed weight W (the line and the hook), which the estimate reads as W (d . z_W),
+    d the unit link direction from the believed anchor. The tare fits the bias as a force
+    beta along the thrust axis, r_i = W (d_i . z_W) + beta (d_i . z_B,i) over samples
+    r_i of the estimate, in least squares:
+
+        beta = sum c_i (r_i - W a_i) / sum c_i^2,   a_i = d_i . z_W,  c_i = d_i . z_B,i
+
+    and takes it off later readings along the current direction: f_L - beta (d . z_B).
+    At another thrust f_R the c_f part leaves e_c (f_R - f_R,tare) (d . z_B) (a few
+    hundredths of a newton for the pull of a taut take-up); the readings stay what the
+    robot measures, corrected by what it measured and believes.
+
+    Parameters
+    ----------
+    weight : float
+        Believed weight of what hangs on the line while it hangs free, W [N] (0 for a
+        cable with nothing hanging on it).
+    """
+
+    def __init__(self, weight: float) -> None:
+        if not weight >= 0.0:
+            raise ValueError("weight >= 0 required")
+        self.weight = weight
+        self.bias: float | None = None
+        """Fitted bias beta along the thrust axis [N] (None before the first tare)."""
+        self.samples = 0
+        """Samples of the tare under way."""
+        self._sum_cr = self._sum_cc = 0.0
+
+    def add(self, reading: float, d_z_W: float, d_z_B: float) -> None:
+        """Add one reading ``reading`` [N] of the line hanging free, with the unit link
+        direction's vertical part d . z_W and its part along the thrust axis d . z_B [-]."""
+        self._sum_cr += d_z_B * (reading - self.weight * d_z_W)
+        self._sum_cc += d_z_B * d_z_B
+        self.samples += 1
+
+    def close(self) -> float | None:
+        """End the tare: :attr:`bias` from the samples added since the last close (kept as
+        it was if there were none, or the thrust axis was across the link) [N]."""
+        if self.samples and self._sum_cc > 0.0:
+            self.bias = self._sum_cr / self._sum_cc
+        self.samples = 0
+        self._sum_cr = self._sum_cc = 0.0
+        return self.bias
+
+    def correct(self, reading: float, d_z_B: float) -> float:
+        """``reading`` [N] less the bias along the link direction, beta (d . z_B) [N]
+        (unchanged before the first tare)."""
+        return reading if self.bias is None else reading - self.bias * d_z_B
+
+
 class MotorLagThrust:
     """Predicts the rotors' actual thrust from commanded speeds through the first-order lag.
 

@@ -44,7 +44,7 @@ from tetherland import GRAVITY
 from tetherland.config import FaultKind, Scenario
 from tetherland.control.common import heading_of
 from tetherland.errors import TetherlandError
-from tetherland.estimation import ThresholdDwell
+from tetherland.estimation import TensionTare, ThresholdDwell
 from tetherland.geometry import theta_A_from_z_B
 from tetherland.interfaces import Command, ControlMode, EventRecord, Reference, StateEstimate
 from tetherland.mission.blend import BlendedTrack
@@ -73,7 +73,7 @@ from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
 from tetherland.mission.release import ReleasePull
-from tetherland.models.hook import MagnetWhere, magnet_load, weight_torque_B
+from tetherland.models.hook import MagnetWhere, bar_hanging_weight, magnet_load, weight_torque_B
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
 
@@ -200,6 +200,17 @@ class MissionSupervisor:
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.stretch.tension_threshold, cfg.stretch.tension_dwell)
+        m = scenario.mechanism
+        self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
+        tare = cfg.stretch.tension_tare
+        self.tare = (
+            TensionTare(bar_hanging_weight(scenario.tether.length, m) if m.kind == "bar" else 0.0)
+            if (m.kind == "bar" if tare is None else tare)
+            else None
+        )
+        """The tension estimate's bias, zeroed on the line hanging free at the first hooking
+        start (``mission.stretch.tension_tare``; None: off): every reading of the
+        supervisor and its fault monitor is taken less it from then on."""
         self._contact_rule = ContactRule(scenario)
         self._slow = SlowApproach(cfg.touchdown, self._contact_rule.geometry, self.geo.link_length)
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
@@ -323,6 +334,29 @@ class MissionSupervisor:
         d /= max(float(np.linalg.norm(d)), 1e-9)
         tension = max(est.tension or 0.0, 0.0)
         return est.body.p_W + tension / (self.mass * self.k_x) * d
+
+    def _link_axes(self, est: StateEstimate) -> tuple[float, float]:
+        """The unit link direction d (the believed anchor to the estimated attachment
+        point, F_W): its vertical part d . z_W and its part along the thrust axis d . z_B
+        [-] (:class:`~tetherland.estimation.TensionTare`)."""
+        R_WB = est.body.R_WB
+        d = est.body.p_W + R_WB @ self._r_att - self.geo.p_A
+        d /= max(float(np.linalg.norm(d)), 1e-9)
+        return float(d[2]), float(d @ R_WB[:, 2])
+
+    def _close_tare(self, t: float, tare: TensionTare) -> None:
+        """End the tare at the hooking start and log what it found."""
+        n = tare.samples
+        bias = tare.close()
+        if bias is None:
+            self._event(t, "tension", "no tare of the tension estimate (no hover sampled)")
+        else:
+            self._event(
+                t, "tension",
+                f"tension tare over {n} readings of the line hanging free (believed weight "
+                f"{tare.weight:.3f} N): bias {bias:+.3f} N along the thrust axis, taken off "
+                "every later reading",
+            )  # fmt: skip
 
     def _close(self, est: StateEstimate, p: np.ndarray, tol: float) -> bool:
         x, y, z = est.body.p_W.tolist()
@@ -508,8 +542,14 @@ class MissionSupervisor:
 
     # ------------------------------------------------------------------ ReferenceSource
     def reference(self, t: float, estimate: StateEstimate) -> Reference:
-        """Advance the state machine and return the reference for time ``t`` (with the
-        magnet, its weight's torque fed forward: :meth:`_weight_torque`)."""
+        """Advance the state machine and return the reference for time ``t`` (the tension
+        read less the tare's bias, :attr:`tare`; with the magnet, its weight's torque fed
+        forward: :meth:`_weight_torque`)."""
+        tare = self.tare
+        if tare is not None and tare.bias is not None and estimate.tension is not None:
+            estimate = dataclasses.replace(
+                estimate, tension=tare.correct(estimate.tension, self._link_axes(estimate)[1])
+            )
         ref = self._reference(t, estimate)
         ff = self._torque_ff = self._weight_torque(t, estimate)
         return ref if ff is None else dataclasses.replace(ref, torque_ff_B=ff)
@@ -554,7 +594,16 @@ class MissionSupervisor:
 
     def _approach(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
+        tare = self.tare
+        if tare is not None and tare.bias is None and est.tension is not None:
+            hold = self._path.segments[-1]
+            if t >= hold.t0 and not (hold.p1 - hold.p0).any():
+                # the hover at the first hooking start: the line hangs free (on a retry it
+                # may hang on the bar or the slope, and the bias has not changed)
+                tare.add(est.tension, *self._link_axes(est))
         if t >= self._path.t_end and self._close(est, wp.hook_start, cfg.hooking.start_tolerance):
+            if tare is not None and tare.bias is None:
+                self._close_tare(t, tare)
             self._path = self._new_path(t, wp.hook_start, cfg.hooking.speed).to(
                 wp.hook_end, pause=cfg.settle_time
             )

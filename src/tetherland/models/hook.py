@@ -45,6 +45,15 @@ def bar_line_length(tether_length: float, hook_shank: float, hook_radius: float,
     return tether_length - (hook_shank - hook_radius - bar_radius)
 
 
+def bar_hanging_weight(tether_length: float, mechanism: MechanismConfig) -> float:
+    """Weight of the bar mechanism's hanging line and hook, g (hook_mass + line_density
+    times :func:`bar_line_length`): the pull of the line hanging free on the attachment
+    point, straight down [N]."""
+    m = mechanism
+    line = bar_line_length(tether_length, m.hook_shank, m.hook_radius, m.bar_radius)
+    return GRAVITY * (m.hook_mass + m.line_density * line)
+
+
 def bar_hook_offset(x_A_W: FloatArray, line_length: float, hook_shank: float,
                     pass_offset: float) -> FloatArray:  # fmt: skip
     """The bar mechanism's counterpart of :func:`hook_offset`: the vector v such that the
