@@ -21,7 +21,7 @@ from tetherland.estimation import TensionTare, tension_from_forces
 from tetherland.geometry import link_angles, link_direction
 from tetherland.interfaces import ControlMode, StateEstimate
 from tetherland.mission import MissionSupervisor, Phase, plan_mission
-from tetherland.models.hook import bar_hanging_weight
+from tetherland.models.hook import bar_hanging_weight, bar_line_length
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import LinkState, RigidBodyState
@@ -204,11 +204,13 @@ def test_with_the_tare_the_robot_reads_its_line_right(bias: float) -> None:
     assert any(e.kind == "tension" and "tare" in e.message for e in sup.events)
 
 
-def _climb(sup: MissionSupervisor, s, bias: float, held: float | None) -> list[str]:
+def _climb(
+    sup: MissionSupervisor, s, bias: float, held: float | None
+) -> tuple[list[str], np.ndarray]:
     """After the release (the supervisor moved to it by hand, its tare taken): the
     unhooking climb from the release's slack point, the line told hanging free
     (``held`` None) or pulling ``held`` N wherever the hook on the bar lets it be taut;
-    returns the supervisor's hook events."""
+    returns the supervisor's hook events and the vehicle's positions until the return."""
     plan, geo = sup.plan, sup.geo
     r_att = np.asarray(s.vehicle.cable_attachment)
     W = bar_hanging_weight(s.tether.length, s.mechanism)
@@ -224,8 +226,10 @@ def _climb(sup: MissionSupervisor, s, bias: float, held: float | None) -> list[s
     est = StateEstimate(t=t0, body=RigidBodyState(slack.copy(), np.zeros(3), q, np.zeros(3)))
     sup._climb_away(t0, est, slack)
     dt = 1.0 / s.controller.rate_hz
-    for k in range(round(30.0 / dt)):
+    flown = []
+    for k in range(round(60.0 / dt)):
         t = t0 + k * dt
+        flown.append(rows[0].copy())
         d_W = rows[0] + R_WB @ r_att - geo.p_A
         r = float(np.linalg.norm(d_W))
         phi, delta = link_angles(geo.R_WA.T @ d_W)
@@ -241,7 +245,7 @@ def _climb(sup: MissionSupervisor, s, bias: float, held: float | None) -> list[s
         if sup.phase != Phase.UNHOOK:
             break
         rows = np.asarray(ref.p_W)[:3]
-    return [e.message for e in sup.events if e.kind == "hook"]
+    return [e.message for e in sup.events if e.kind == "hook"], np.array(flown)
 
 
 @pytest.mark.parametrize("tare", [True, False])
@@ -257,7 +261,39 @@ def test_the_unhooking_climb_reads_a_free_hook_free_with_the_tare(tare: bool) ->
         # to the tethered landing, the tare (if any) taken at the hooking start
         sup = _story(over, BIAS if tare else 0.0)
         assert sup.phase == Phase.TETHERED_LANDING
-        events = _climb(sup, s, BIAS, held)
+        events, _ = _climb(sup, s, BIAS, held)
         assert any("still on the bar" in m for m in events) is read, (held, events)
         if not read:
             assert sup.phase == Phase.RETURN
+
+
+def test_the_reverse_pass_climbs_away_from_the_bar() -> None:
+    """A hook read on the bar during the unhooking climb: the reverse pass goes under the
+    bar to its entry, then away from the bar before it climbs to the hooking start. The
+    tips point up: climbing straight up from the entry, the crown ``pass_offset`` beside
+    the believed bar, a hook swinging after its release, or a bar off its belief (1.6 cm
+    in draw 35-00000), met the bar and caught it again. Every tick that lifts the hanging
+    crown (straight under the attachment) from under the bar's top holds it at least
+    2 ``pass_offset`` from the believed axis along x_A, on its side away from the
+    landing point (the take-up's mirror distance, the other side)."""
+    s = load_scenario("slope50", PILOT)
+    m = s.mechanism
+    sup = _story(PILOT, BIAS)
+    events, flown = _climb(sup, s, BIAS, 1.5)
+    assert any("still on the bar" in e for e in events), events
+    assert sup.phase == Phase.RETURN
+    geo = sup.geo
+    hang = bar_line_length(s.tether.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    crown = flown + sup.wp.attachment_W - np.array([0.0, 0.0, hang + m.hook_shank])
+    x = geo.R_WA[:, 0].copy()
+    x[2] = 0.0
+    x /= np.linalg.norm(x)
+    along = (crown - geo.p_A) @ x  # along x_A's horizontal part [m]
+    step = np.diff(crown, axis=0)
+    # the climbs (straight up, the legs that lift the hook past the bar from below: the
+    # slack point's, on the landing side, and the last one to the hooking start)
+    climbing = (step[:, 2] > 1e-9) & (step[:, 2] > 10.0 * np.abs(step @ x))
+    under = crown[:-1, 2] < geo.p_A[2] + m.bar_radius
+    k = np.flatnonzero(climbing & under)
+    assert np.all((along[k] > 0.0) | (along[k] <= -2.0 * m.pass_offset + 1e-9)), along[k]
+    assert np.any(along[k] > 0.0) and np.any(along[k] <= -2.0 * m.pass_offset + 1e-9)

@@ -1006,6 +1006,15 @@ class MissionSupervisor:
             self._climb_slack = None
             *corners, last = unhooking_path(slack, wp.unhook_entry, wp.hook_start,
                                             back_off=False)  # fmt: skip
+            # the pass under the bar goes on pass_offset farther from it, and the climb
+            # rises there: straight up from the entry (the crown pass_offset beside the
+            # believed bar) the tips, pointing up, of a hook swinging or a bar off its
+            # belief met the bar and caught it again (pilot draw 35-00000: released, then
+            # caught by that climb, "hook did not release"); the return starts from there
+            x = self.geo.R_WA[:, 0].copy()
+            x[2] = 0.0
+            away = -self.scenario.mechanism.pass_offset * x / np.linalg.norm(x)
+            corners, last = [p + away for p in corners], last + away
             self._path = self._new_path(t, est.body.p_W, cfg.hooking.speed).to(slack)
             for p in corners:
                 self._path.to(p)
@@ -1018,7 +1027,7 @@ class MissionSupervisor:
             home_high = np.array([*wp.start[:2], wp.z_safe])
             home = wp.start + self._takeoff_height * Z_W
             self._path = (
-                self._new_path(t, wp.hook_start, free_hook=True)
+                self._new_path(t, self._path.end, free_hook=True)
                 .to(up)
                 .to(home_high)
                 .to(home, pause=cfg.settle_time)
