@@ -281,8 +281,9 @@ class Ukf:
     def predict_rows(self, imu: FloatArray, n: int) -> None:
         """:meth:`predict_many` on packed rows ``imu[:n]`` = [t, f_B (3), omega_B (3)].
 
-        The hot path of :class:`~tetherland.estimation.UkfEstimator`: the caller
-        guarantees C-contiguous float rows with times increasing beyond :attr:`t`.
+        The caller guarantees C-contiguous float rows with times increasing beyond
+        :attr:`t` (:class:`~tetherland.estimation.UkfEstimator` does the same inside its
+        compiled estimate, :func:`~tetherland.estimation.kernels.flush`).
         """
         kernels.predict_ws(self._ws, imu, n)
 
