@@ -139,7 +139,10 @@ class UkfEstimator:
         f_B, omega_B = np.array([0.0, 0.0, 9.81]), np.zeros(3)
         kernels.push_imu(ws, e, t, f_B, omega_B)
         kernels.estimate_tick(ws, e, np.empty(kernels.WIDTH))
-        kernels.command_into(e, t, np.zeros(4))
+        held = np.zeros(4)
+        kernels.command_into(e, t, held)
+        held.setflags(write=False)  # (some controllers hand out read-only speeds)
+        kernels.command_into(e, t, held)
         x = ws[kernels.WS_X0 : kernels.WS_X1]
         kernels.fuse_pose(ws, e, t, x[0:3].copy(), x[6:10].copy())
 
