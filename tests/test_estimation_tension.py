@@ -9,6 +9,7 @@ import pytest
 
 from tetherland import GRAVITY as g
 from tetherland.estimation import MotorLagThrust, TensionEstimator, tension_from_forces
+from tetherland.estimation.tension import tension_filter_time_constant
 from tetherland.geometry import link_direction
 from tetherland.rotations import rotation_from_z_and_yaw
 
@@ -94,14 +95,22 @@ def test_estimator_last_tension_is_the_last_estimates():
     sc = load_scenario("slope50")
     est = UkfEstimator(sc, RigidBodyState.at_rest(np.zeros(3)))
     assert est.last_tension is None
+    stretch = sc.mission.stretch
+    plain = TensionEstimator(
+        sc.vehicle.mass,
+        stretch.tension_threshold,
+        stretch.tension_dwell,
+        tension_filter_time_constant(sc.tether.stiffness, sc.vehicle.mass),
+    )
     rng = np.random.default_rng(2)
     for k in range(1, 40):
         f_B = np.array([0.0, 0.0, g]) + rng.normal(0.0, 0.2, 3)
         est.predict(ImuSample(k * 1e-3, f_B, np.zeros(3)))
         e = est.estimate()
         last = est.last_tension
-        assert last.filtered == e.tension == est.tension.value
-        assert last.taut == est.tension.taut
+        # the plain filter fed the same raw tensions: the same filtered value and rule
+        assert last.filtered == e.tension == plain.filter_value(e.t, last.raw)
+        assert last.taut == plain.taut
         assert math.isfinite(last.raw)
     # the raw tension of the last estimate, with the motors off: the residual force's
     # projection on the link (or its norm): m |f_B - b_a| for a level vehicle at most

@@ -25,9 +25,12 @@ KERNELS = (
     tracker.tracker_into,
     hierarchical.hierarchical_into,
     dfl.dfl_into,
-    ukf_kernels.predict_into,
-    ukf_kernels.update_pose_into,
-    estimation_kernels.estimate_into,
+    ukf_kernels.predict_ws,
+    ukf_kernels.update_pose_ws,
+    estimation_kernels.push_imu,
+    estimation_kernels.estimate_tick,
+    estimation_kernels.fuse_pose,
+    estimation_kernels.command_into,
     state.link_kernel,
 )
 

@@ -2,12 +2,20 @@
 
 Implements :class:`tetherland.interfaces.Estimator` and ``CommandAware``. IMU samples are
 buffered by :meth:`UkfEstimator.predict` and integrated together (every sample, one
-unscented transform, one compiled call: :meth:`Ukf.predict_rows`) when an estimate or a
-motion-capture update needs them, i.e. at the control rate. The cable tension is
-estimated from the rotors' actual thrust (commanded speeds through the motor lag) and the
-bias-corrected specific force, projected on the estimated link direction; the link state
-and the tension of an estimate come from one compiled call as well
-(:func:`tetherland.estimation.kernels.estimate_into`). With an elastic cable the link
+unscented transform) when an estimate or a motion-capture update needs them, i.e. at the
+control rate. The cable tension is estimated from the rotors' actual thrust (commanded
+speeds through the motor lag, the believed ground effect) and the bias-corrected specific
+force, projected on the estimated link direction. Each step is one compiled call on the
+estimator's mutable state (the filter's workspace and the estimator's own array, see
+:mod:`tetherland.estimation.kernels`): :func:`~tetherland.estimation.kernels.push_imu`,
+:func:`~tetherland.estimation.kernels.estimate_tick` (the integration, the thrust, the
+link state and the filtered tension of an estimate),
+:func:`~tetherland.estimation.kernels.fuse_pose` and
+:func:`~tetherland.estimation.kernels.command_into`; the plain pieces they compile
+(:class:`~tetherland.estimation.tension.MotorLagThrust`,
+:class:`~tetherland.estimation.tension.TensionEstimator`,
+:meth:`~tetherland.estimation.ukf.Ukf.predict_rows`, ...) give the same bits (a test runs
+both side by side). With an elastic cable the link
 state is that of the stretched cable (direction and rates from the actual distance, not
 l) and :meth:`UkfEstimator.cable` reports the estimated stretch.
 """
@@ -22,28 +30,31 @@ from numpy.typing import ArrayLike
 from tetherland.config import Scenario
 from tetherland.estimation import kernels
 from tetherland.estimation.ground_effect import BelievedGroundEffect
-from tetherland.estimation.kernels import estimate_into as _estimate_into
+from tetherland.estimation.kernels import command_into as _command_into
+from tetherland.estimation.kernels import estimate_tick as _estimate_tick
+from tetherland.estimation.kernels import fuse_pose as _fuse_pose
+from tetherland.estimation.kernels import push_imu as _push_imu
 from tetherland.estimation.tension import (
+    F_T,
+    F_TAUT,
+    F_VALUE,
     CableEstimate,
-    MotorLagThrust,
     TensionEstimate,
     TensionEstimator,
     elastic_tension,
+    pack_motor_lag,
+    pack_tension_filter,
     tension_filter_time_constant,
 )
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
+from tetherland.estimation.ukf_kernels import REJECTED
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Command, ImuSample, MocapSample, StateEstimate
 from tetherland.rotations import quat_to_rotmat
 from tetherland.state import LinkState, RigidBodyState
 
-_BUFFER = 16
 _P_W, _V_W, _Q_WB, _OMEGA_B = kernels.P_W, kernels.V_W, kernels.Q_WB, kernels.OMEGA_B
 _ACCEL_BIAS, _GYRO_BIAS, _EXTERNAL = kernels.ACCEL_BIAS, kernels.GYRO_BIAS, kernels.EXTERNAL
-_LINK_TO_TENSION = slice(kernels.LINK.start, kernels.TENSION + 1)
-"""The link state (4), d_B (3) and the raw tension of ``estimate_into``'s output."""
-assert kernels.LINK.stop == kernels.D_B.start and kernels.D_B.stop == kernels.TENSION
-"""IMU samples buffered at most between two integrations."""
 
 
 class UkfEstimator:
@@ -91,63 +102,70 @@ class UkfEstimator:
         )
         geo = LandingGeometry.from_scenario(scenario)
         self._p_A, self._r_att = geo.p_A, np.asarray(v.cable_attachment, dtype=float)
-        self._geo = kernels.pack_geometry(self._r_att, geo.p_A, geo.R_WA)
         self._length, self._stiffness = scenario.tether.length, scenario.tether.stiffness
         if tension_time_constant is None:
             tension_time_constant = tension_filter_time_constant(self._stiffness, v.mass)
-        self.tension = TensionEstimator(
-            v.mass,
-            scenario.mission.stretch.tension_threshold,
-            scenario.mission.stretch.tension_dwell,
-            tension_time_constant,
-        )
+        stretch = scenario.mission.stretch
+        TensionEstimator(v.mass, stretch.tension_threshold, stretch.tension_dwell,
+                         tension_time_constant)  # (validates the arguments)  # fmt: skip
         w0 = np.zeros(4) if rotor_speeds0 is None else np.asarray(rotor_speeds0, dtype=float)
-        self.motors = MotorLagThrust(v.thrust_coefficient, v.motor_time_constant, w0)
         self.ground_effect = (
             BelievedGroundEffect(scenario) if scenario.estimator.ground_effect_belief else None
         )
         """The believed ground effect on the predicted thrust (None: not modelled)."""
-        self._motor_t = t0
-        self._w_cmd = [float(w) for w in w0]
-        self._buf = np.empty((_BUFFER, 7))  # rows [t, f_B (3), omega_B (3)]
-        self._n = 0
+        # the mutable state of every step in two arrays, the filter's and this one
+        # (kernels.E_*: buffered IMU samples, motor lag, tension filter, the belief)
+        self._ws = self.ukf.workspace
+        self._e = kernels.pack_estimator(
+            self._r_att, geo.p_A, geo.R_WA, v.mass, t0,
+            pack_motor_lag(v.thrust_coefficient, v.motor_time_constant, w0),
+            pack_tension_filter(stretch.tension_threshold, stretch.tension_dwell,
+                                tension_time_constant),
+            None if self.ground_effect is None else self.ground_effect.packed,
+        )  # fmt: skip
         self.dropouts = 0
         """Invalid (dropped) motion-capture samples received."""
         self.last_nis = math.nan
         """Normalised innovation squared of the last fused pose (chi-square, 6 dof)."""
         self._cached: StateEstimate | None = None
-        # load the compiled outputs now (numba's cache, once per process)
-        kernels.estimate_into(
-            self.ukf.x_view, self.ukf.imu_view, 0.0, self.mass, self._geo, np.empty(kernels.WIDTH)
-        )
-        self._last_raw: float | None = None  # raw tension of the last estimate [N]
-        # the UKF's live state and IMU record (updated in place, never replaced)
-        self._x_view, self._imu_view = self.ukf.x_view, self.ukf.imu_view
+        self._P = self.ukf.covariance_view
+        self._load_kernels()
+
+    def _load_kernels(self) -> None:
+        """Load the compiled steps now (numba's cache, once per process) rather than inside
+        the first control ticks: calls on scratch copies."""
+        ws, e = self._ws.copy(), self._e.copy()
+        t = float(ws[kernels.WS_CLOCK0]) + 1e-3
+        f_B, omega_B = np.array([0.0, 0.0, 9.81]), np.zeros(3)
+        kernels.push_imu(ws, e, t, f_B, omega_B)
+        kernels.estimate_tick(ws, e, np.empty(kernels.WIDTH))
+        held = np.zeros(4)
+        kernels.command_into(e, t, held)
+        held.setflags(write=False)  # (some controllers hand out read-only speeds)
+        kernels.command_into(e, t, held)
+        x = ws[kernels.WS_X0 : kernels.WS_X1]
+        kernels.fuse_pose(ws, e, t, x[0:3].copy(), x[6:10].copy())
 
     # ------------------------------------------------------------------ Estimator protocol
     def predict(self, imu: ImuSample) -> None:
         """Buffer one IMU sample; it is integrated before the next estimate or update."""
-        t = imu.t
-        if t <= self._imu_view[0]:  # ukf.t
-            return  # a sample at the estimate's own time spans no interval
-        n = self._n
-        if n == _BUFFER:
-            self._flush()
-            n = 0
-        buf = self._buf  # (indexed in place: no row view per sample)
-        buf[n, 0] = t
-        buf[n, 1:4] = imu.specific_force_B
-        buf[n, 4:7] = imu.omega_B
-        self._n = n + 1
-        self._cached = None
+        if _push_imu(self._ws, self._e, imu.t, imu.specific_force_B, imu.omega_B):
+            self._cached = None
 
     def update(self, mocap: MocapSample) -> None:
         """Fuse a (delayed) motion-capture pose; dropouts are counted and skipped."""
         if not mocap.valid:
             self.dropouts += 1
             return
-        self._flush()
-        self.last_nis = self.ukf.update_pose(mocap.t_measured, mocap.p_W, mocap.q_WB)
+        nis = _fuse_pose(
+            self._ws, self._e, float(mocap.t_measured),
+            np.ascontiguousarray(mocap.p_W, dtype=float),
+            np.ascontiguousarray(mocap.q_WB, dtype=float),
+        )  # fmt: skip
+        if nis == REJECTED:
+            self.ukf.rejected_late += 1
+            nis = math.nan
+        self.last_nis = nis
         self._cached = None
 
     def estimate(self) -> StateEstimate:
@@ -155,33 +173,14 @@ class UkfEstimator:
         cached = self._cached
         if cached is not None:
             return cached
-        if self._n:  # _flush
-            self.ukf.predict_rows(self._buf, self._n)
-            self._n = 0
-        x, imu = self._x_view, self._imu_view
-        t = float(imu[0])  # ukf.t
         out = np.empty(kernels.WIDTH)  # fresh: the record's arrays are views into it
-        thrust = self._thrust_at(t)
-        ge = self.ground_effect
-        if ge is not None:
-            motors = self.motors
-            c_f = motors.c_f
-            w0, w1, w2, w3 = motors.speeds
-            thrust = ge.total_thrust_of(
-                x, [c_f * (w0 * w0), c_f * (w1 * w1), c_f * (w2 * w2), c_f * (w3 * w3)]
-            )
-        _estimate_into(x, imu, thrust, self.mass, self._geo, out)
-        # link (4) and the raw tension: the tension low-passed, the taut rule applied
-        phi, delta, phi_dot, delta_dot, _, _, _, raw = out[_LINK_TO_TENSION].tolist()
-        tension = self.tension
-        filtered = tension.filter_value(t, raw)
-        self._last_raw = raw
+        t, filtered, phi, delta, phi_dot, delta_dot = _estimate_tick(self._ws, self._e, out)
         self._cached = cached = StateEstimate(
             t,
             RigidBodyState(out[_P_W], out[_V_W], out[_Q_WB], out[_OMEGA_B]),
             out[_GYRO_BIAS],
             out[_ACCEL_BIAS],
-            self.ukf.covariance,
+            self._P.copy(),
             LinkState(phi, delta, phi_dot, delta_dot),
             filtered,
             out[_EXTERNAL],
@@ -192,9 +191,11 @@ class UkfEstimator:
     def last_tension(self) -> TensionEstimate | None:
         """Raw and filtered tension and the taut rule, as of the last estimate (None
         before the first)."""
-        if self._last_raw is None:
+        e = self._e
+        f = e[kernels.E_FILTER]
+        if math.isnan(f[F_T]):  # (the filter's time: set by the first estimate)
             return None
-        return TensionEstimate(self._last_raw, self.tension.value, self.tension.taut)
+        return TensionEstimate(float(e[kernels.E_RAW]), float(f[F_VALUE]), bool(f[F_TAUT]))
 
     def cable(self) -> CableEstimate:
         """The cable seen from the current estimate: distance, stretch and, for an elastic
@@ -209,21 +210,7 @@ class UkfEstimator:
     # ------------------------------------------------------------------ CommandAware
     def command_sent(self, t: float, command: Command) -> None:
         """The rotors are commanded ``command.rotor_speeds`` from time ``t`` on."""
-        self._thrust_at(t)
-        self._w_cmd = np.asarray(command.rotor_speeds, dtype=float).tolist()
-
-    # ------------------------------------------------------------------ helpers
-    def _thrust_at(self, t: float) -> float:
-        """Total actual thrust at ``t`` (the motor lag advanced to ``t``) [N]."""
-        dt = t - self._motor_t
-        if dt > 0.0:
-            self._motor_t = t
-            return self.motors.advance(self._w_cmd, dt)
-        return self.motors.total_thrust
-
-    def _flush(self) -> None:
-        n = self._n
-        if n == 0:
-            return
-        self.ukf.predict_rows(self._buf, n)
-        self._n = 0
+        w = command.rotor_speeds
+        if type(w) is not np.ndarray or w.dtype != np.float64 or w.shape != (4,):
+            w = np.ascontiguousarray(w, dtype=float).reshape(4)
+        _command_into(self._e, t, w)

@@ -16,6 +16,20 @@ Layout of ``out`` (:data:`WIDTH` floats): p_W, v_W, q_WB, omega_B, accel bias b_
 bias b_g (the log's estimate columns in order), link [phi, delta, phi', delta'], d_B, the
 raw tension and the external force m (f_B - b_a) - f_R e3 in F_B (everything but the
 rotors: cable, contact, wind). ``geo`` = [r_att_B (3), p_A (3), R_WA (3x3, row-major)].
+
+The estimator's whole tick (issue 25). :class:`~tetherland.estimation.UkfEstimator` keeps
+its mutable state in two arrays, the filter's workspace (``ukf_kernels.WS_*``) and its
+own (``E_*`` below: the buffered IMU samples, the geometry, the motor lag, the tension
+filter and the believed ground effect), so that each of its steps is one compiled call of
+three or four array arguments: :func:`push_imu` (an IMU sample), :func:`estimate_tick`
+(the buffered samples integrated, the motor lag advanced, the believed ground effect, the
+outputs of :func:`estimate_into` and the filtered tension with the taut rule),
+:func:`fuse_pose` (a motion-capture pose) and :func:`command_into` (a command sent). They
+call the compiled forms of the laws (:func:`~tetherland.estimation.ukf_kernels.predict_into`,
+:func:`~tetherland.estimation.tension.motor_lag_advance`,
+:func:`~tetherland.estimation.ground_effect.believed_total_thrust_of`,
+:func:`estimate_into`, :func:`~tetherland.estimation.tension.tension_filter_step`) in the
+order the plain estimator calls its pieces: the same bits (a test runs both side by side).
 """
 
 from __future__ import annotations
@@ -25,7 +39,18 @@ import math
 import numpy as np
 from numba import njit
 
-from tetherland.estimation.tension import tension_from_forces
+from tetherland.estimation.ground_effect import believed_total_thrust_of
+from tetherland.estimation.tension import (
+    FILTER_WIDTH,
+    M_COMMAND,
+    M_THRUST_COEFFICIENT,
+    MOTOR_WIDTH,
+    motor_lag_advance,
+    motor_lag_total_thrust,
+    tension_filter_step,
+    tension_from_forces,
+)
+from tetherland.estimation.ukf_kernels import WS_CLOCK, WS_X, predict_ws, update_pose_ws
 from tetherland.geometry import FloatArray
 from tetherland.state import link_into, link_state_reference
 
@@ -34,6 +59,148 @@ ACCEL_BIAS, GYRO_BIAS, LINK, D_B = slice(13, 16), slice(16, 19), slice(19, 23), 
 TENSION = 26
 EXTERNAL = slice(27, 30)
 WIDTH = 30
+WS_X0, WS_X1, WS_CLOCK0, WS_CLOCK1 = WS_X.start, WS_X.stop, WS_CLOCK.start, WS_CLOCK.stop
+
+
+# ------------------------------------------------------------------ the estimator's state
+BUFFER = 16
+"""IMU samples buffered at most between two integrations."""
+E_COUNT = 0
+"""Number n of buffered IMU samples."""
+E_BUFFER = slice(1, 1 + BUFFER * 7)
+"""The buffered IMU rows [t, f_B (3), omega_B (3)] (BUFFER, 7), row-major."""
+E_GEOMETRY = slice(E_BUFFER.stop, E_BUFFER.stop + 15)
+"""``geo`` of :func:`estimate_into`."""
+E_MASS = E_GEOMETRY.stop
+"""Believed mass m [kg]."""
+E_MOTOR_T = E_MASS + 1
+"""Time the motor lag was last advanced to [s]."""
+E_MOTOR = slice(E_MOTOR_T + 1, E_MOTOR_T + 1 + MOTOR_WIDTH)
+"""The motor lag (:func:`~tetherland.estimation.tension.pack_motor_lag`)."""
+E_FILTER = slice(E_MOTOR.stop, E_MOTOR.stop + FILTER_WIDTH)
+"""The tension filter (:func:`~tetherland.estimation.tension.pack_tension_filter`)."""
+E_RAW = E_FILTER.stop
+"""Raw tension of the last estimate [N] (NaN: no estimate yet)."""
+E_GROUND_EFFECT = E_RAW + 1
+"""1 with the believed ground effect, 0 without."""
+E_FACTORS = slice(E_GROUND_EFFECT + 1, E_GROUND_EFFECT + 5)
+"""The believed factors of the last estimate (4) [-]."""
+E_PACK = E_FACTORS.stop
+"""Start of the believed ground effect packed
+(:func:`~tetherland.estimation.ground_effect.pack_believed`), to the end."""
+_B0, _B1, _G0, _G1 = E_BUFFER.start, E_BUFFER.stop, E_GEOMETRY.start, E_GEOMETRY.stop
+_M0, _M1, _F0, _F1 = E_MOTOR.start, E_MOTOR.stop, E_FILTER.start, E_FILTER.stop
+_C0, _CF = E_MOTOR.start + M_COMMAND.start, E_MOTOR.start + M_THRUST_COEFFICIENT
+_K0, _K1 = E_FACTORS.start, E_FACTORS.stop
+
+
+def pack_estimator(
+    r_att_B: FloatArray,
+    p_A: FloatArray,
+    R_WA: FloatArray,
+    mass: float,
+    t0: float,
+    motor: FloatArray,
+    tension_filter: FloatArray,
+    believed: FloatArray | None,
+) -> FloatArray:
+    """The estimator's state (``E_*``): nothing buffered, the geometry (attachment point
+    r_att_B [m], anchor p_A [m], R_WA), the ``mass`` [kg], the motor lag ``motor`` as of
+    ``t0`` [s], the tension filter and the packed believed ground effect (None: none)."""
+    pack = np.empty(0) if believed is None else np.asarray(believed, dtype=float)
+    e = np.zeros(E_PACK + pack.size)
+    e[E_GEOMETRY] = pack_geometry(r_att_B, p_A, R_WA)
+    e[E_MASS], e[E_MOTOR_T] = mass, t0
+    e[E_MOTOR], e[E_FILTER] = motor, tension_filter
+    e[E_RAW] = math.nan
+    e[E_GROUND_EFFECT] = 0.0 if believed is None else 1.0
+    e[E_FACTORS] = 1.0
+    e[E_PACK:] = pack
+    return e
+
+
+# ------------------------------------------------------------------ the estimator's steps
+@njit(cache=True)
+def flush(ws: FloatArray, e: FloatArray) -> None:
+    """Integrate the buffered IMU samples (one unscented transform) into the filter's
+    workspace ``ws``."""
+    n = int(e[E_COUNT])
+    if n:
+        predict_ws(ws, e[_B0:_B1].reshape((BUFFER, 7)), n)
+        e[E_COUNT] = 0.0
+
+
+@njit(cache=True)
+def push_imu(ws: FloatArray, e: FloatArray, t: float, f_B: FloatArray,
+             omega_B: FloatArray) -> bool:  # fmt: skip
+    """Buffer the IMU sample (t [s], f_B [m/s^2], omega_B [rad/s]), integrating the full
+    buffer first; False (nothing done) for a sample at or before the estimate's time."""
+    if t <= ws[WS_CLOCK0]:
+        return False  # a sample at the estimate's own time spans no interval
+    n = int(e[E_COUNT])
+    if n == BUFFER:
+        flush(ws, e)
+        n = 0
+    i = _B0 + 7 * n
+    e[i] = t
+    for k in range(3):
+        e[i + 1 + k] = f_B[k]
+        e[i + 4 + k] = omega_B[k]
+    e[E_COUNT] = n + 1
+    return True
+
+
+@njit(cache=True)
+def fuse_pose(ws: FloatArray, e: FloatArray, t_meas: float, p_W: FloatArray,
+              q_WB: FloatArray) -> float:  # fmt: skip
+    """The buffered samples integrated, then the pose (p_W [m], q_WB) measured at
+    ``t_meas`` [s] fused (:func:`~tetherland.estimation.ukf_kernels.update_pose_into`):
+    the NIS, or ``REJECTED``."""
+    flush(ws, e)
+    return update_pose_ws(ws, t_meas, p_W, q_WB)
+
+
+@njit(cache=True)
+def thrust_at(e: FloatArray, t: float) -> float:
+    """Total actual thrust at ``t`` [s]: the motor lag advanced to ``t`` [N]."""
+    dt = t - e[E_MOTOR_T]
+    m = e[_M0:_M1]
+    if dt > 0.0:
+        e[E_MOTOR_T] = t
+        return motor_lag_advance(m, dt)
+    return motor_lag_total_thrust(m)
+
+
+@njit(cache=True)
+def command_into(e: FloatArray, t: float, rotor_speeds: FloatArray) -> None:
+    """The rotors are commanded ``rotor_speeds`` (4) [rad/s] from ``t`` [s] on: the motor
+    lag advanced to ``t``, the command held from there."""
+    thrust_at(e, t)
+    for i in range(4):
+        e[_C0 + i] = rotor_speeds[i]
+
+
+@njit(cache=True)
+def estimate_tick(ws: FloatArray, e: FloatArray, out: FloatArray):
+    """One estimate: the buffered samples integrated, the thrust (motor lag, believed
+    ground effect), :func:`estimate_into` into ``out`` and the tension filtered (taut
+    rule in ``e[E_FILTER]``). Returns (t [s], filtered tension [N], phi, delta [rad],
+    phi', delta' [rad/s])."""
+    flush(ws, e)
+    x = ws[WS_X0:WS_X1]
+    imu = ws[WS_CLOCK0:WS_CLOCK1]
+    t = imu[0]
+    thrust = thrust_at(e, t)
+    if e[E_GROUND_EFFECT] != 0.0:
+        c_f = e[_CF]
+        w0, w1, w2, w3 = e[_M0], e[_M0 + 1], e[_M0 + 2], e[_M0 + 3]
+        thrust = believed_total_thrust_of(x, c_f * (w0 * w0), c_f * (w1 * w1), c_f * (w2 * w2),
+                                          c_f * (w3 * w3), e[E_PACK:], e[_K0:_K1])  # fmt: skip
+    estimate_into(x, imu, thrust, e[E_MASS], e[_G0:_G1], out)
+    raw = out[TENSION]
+    e[E_RAW] = raw
+    filtered = tension_filter_step(e[_F0:_F1], t, raw)
+    return t, filtered, out[19], out[20], out[21], out[22]
 
 
 def pack_geometry(r_att_B: FloatArray, p_A: FloatArray, R_WA: FloatArray) -> FloatArray:

@@ -6,6 +6,12 @@ so  f_L = d_B . (f_R e3 - m a_m)  (projection on the link), or, when d is unknow
 f_L = ||f_R e3 - m a_m||. The thrust f_R is the rotors' actual thrust, predicted from the
 commanded speeds through the motor lag; the estimate is low-pass filtered.
 
+Each law is here twice: the plain classes (:class:`MotorLagThrust`,
+:class:`TensionEstimator`, :class:`ThresholdDwell`) and compiled steps of the same
+operations in the same order on a packed state (:func:`motor_lag_advance`,
+:func:`tension_filter_step`), which the estimator's per-tick kernels
+(:mod:`tetherland.estimation.kernels`) call; a test compares them bit for bit.
+
 Elastic cables (docs/tether.md): the force balance holds whatever the cable's stretch, so
 the estimate needs no cable model; the link direction d is that of the stretched cable
 (anchor to attachment point, at distance l + s). The stretch gives a second, geometric
@@ -20,6 +26,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 
 from tetherland.geometry import FloatArray
@@ -318,3 +325,115 @@ class MotorLagThrust:
                        c3 + (w3 - c3) * a]  # fmt: skip
         w0, w1, w2, w3 = self._w  # total_thrust, inlined
         return self.c_f * (w0 * w0 + w1 * w1 + w2 * w2 + w3 * w3)
+
+
+# ------------------------------------------------------------------ compiled forms
+# The packed state of the compiled motor lag (:func:`pack_motor_lag`), in order:
+M_SPEEDS = slice(0, 4)
+"""Rotor speeds w [rad/s] (:attr:`MotorLagThrust.speeds`)."""
+M_COMMAND = slice(4, 8)
+"""Commanded speeds w_cmd held [rad/s]."""
+M_DT = 8
+"""Step of the cached decay [s] (-1: none yet)."""
+M_DECAY = 9
+"""exp(-dt/tau_m) of that step [-]."""
+M_THRUST_COEFFICIENT = 10
+"""c_f [N/(rad/s)^2]."""
+M_TIME_CONSTANT = 11
+"""tau_m [s]."""
+MOTOR_WIDTH = 12
+
+
+def pack_motor_lag(thrust_coefficient: float, time_constant: float, w0: ArrayLike) -> FloatArray:
+    """The state of :func:`motor_lag_advance`: :class:`MotorLagThrust` (``thrust_coefficient``
+    [N/(rad/s)^2], ``time_constant`` [s], speeds ``w0`` [rad/s]) packed, ``w0`` commanded
+    (held until the first command)."""
+    m = np.zeros(MOTOR_WIDTH)
+    m[M_SPEEDS] = m[M_COMMAND] = np.asarray(w0, dtype=float).reshape(4)
+    m[M_DT] = -1.0
+    m[M_THRUST_COEFFICIENT], m[M_TIME_CONSTANT] = thrust_coefficient, time_constant
+    return m
+
+
+@njit(cache=True)
+def motor_lag_total_thrust(m: FloatArray) -> float:
+    """:attr:`MotorLagThrust.total_thrust` of the packed state ``m`` [N]."""
+    w0, w1, w2, w3 = m[0], m[1], m[2], m[3]
+    return m[M_THRUST_COEFFICIENT] * (w0 * w0 + w1 * w1 + w2 * w2 + w3 * w3)
+
+
+@njit(cache=True)
+def motor_lag_advance(m: FloatArray, dt: float) -> float:
+    """:meth:`MotorLagThrust.advance` by ``dt`` [s] with the command ``m[M_COMMAND]`` held,
+    on the packed state ``m`` (in place); returns the total thrust [N]."""
+    tau = m[M_TIME_CONSTANT]
+    if tau <= 0.0:
+        for i in range(4):
+            m[i] = m[4 + i]
+    else:
+        if dt != m[M_DT]:  # the decay for the (usually constant) step, computed once
+            m[M_DT] = dt
+            m[M_DECAY] = math.exp(-dt / tau)
+        a = m[M_DECAY]
+        for i in range(4):
+            c = m[4 + i]
+            m[i] = c + (m[i] - c) * a
+    return motor_lag_total_thrust(m)
+
+
+# The packed state of the compiled tension filter and taut rule (:func:`pack_tension_filter`):
+F_T = 0
+"""Time of the last sample [s] (NaN: none yet)."""
+F_VALUE = 1
+"""Filtered estimate [N]."""
+F_DT = 2
+"""Interval of the cached factor [s] (NaN: none yet)."""
+F_FACTOR = 3
+"""1 - exp(-dt/tau) of that interval [-]."""
+F_TIME_CONSTANT = 4
+"""Low-pass time constant tau [s]."""
+F_THRESHOLD = 5
+"""Taut threshold [N]."""
+F_DWELL = 6
+"""Taut dwell [s]."""
+F_ABOVE_SINCE = 7
+"""Time since which the filtered value is above the threshold [s] (NaN: it is not)."""
+F_TAUT = 8
+"""The taut rule's result at the last sample (1 or 0)."""
+FILTER_WIDTH = 9
+
+
+def pack_tension_filter(threshold: float, dwell: float, time_constant: float) -> FloatArray:
+    """The state of :func:`tension_filter_step`: a reset :class:`TensionEstimator`
+    (``threshold`` [N], ``dwell`` [s], ``time_constant`` [s]) packed."""
+    f = np.zeros(FILTER_WIDTH)
+    f[F_T] = f[F_DT] = f[F_ABOVE_SINCE] = math.nan
+    f[F_TIME_CONSTANT], f[F_THRESHOLD], f[F_DWELL] = time_constant, threshold, dwell
+    return f
+
+
+@njit(cache=True)
+def tension_filter_step(f: FloatArray, t: float, raw: float) -> float:
+    """:meth:`TensionEstimator.filter_value` (the low-pass and the
+    :class:`ThresholdDwell` rule) on the packed state ``f`` (in place): the raw estimate
+    ``raw`` [N] at ``t`` [s]; returns the filtered estimate [N]."""
+    tc = f[F_TIME_CONSTANT]
+    if math.isnan(f[F_T]) or tc == 0.0:
+        f[F_VALUE] = raw
+    else:
+        dt = t - f[F_T]
+        if dt != f[F_DT]:  # the (usually constant) interval: its factor once
+            f[F_DT] = dt
+            f[F_FACTOR] = 1.0 - math.exp(-max(dt, 0.0) / tc)
+        f[F_VALUE] += f[F_FACTOR] * (raw - f[F_VALUE])
+    f[F_T] = t
+    value = f[F_VALUE]
+    if value > f[F_THRESHOLD]:
+        if math.isnan(f[F_ABOVE_SINCE]):
+            f[F_ABOVE_SINCE] = t
+    else:
+        f[F_ABOVE_SINCE] = math.nan
+    since = f[F_ABOVE_SINCE]
+    taut = not math.isnan(since) and t - since >= f[F_DWELL] - 1e-12
+    f[F_TAUT] = 1.0 if taut else 0.0
+    return value

@@ -146,25 +146,30 @@ class Ukf:
         wc = wm.copy()
         wm[0] = lam / (n + lam)
         wc[0] = lam / (n + lam) + (1.0 - alpha * alpha + beta)
-        self._wm, self._wc = wm, wc
         R_diag = np.array([noise.position_noise**2] * 3 + [noise.attitude_noise**2] * 3)
         process = np.array(
             [noise.accel_noise, noise.gyro_noise, noise.gyro_bias_walk, noise.accel_bias_walk,
              _NOISE_FLOOR]
         )  # fmt: skip
-        self._par = kernels.pack_params(self._gamma, process, R_diag)
-        q0 = np.asarray(x0.q_WB, dtype=float)
-        self._x = np.concatenate((x0.p_W, x0.v_W, q0 / np.linalg.norm(q0), x0.b_g, x0.b_a)).astype(
-            float
-        )
-        self._P = np.array(P0, dtype=float)
-        if self._P.shape != (n, n):
-            raise ValueError(f"P0 must be {n}x{n}, got {self._P.shape}")
-        # [t, f_B and omega_B of the last IMU sample, mean f_B of the last prediction]
-        self._imu = np.concatenate(([float(t0)], -_G_W, np.zeros(3), -_G_W))
+        P0 = np.array(P0, dtype=float)
+        if P0.shape != (n, n):
+            raise ValueError(f"P0 must be {n}x{n}, got {P0.shape}")
+        # the whole state in one array (kernels.WS_*), the arrays below views of it
+        rows = max(2, int(history * imu_rate_hz) + 2)
+        self._ws = ws = np.zeros(kernels.workspace_size(rows))
+        self._x, self._P = ws[kernels.WS_X], ws[kernels.WS_P].reshape(n, n)
+        self._imu, self._wm, self._wc = ws[kernels.WS_CLOCK], ws[kernels.WS_WM], ws[kernels.WS_WC]
+        self._par = ws[kernels.WS_PAR]
         # mean-only history for delayed measurements: ring of rows [t, p_W, q_WB]
-        self._hist = np.zeros((max(2, int(history * imu_rate_hz) + 2), kernels.HIST_WIDTH))
-        self._ring = np.zeros(2, dtype=np.int64)  # [head, count]
+        self._hist = ws[kernels.WS_HIST :].reshape(rows, kernels.HIST_WIDTH)
+        self._ring = ws[kernels.WS_RING].view(np.int64)  # [head, count]
+        self._wm[...], self._wc[...] = wm, wc
+        self._par[...] = kernels.pack_params(self._gamma, process, R_diag)
+        q0 = np.asarray(x0.q_WB, dtype=float)
+        self._x[...] = np.concatenate((x0.p_W, x0.v_W, q0 / np.linalg.norm(q0), x0.b_g, x0.b_a))
+        self._P[...] = P0
+        # [t, f_B and omega_B of the last IMU sample, mean f_B of the last prediction]
+        self._imu[...] = np.concatenate(([float(t0)], -_G_W, np.zeros(3), -_G_W))
         self._hist[0, 0] = t0
         self._hist[0, 1:4], self._hist[0, 4:8] = self._x[0:3], self._x[6:10]
         self._ring[1] = 1
@@ -175,15 +180,13 @@ class Ukf:
     def _load_kernels(self) -> None:
         """Load the compiled prediction and update now (numba's cache, once per process)
         rather than inside the first control ticks: calls on scratch copies."""
-        x, P, clock = self._x.copy(), self._P.copy(), self._imu.copy()
-        hist, ring = self._hist.copy(), self._ring.copy()
+        ws = self._ws.copy()
+        t = float(ws[kernels.WS_CLOCK][0])
         row = np.zeros((1, 7))
-        row[0, 0], row[0, 3] = clock[0] + 1e-3, 9.81
-        kernels.predict_into(x, P, clock, row, 1, self._wm, self._wc, self._par, hist, ring)
-        kernels.update_pose_into(
-            x, P, float(clock[0]), x[0:3].copy(), x[6:10].copy(), self._wm, self._wc, self._par,
-            hist, ring,
-        )  # fmt: skip
+        row[0, 0], row[0, 3] = t + 1e-3, 9.81
+        kernels.predict_ws(ws, row, 1)
+        x = ws[kernels.WS_X]
+        kernels.update_pose_ws(ws, t + 1e-3, x[0:3].copy(), x[6:10].copy())
 
     # ---------------------------------------------------------------- accessors
     @property
@@ -197,9 +200,22 @@ class Ukf:
         return self._P.copy()
 
     @property
+    def covariance_view(self) -> FloatArray:
+        """The live error covariance (15x15) (updated in place by every step: read, never
+        keep or write)."""
+        return self._P
+
+    @property
     def x(self) -> FloatArray:
         """The state vector [p_W, v_W, q_WB, b_g, b_a] (16,) (a copy)."""
         return self._x.copy()
+
+    @property
+    def workspace(self) -> FloatArray:
+        """The live workspace: the filter's whole state in one array, laid out as
+        ``ukf_kernels.WS_*`` (updated in place by every step: read, never keep or write;
+        the compiled steps of :class:`~tetherland.estimation.UkfEstimator` take it)."""
+        return self._ws
 
     @property
     def x_view(self) -> FloatArray:
@@ -265,13 +281,11 @@ class Ukf:
     def predict_rows(self, imu: FloatArray, n: int) -> None:
         """:meth:`predict_many` on packed rows ``imu[:n]`` = [t, f_B (3), omega_B (3)].
 
-        The hot path of :class:`~tetherland.estimation.UkfEstimator`: the caller
-        guarantees C-contiguous float rows with times increasing beyond :attr:`t`.
+        The caller guarantees C-contiguous float rows with times increasing beyond
+        :attr:`t` (:class:`~tetherland.estimation.UkfEstimator` does the same inside its
+        compiled estimate, :func:`~tetherland.estimation.kernels.flush`).
         """
-        kernels.predict_into(
-            self._x, self._P, self._imu, imu, n, self._wm, self._wc, self._par, self._hist,
-            self._ring,
-        )  # fmt: skip
+        kernels.predict_ws(self._ws, imu, n)
 
     def update_pose(self, t_meas: float, p_W: ArrayLike, q_WB: ArrayLike) -> float:
         """Fuse a motion-capture pose measured at ``t_meas`` (possibly in the past).
@@ -284,10 +298,9 @@ class Ukf:
             The normalised innovation squared (chi-square with 6 dof when consistent);
             NaN if the measurement was older than the history and was not fused.
         """
-        nis = kernels.update_pose_into(
-            self._x, self._P, float(t_meas),
+        nis = kernels.update_pose_ws(
+            self._ws, float(t_meas),
             np.ascontiguousarray(p_W, dtype=float), np.ascontiguousarray(q_WB, dtype=float),
-            self._wm, self._wc, self._par, self._hist, self._ring,
         )  # fmt: skip
         if nis == kernels.REJECTED:
             self.rejected_late += 1

@@ -50,6 +50,50 @@ SERIES_ANGLE = 0.05
 """Rotation angle below which the compiled exp map uses its Taylor series [rad]."""
 
 
+# ------------------------------------------------------------------ the filter's workspace
+# One float array holds the whole state of a :class:`~tetherland.estimation.ukf.Ukf` (its
+# arrays are views of it), so that a compiled step takes one argument, not ten (each
+# array argument costs a compiled call about 650 instructions of unboxing). In order:
+WS_X = slice(0, 16)
+"""State x [p_W, v_W, q_WB, b_g, b_a]."""
+WS_P = slice(16, 16 + N_ERR * N_ERR)
+"""Error covariance P (15, 15), row-major."""
+WS_CLOCK = slice(WS_P.stop, WS_P.stop + 10)
+"""``clock`` (see the module docstring)."""
+WS_WM = slice(WS_CLOCK.stop, WS_CLOCK.stop + N_SIG)
+"""Mean weights (31)."""
+WS_WC = slice(WS_WM.stop, WS_WM.stop + N_SIG)
+"""Covariance weights (31)."""
+WS_PAR = slice(WS_WC.stop, WS_WC.stop + 12)
+"""``par`` (:func:`pack_params`)."""
+WS_RING = slice(WS_PAR.stop, WS_PAR.stop + 2)
+"""``ring`` [head, count], two int64 stored in the bits of two floats."""
+WS_HIST = WS_RING.stop
+"""Start of ``hist`` (H, :data:`HIST_WIDTH`), row-major, to the end of the workspace."""
+
+
+def workspace_size(history_rows: int) -> int:
+    """Length of the workspace of a filter with ``history_rows`` history rows."""
+    return WS_HIST + history_rows * HIST_WIDTH
+
+
+_X0, _X1, _P0, _P1 = WS_X.start, WS_X.stop, WS_P.start, WS_P.stop
+_C0, _C1 = WS_CLOCK.start, WS_CLOCK.stop
+_WM0, _WM1, _WC0, _WC1 = WS_WM.start, WS_WM.stop, WS_WC.start, WS_WC.stop
+_PAR0, _PAR1, _R0, _R1 = WS_PAR.start, WS_PAR.stop, WS_RING.start, WS_RING.stop
+
+
+@njit(cache=True)
+def workspace_views(ws: np.ndarray):
+    """(x, P, clock, wm, wc, par, hist, ring): the views of the kernels' arguments into
+    the workspace ``ws`` (the layout ``WS_*``); Python takes the same views with numpy."""
+    return (
+        ws[_X0:_X1], ws[_P0:_P1].reshape((N_ERR, N_ERR)), ws[_C0:_C1], ws[_WM0:_WM1],
+        ws[_WC0:_WC1], ws[_PAR0:_PAR1], ws[WS_HIST:].reshape((-1, HIST_WIDTH)),
+        ws[_R0:_R1].view(np.int64),
+    )  # fmt: skip
+
+
 def pack_params(gamma: float, noise: np.ndarray, R_diag: np.ndarray) -> np.ndarray:
     """``par`` of the kernels from gamma, the 5 process-noise values and the 6 R entries."""
     return np.concatenate(([gamma], noise, R_diag)).astype(float)
@@ -553,6 +597,21 @@ def update_pose_into(
             P[a, b] = v
             P[b, a] = v
     return nis
+
+
+@njit(cache=True)
+def predict_ws(ws: np.ndarray, imu: np.ndarray, n: int) -> None:
+    """:func:`predict_into` on the filter's workspace ``ws`` (``WS_*``)."""
+    x, P, clock, wm, wc, par, hist, ring = workspace_views(ws)
+    predict_into(x, P, clock, imu, n, wm, wc, par, hist, ring)
+
+
+@njit(cache=True)
+def update_pose_ws(ws: np.ndarray, t_meas: float, p_meas: np.ndarray,
+                   q_meas: np.ndarray) -> float:  # fmt: skip
+    """:func:`update_pose_into` on the filter's workspace ``ws`` (``WS_*``)."""
+    x, P, _, wm, wc, par, hist, ring = workspace_views(ws)
+    return update_pose_into(x, P, t_meas, p_meas, q_meas, wm, wc, par, hist, ring)
 
 
 @njit(cache=True)
