@@ -18,7 +18,7 @@ from tetherland.config import load_scenario
 from tetherland.geometry import link_angles
 from tetherland.interfaces import ControlMode, StateEstimate
 from tetherland.mission import MissionSupervisor, Phase, plan_mission
-from tetherland.mission.hooking import bar_seating_path, swing_shaper
+from tetherland.mission.hooking import bar_seating_path, swing_shaper, take_up_legs
 from tetherland.mission.paths import segment_duration, smoothstep_residual
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.plant import Plant
@@ -116,7 +116,7 @@ def _take_up_legs(scenario, plan, t_pass: float) -> list[tuple[float, float, flo
     """The bar's take-up legs from the end of the hooking pass ``t_pass`` [s] to the
     stretch leg's start, as the legs' formula gives them with perfect tracking: per leg
     (start, duration, unshaped duration T, horizontal length) [s, s, s, m]. A leg lasts
-    max(0.5 s, the smoothstep's speed and acceleration limits) plus half the believed
+    max(P, the smoothstep's speed and acceleration limits) plus half the believed
     swing period P (the zero-vibration shaper's span); the swing starts at the first
     control tick ``settle_time`` after the climb, from the climb's top."""
     cfg, geo, wp = scenario.mission, plan.geometry, plan.waypoints
@@ -130,7 +130,8 @@ def _take_up_legs(scenario, plan, t_pass: float) -> list[tuple[float, float, flo
         if i == 2:  # the swing: at the first tick after the climb and its settle
             t = math.ceil((t + cfg.settle_time) / dt - 1e-6) * dt
         d = corner - p
-        T = segment_duration(float(np.linalg.norm(d)), speed or take_up, cfg.flight.cruise_accel)
+        T = segment_duration(float(np.linalg.norm(d)), speed or take_up, cfg.flight.cruise_accel,
+                             take_up_legs(scenario)[0])  # fmt: skip
         legs.append((t, T + half, T, float(np.hypot(d[0], d[1]))))
         t, p = t + T + half, corner
     return legs
@@ -155,9 +156,11 @@ def test_the_take_up_legs_leave_a_hanging_hook_still(overrides: list[str]) -> No
     t_pass = next(p for p in sup.records if p.phase == Phase.STRETCH).start
     legs = _take_up_legs(s, plan, t_pass)
     dt = 1.0 / s.controller.rate_hz
-    # the swing's last chord ends where the stretch leg starts, on phi_0
+    # the swing's last chord ends where the stretch leg starts, on phi_0: to two ticks
+    # (the end falls between ticks, the estimate is one tick behind, and the smoothstep's
+    # deficit 126 (1 - tau)^5 drops under the 1e-12 rad test a few ms before the end)
     t_last, dur_last, _, _ = legs[-1]
-    assert t_on is not None and abs(t_on - (t_last + dur_last)) <= dt + 1e-9
+    assert t_on is not None and abs(t_on - (t_last + dur_last)) <= 2.0 * dt
     t = np.array([row[0] for row in trace])
     a_h = np.array([row[1][2, :2] for row in trace])  # horizontal reference acceleration
     P = swing_shaper(s).period

@@ -290,6 +290,9 @@ def take_up_legs(scenario: Scenario) -> tuple[float, ZVShaper | None]:
     believed swing period P (:func:`swing_shaper`): a pendulum of period P driven by the
     move is left with no swing, whatever the leg's duration, and one of period P_true
     with |cos(pi P / (2 P_true))| of the unshaped move's (:meth:`ZVShaper.residual_ratio`).
+    Experiment (branch i22-takeup-mid): the unshaped part at least one period P (a leg at
+    least 1.5 P), slower chords than the speed limits give: with 0.5 s the 60 deg
+    campaign draws 00005 and 00008 lost the seated hook (docs/mechanism.md).
     The robot does not see whether the hook hangs free beside the bar (the level move;
     a hook not seated) or sits in its crook, so every leg is shaped for the free hook.
     A leg so lasts its speed-limited duration plus P/2 (1.1 s for the pilot's 1.2 m
@@ -297,7 +300,8 @@ def take_up_legs(scenario: Scenario) -> tuple[float, ZVShaper | None]:
     leaves 11 % of its horizontal length swinging (the smoothstep's velocity spectrum
     at 2 cycles per leg, :func:`~tetherland.mission.paths.smoothstep_residual`), and
     has its first zero only at 2.6 periods."""
-    return SHORTEST_LEG, swing_shaper(scenario) if scenario.mechanism.kind == "bar" else None
+    shaper = swing_shaper(scenario) if scenario.mechanism.kind == "bar" else None
+    return (SHORTEST_LEG if shaper is None else max(SHORTEST_LEG, shaper.period)), shaper
 
 
 def swing_shaper(scenario: Scenario) -> ZVShaper | None:
