@@ -520,8 +520,9 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
     """Fly the bar's hooking pass and take-up as the supervisor does, planned on
     ``belief``, in ``plant`` (the truth): the hooking pass at ``mission.hooking.speed``
     with its settle pause, the level move and the seat's climb (:func:`bar_climb_path`)
-    at the take-up speed, and after ``settle_time`` the swing (:func:`bar_swing_path`)
-    from where the vehicle then is, then the stretch. The vehicle, level, is driven by an
+    at the take-up speed (its legs shaped, :func:`take_up_legs`), and after
+    ``settle_time`` the swing (:func:`bar_swing_path`) from where the vehicle then is,
+    then the stretch. The vehicle, level, is driven by an
     applied force reproducing the robot's free-flight position loop (PID with the
     ``controller.free_flight`` gains and clamp, the path's acceleration fed forward, the
     believed weight compensated) with the rotors off. Stops once the line pulls more than
@@ -529,7 +530,12 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
     rule, read here from the pass's end: stricter than the supervisor, which does not
     read it during the climb) or ``timeout`` after the stretch. Returns (time the line
     came taut or inf, end of the swing) [s, s]."""
-    from tetherland.mission.hooking import bar_climb_path, bar_swing_path, shortest_leg
+    from tetherland.mission.hooking import (
+        bar_climb_path,
+        bar_swing_path,
+        shortest_leg,
+        take_up_legs,
+    )
     from tetherland.mission.paths import Path
     from tetherland.mission.plan import plan_mission
 
@@ -537,11 +543,13 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
     plan = plan_mission(belief, plant.start_state())
     geo, wp = plan.geometry, plan.waypoints
     legs = shortest_leg(belief)
+    take_up_leg, shaper = take_up_legs(belief)  # the take-up's legs, shaped
     take_up_speed = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
     hooking = Path(1.0, wp.hook_start, cfg.hooking.speed, cfg.flight.cruise_accel, legs)
     hooking.to(wp.hook_end, pause=cfg.settle_time)
     t_pass = hooking.t_end
-    climb = Path(t_pass, wp.hook_end, take_up_speed, cfg.flight.cruise_accel, legs)
+    climb = Path(t_pass, wp.hook_end, take_up_speed, cfg.flight.cruise_accel, take_up_leg,
+                 shaper)  # fmt: skip
     for corner, speed in bar_climb_path(belief, geo.R_WA[:, 0], wp.hook_end):
         climb.to(corner, speed=speed)
     t_swing = climb.t_end + cfg.settle_time
@@ -559,7 +567,7 @@ def _fly_take_up(plant: Plant, belief: Scenario) -> tuple[float, float]:
         i += 1
         if swing is None and t >= t_swing:  # the swing from where the climb left it
             seat = d.qpos[0:3].copy()
-            swing = Path(t, seat, take_up_speed, cfg.flight.cruise_accel, legs)
+            swing = Path(t, seat, take_up_speed, cfg.flight.cruise_accel, take_up_leg, shaper)
             for corner, _ in bar_swing_path(belief, geo.p_A, seat, wp.stretch, wp.attachment_W):
                 swing.to(corner)
             t_seated = swing.t_end

@@ -88,7 +88,8 @@ class MechanismConfig(Section):
     swing_periods: float = Field(2.0, ge=0, le=10)
     """Shortest free-flight leg of the mission, in swing periods of the hanging hook
     (2 pi sqrt(L/g)): a smooth rest-to-rest leg that long leaves the hook almost still
-    (the bar mechanism) [-]."""
+    (the bar mechanism; not the take-up after the hooking pass, whose legs are shaped at
+    that period and as short as the speed limits allow) [-]."""
     lift_margin: float = Field(0.3, ge=0, le=5)
     """The mission's takeoff point is at least this far above the hanging hook's depth
     below the vehicle (the hook leaves the ground during the climb) [m]."""

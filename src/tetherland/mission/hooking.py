@@ -279,6 +279,31 @@ def shortest_leg(scenario: Scenario) -> float:
     return max(SHORTEST_LEG, m.swing_periods * swing_period(line, m.hook_shank))
 
 
+def take_up_legs(scenario: Scenario) -> tuple[float, ZVShaper | None]:
+    """Shortest leg [s] and shaper of the take-up's legs after the hooking pass (the
+    bar's level move, seat climb, swing chords and stretch; the disk's and the magnet's
+    take-up, nothing hanging free (the magnet clipped on its boom): :data:`SHORTEST_LEG`,
+    unshaped).
+
+    With the bar every take-up leg is the rest-to-rest smoothstep of the speed limits
+    (at least :data:`SHORTEST_LEG`) convolved with the zero-vibration shaper at the hook's
+    believed swing period P (:func:`swing_shaper`): a pendulum of period P driven by the
+    move is left with no swing, whatever the leg's duration, and one of period P_true
+    with |cos(pi P / (2 P_true))| of the unshaped move's (:meth:`ZVShaper.residual_ratio`).
+    Experiment (branch i22-takeup-mid): the unshaped part at least one period P (a leg at
+    least 1.5 P), slower chords than the speed limits give: with 0.5 s the 60 deg
+    campaign draws 00005 and 00008 lost the seated hook (docs/mechanism.md).
+    The robot does not see whether the hook hangs free beside the bar (the level move;
+    a hook not seated) or sits in its crook, so every leg is shaped for the free hook.
+    A leg so lasts its speed-limited duration plus P/2 (1.1 s for the pilot's 1.2 m
+    cable); the unshaped leg of ``mechanism.swing_periods`` = 2 periods it replaces
+    leaves 11 % of its horizontal length swinging (the smoothstep's velocity spectrum
+    at 2 cycles per leg, :func:`~tetherland.mission.paths.smoothstep_residual`), and
+    has its first zero only at 2.6 periods."""
+    shaper = swing_shaper(scenario) if scenario.mechanism.kind == "bar" else None
+    return (SHORTEST_LEG if shaper is None else max(SHORTEST_LEG, shaper.period)), shaper
+
+
 def swing_shaper(scenario: Scenario) -> ZVShaper | None:
     """The zero-vibration shaper of the free-flight moves (:class:`ZVShaper`): with a
     hook hanging on a line (the bar mechanism) at its believed swing period

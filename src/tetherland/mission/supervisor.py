@@ -66,6 +66,7 @@ from tetherland.mission.hooking import (
     magnet_pull_out_path,
     shortest_leg,
     swing_shaper,
+    take_up_legs,
     takeoff_height,
     unhooking_path,
 )
@@ -171,6 +172,8 @@ class MissionSupervisor:
         if self._magnet:  # clipped on its boom until released: nothing swings before
             self._hanging = (self._min_leg, self._shaper)
             self._min_leg, self._shaper = SHORTEST_LEG, None
+        self._take_up = take_up_legs(scenario)
+        """Shortest leg [s] and shaper of the take-up's legs (:meth:`_take_up_path`)."""
         self._climb_slack: np.ndarray | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
         self._swing_at: float | None = None
@@ -319,6 +322,13 @@ class MissionSupervisor:
         the mechanism (passes, take-up, release, unhooking) are not shaped."""
         return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
                     self._min_leg, self._shaper if free_hook else None)  # fmt: skip
+
+    def _take_up_path(self, t: float, start: np.ndarray, speed: float) -> Path:
+        """A take-up path from ``start`` after the hooking pass: with the bar every leg
+        shaped at the hanging hook's believed swing period and as short as the speed
+        limits allow (:func:`~tetherland.mission.hooking.take_up_legs`)."""
+        shortest, shaper = self._take_up
+        return Path(t, start, speed, self.cfg.flight.cruise_accel, shortest, shaper)
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""
@@ -617,7 +627,7 @@ class MissionSupervisor:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
             take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
-            self._path = self._new_path(t, wp.hook_end, take_up)
+            self._path = self._take_up_path(t, wp.hook_end, take_up)
             m = self.scenario.mechanism
             if m.kind == "bar":
                 # level to the pass's mirror across the bar and climb to seat the hook in
@@ -651,7 +661,7 @@ class MissionSupervisor:
             self._swing_at = None
             take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
             seat = est.body.p_W.copy()
-            self._path = self._new_path(t, seat, take_up)
+            self._path = self._take_up_path(t, seat, take_up)
             for corner, _ in bar_swing_path(self.scenario, self.geo.p_A, seat, wp.stretch,
                                             wp.attachment_W):  # fmt: skip
                 self._path.to(corner)
