@@ -505,7 +505,7 @@ def test_tension_filter_follows_the_cable_axial_mode():
     assert tension_filter_time_constant(1e9, 1.0) == fast
     assert tension_filter_time_constant(1.0, 1.0) == slow
     est = UkfEstimator(load_scenario("slope50", [NYLON]), RigidBodyState.at_rest(np.zeros(3)))
-    assert est.tension.time_constant == pytest.approx(0.2 / math.sqrt(k_nylon))
+    assert est.tension_time_constant == pytest.approx(0.2 / math.sqrt(k_nylon))
 
 
 def test_link_rates_of_a_stretched_cable_use_its_real_length():

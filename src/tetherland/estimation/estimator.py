@@ -37,6 +37,7 @@ from tetherland.estimation.kernels import push_imu as _push_imu
 from tetherland.estimation.tension import (
     F_T,
     F_TAUT,
+    F_TIME_CONSTANT,
     F_VALUE,
     CableEstimate,
     TensionEstimate,
@@ -186,6 +187,13 @@ class UkfEstimator:
             out[_EXTERNAL],
         )
         return cached
+
+    @property
+    def tension_time_constant(self) -> float:
+        """Time constant of the tension estimate's low-pass [s] (chosen from the believed
+        cable's axial mode, :func:`~tetherland.estimation.tension.tension_filter_time_constant`,
+        unless given)."""
+        return float(self._e[kernels.E_FILTER][F_TIME_CONSTANT])
 
     @property
     def last_tension(self) -> TensionEstimate | None:
