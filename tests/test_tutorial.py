@@ -4,7 +4,7 @@ limit it quotes, the design it writes, a successful mission, a campaign report a
 exact replay).
 
 Campaigns run with fewer runs than the tutorial shows: ``--runs N`` becomes ``--runs``
-``$TETHERLAND_TUTORIAL_RUNS`` (default 2), so that the whole tutorial takes about a minute.
+``$TETHERLAND_TUTORIAL_RUNS`` (default 1), so that the whole tutorial takes about a minute.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from tetherland.config import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIAL = ROOT / "docs" / "tutorial.md"
-RUNS = int(os.environ.get("TETHERLAND_TUTORIAL_RUNS", "2"))
+RUNS = int(os.environ.get("TETHERLAND_TUTORIAL_RUNS", "1"))
 
 FENCE = re.compile(r"^```(?P<info>[^\n`]*)\n(?P<body>.*?)^```[ \t]*$", re.M | re.S)
 
