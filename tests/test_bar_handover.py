@@ -20,24 +20,30 @@ from tetherland.interfaces import ControlMode, StateEstimate
 from tetherland.mission import MissionSupervisor, Phase, plan_mission
 from tetherland.mission.hooking import bar_seating_path, swing_shaper, take_up_legs
 from tetherland.mission.paths import segment_duration, smoothstep_residual
+from tetherland.mission.supervisor import handover_tension
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import LinkState, RigidBodyState
 
 HANGING = 0.2
 """Tension read with the line hanging free before the stretch [N] (its weight)."""
-TAUT = 1.5
+TAUT = 2.5
 """Tension read in the stretch phase wherever the line can be taut [N]: above the
-threshold all the way, as with the anchor believed 1.7 cm toward the landing side (slope
-60 deg, draw 1)."""
+hand-over tension (the landing plan's start tension, 2 N) all the way, as with the
+anchor believed 1.7 cm toward the landing side (slope 60 deg, draw 1)."""
 
 
-def _fly(scenario, limit: float = 170.0, trace: list | None = None):
+def _fly(scenario, limit: float = 170.0, trace: list | None = None, taut: float = TAUT,
+         until: Phase = Phase.TETHERED_LANDING, held: float | None = None):  # fmt: skip
     """Fly the supervisor with perfect tracking (the estimate is the last reference) and
-    the tension readings above; returns the supervisor, its plan, the hand-over time, the
+    the tension readings above (``taut`` where the line can be taut) until it enters
+    ``until``; returns the supervisor, its plan, the time it entered ``until``, the
     estimate then, and the first time the believed link pointed along the landing plan's
     start direction phi_0 (to rounding: the end of the take-up's swing, at rest).
-    ``trace`` gets each tick's time and reference rows (p, v, a)."""
+    ``trace`` gets each tick's time and reference rows (p, v, a). ``held``: the line
+    holds the attachment within that distance of the anchor in the stretch phase [m] (the
+    position is pulled back onto it, at rest), else the vehicle goes wherever the
+    reference goes."""
     plan = plan_mission(scenario, Plant(scenario).start_state())
     phi0 = float(plan.landing_trajectory.output(0.0).phi[0])
     t_on: float | None = None
@@ -59,20 +65,60 @@ def _fly(scenario, limit: float = 170.0, trace: list | None = None):
         # anchor (the pass ends pass_depth + pass_margin under the bar, the line slack)
         r = float(np.linalg.norm(d_A))
         can_be_taut = r >= scenario.tether.length - scenario.mission.detection.anchor_length_error
-        tension = (TAUT if sup.phase in (Phase.STRETCH, Phase.TETHERED_LANDING) and can_be_taut
+        tension = (taut if sup.phase in (Phase.STRETCH, Phase.TETHERED_LANDING) and can_be_taut
                    else HANGING)  # fmt: skip
         est = StateEstimate(
             t=t, body=RigidBodyState(rows[0].copy(), rows[1].copy(), q, np.zeros(3)),
             link=LinkState(phi, delta), tension=tension,
         )  # fmt: skip
         ref = sup.reference(t, est)
-        if sup.phase == Phase.TETHERED_LANDING:
+        if sup.phase == until:
             return sup, plan, t, est, t_on
         assert ref.mode == ControlMode.FREE_FLIGHT, (t, sup.phase)
         rows = np.asarray(ref.p_W)[:3]
+        if held is not None and sup.phase == Phase.STRETCH:
+            d_W = rows[0] + R_WB @ r_att - geo.p_A
+            if float(np.linalg.norm(d_W)) > held:  # held by the line, at rest
+                rows = np.zeros((3, 3))
+                rows[0] = geo.p_A + held * d_W / np.linalg.norm(d_W) - R_WB @ r_att
         if trace is not None:
             trace.append((t, rows.copy()))
-    pytest.fail(f"no hand-over to tethered control within {limit} s (phase {sup.phase.name})")
+    pytest.fail(f"no {until.name} within {limit} s (phase {sup.phase.name})")
+
+
+def test_the_bar_hands_over_at_the_landing_plans_start_tension() -> None:
+    """With the bar the stretch hands over once the line holds the tension the landing
+    plan starts with (``planner.start_tension``), not the taut threshold: a hook caught
+    by a tip holds about the threshold and rolls over the bar as the landing's pull grows
+    (pilot draw 50-00005: the line slack 0.16 s, "cable lost"). The disk and the magnet
+    keep the threshold; a start tension below the threshold leaves the threshold."""
+    bar = load_scenario("slope50", ["mechanism.kind=bar"])
+    start, threshold = bar.planner.start_tension, bar.mission.stretch.tension_threshold
+    assert threshold < start
+    assert handover_tension(bar) == start
+    low = load_scenario(
+        "slope50", ["mechanism.kind=bar", f"planner.start_tension={0.5 * threshold}"]
+    )
+    assert handover_tension(low) == threshold
+    for kind in ("slope50", "wall90"):
+        s = load_scenario(kind)
+        assert handover_tension(s) == s.mission.stretch.tension_threshold
+
+
+def test_a_line_holding_less_than_the_start_tension_is_not_handed_over() -> None:
+    """A line read taut on the stretch direction at 1.5 N, above the threshold (1 N) but
+    below the landing plan's start tension (2 N): on main tethered control took over
+    ``tension_dwell`` after the stretch leg began; now the vehicle keeps pulling in free
+    flight and, without the start tension by ``mission.stretch.timeout`` after the
+    stretch target, counts the hook as missed and retries."""
+    s = load_scenario("slope50", ["mechanism.kind=bar"])
+    m, l = s.mechanism, s.tether.length
+    low = 0.5 * (s.mission.stretch.tension_threshold + s.planner.start_tension)
+    gap = m.hook_radius + m.bar_radius  # the swing's radius (test above): the line holds there
+    held = math.hypot(l + gap, m.pass_offset) - gap
+    sup, _, t_retry, _, t_on = _fly(s, taut=low, until=Phase.RETRY, held=held)
+    assert t_on is not None and t_on < t_retry
+    assert all(p.phase != Phase.TETHERED_LANDING for p in sup.records)
 
 
 @pytest.mark.parametrize("overrides", [

@@ -137,10 +137,11 @@ def test_the_tare_needs_a_thrust_axis_along_the_link() -> None:
         TensionTare(-0.1)
 
 
-def _story(overrides: list[str], bias: float, taut: float = 1.5, limit: float = 170.0):
+def _story(overrides: list[str], bias: float, taut: float = 2.5, limit: float = 170.0):
     """Fly the supervisor with perfect tracking (the estimate is the last reference, level)
     through approach, hooking and take-up, told the truth: the line hangs free (the
-    estimate reads W (d . z_W)), taut (``taut`` N) in the stretch wherever it can be (the
+    estimate reads W (d . z_W)), taut (``taut`` N, above the bar's hand-over tension, the
+    landing plan's start tension) in the stretch wherever it can be (the
     attachment within the anchor check's tolerance of the cable length from the
     anchor), and the robot's estimate reads ``bias`` N more along its thrust axis.
     Returns the supervisor at tethered control or at the safe state."""

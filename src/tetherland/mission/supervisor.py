@@ -125,6 +125,27 @@ _P_TETHERED_LANDING, _P_TETHERED_TAKEOFF = _P.TETHERED_LANDING, _P.TETHERED_TAKE
 _FREE_FLIGHT = ControlMode.FREE_FLIGHT
 
 
+def handover_tension(scenario: Scenario) -> float:
+    """Estimated tension the stretch must hold (``mission.stretch.tension_dwell``) before
+    tethered control takes over [N].
+
+    ``mission.stretch.tension_threshold``; with the bar mechanism at least
+    ``planner.start_tension``, the tension the landing plan starts with (the stretch's
+    pull aims beyond it, :func:`tetherland.config.checks.stretch_tension_limit`). A hook
+    caught by a tip instead of its crook holds about the threshold, and rolls over the
+    bar as the landing's pull grows: the line goes slack for 0.16 s and the cable-lost
+    rule stops the mission (pilot draw slope50 50 deg 00005: crown 37 mm from the bar's
+    axis, taut 4 cm short, 1.05 N at the hand-over, slack 0.2 s into the landing). Pulled
+    to the start tension in free flight, where the position loop holds the vehicle
+    through the slack, it rolls into its crook before the hand-over. The disk's and the
+    magnet's cable have no such seat: their threshold is unchanged.
+    """
+    threshold = scenario.mission.stretch.tension_threshold
+    if scenario.mechanism.kind != "bar":
+        return threshold
+    return max(threshold, scenario.planner.start_tension)
+
+
 class TransitionError(TetherlandError):
     """The supervisor tried a phase change that :data:`TRANSITIONS` does not allow."""
 
@@ -203,6 +224,9 @@ class MissionSupervisor:
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.stretch.tension_threshold, cfg.stretch.tension_dwell)
+        self._handover = ThresholdDwell(handover_tension(scenario), cfg.stretch.tension_dwell)
+        """The stretch's taut rule (:func:`handover_tension`); ``_taut`` is the unhooking
+        climb's."""
         m = scenario.mechanism
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
         tare = cfg.stretch.tension_tare
@@ -638,7 +662,7 @@ class MissionSupervisor:
                                                     wp.hook_end):  # fmt: skip
                     self._path.to(corner, speed=speed)
                 self._swing_at = self._path.t_end + cfg.settle_time
-                self._taut.reset()
+                self._handover.reset()
                 self._enter(Phase.STRETCH, t, "hooking pass done")
                 return self._free(t, est)
             if self._magnet:  # straight back first: out of the clip, not along the plate
@@ -650,7 +674,7 @@ class MissionSupervisor:
             self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
             if self._magnet:  # the pull-out (after the EPM's switching time) unclips it
                 self._magnet_moves.append((t + m.epm_on_time, "held"))
-            self._taut.reset()
+            self._handover.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
 
@@ -667,7 +691,7 @@ class MissionSupervisor:
                 self._path.to(corner)
             self._stretch_leg = len(self._path.segments)  # the next move is the stretch
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
-            self._taut.reset()
+            self._handover.reset()
         if self._swing_at is not None or self._swinging(t):
             # the bar: not during the seat's climb (a hook seated early holds the vehicle
             # under the climb's top and the line pulls: 1.24 N estimated for 0.2 s on a
@@ -675,8 +699,8 @@ class MissionSupervisor:
             # tethered landing from the seat), nor during the swing over the bar (a belief
             # error of the anchor, or the tension estimate's bias, reads taut there, far
             # above the direction where the landing plan, its thrust and tension start)
-            self._taut.reset()
-        elif self._taut.update(t, est.tension or 0.0) and est.link is not None:
+            self._handover.reset()
+        elif self._handover.update(t, est.tension or 0.0) and est.link is not None:
             self.times["t_tethered"] = t
             track = TrajectoryTrack(self.landing_traj, t, self.rate_hz, int(Phase.TETHERED_LANDING))
             self._track = BlendedTrack(track, self._output_now(est), t, cfg.blend_time)
@@ -684,7 +708,7 @@ class MissionSupervisor:
             self._landing_rate = 0.0
             self._enter(
                 Phase.TETHERED_LANDING, t,
-                f"estimated tension {est.tension:.2f} N above {cfg.stretch.tension_threshold} N "
+                f"estimated tension {est.tension:.2f} N above {self._handover.threshold} N "
                 f"for {cfg.stretch.tension_dwell} s: cable taut, tethered control",
             )  # fmt: skip
             return self._track.reference(t, self.phase)
@@ -981,7 +1005,8 @@ class MissionSupervisor:
         assert self._shaper is not None
         here = self._path.end
         self._path = self._new_path(t, here, cfg.hooking.speed, free_hook=True).to(
-            wp.hook_start, pause=cfg.settle_time)
+            wp.hook_start, pause=cfg.settle_time
+        )
         self._path.delay(self.scenario.mechanism.epm_off_time + self._shaper.period)
 
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
