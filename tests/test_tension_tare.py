@@ -21,6 +21,8 @@ from tetherland.estimation import TensionTare, tension_from_forces
 from tetherland.geometry import link_angles, link_direction
 from tetherland.interfaces import ControlMode, StateEstimate
 from tetherland.mission import MissionSupervisor, Phase, plan_mission
+from tetherland.mission.hooking import SHORTEST_LEG, swing_shaper, take_up_legs
+from tetherland.mission.paths import segment_duration, smoothstep_residual
 from tetherland.models.hook import bar_hanging_weight, bar_line_length
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.plant import Plant
@@ -205,12 +207,13 @@ def test_with_the_tare_the_robot_reads_its_line_right(bias: float) -> None:
 
 
 def _climb(
-    sup: MissionSupervisor, s, bias: float, held: float | None
+    sup: MissionSupervisor, s, bias: float, held: float | None, trace: list | None = None
 ) -> tuple[list[str], np.ndarray]:
     """After the release (the supervisor moved to it by hand, its tare taken): the
     unhooking climb from the release's slack point, the line told hanging free
     (``held`` None) or pulling ``held`` N wherever the hook on the bar lets it be taut;
-    returns the supervisor's hook events and the vehicle's positions until the return."""
+    returns the supervisor's hook events and the vehicle's positions until the return.
+    ``trace`` gets each tick's time, reference rows (p, v, a) and the supervisor's path."""
     plan, geo = sup.plan, sup.geo
     r_att = np.asarray(s.vehicle.cable_attachment)
     W = bar_hanging_weight(s.tether.length, s.mechanism)
@@ -245,6 +248,8 @@ def _climb(
         if sup.phase != Phase.UNHOOK:
             break
         rows = np.asarray(ref.p_W)[:3]
+        if trace is not None:
+            trace.append((t, rows.copy(), sup._path))
     return [e.message for e in sup.events if e.kind == "hook"], np.array(flown)
 
 
@@ -297,3 +302,63 @@ def test_the_reverse_pass_climbs_away_from_the_bar() -> None:
     k = np.flatnonzero(climbing & under)
     assert np.all((along[k] > 0.0) | (along[k] <= -2.0 * m.pass_offset + 1e-9)), along[k]
     assert np.any(along[k] > 0.0) and np.any(along[k] <= -2.0 * m.pass_offset + 1e-9)
+
+
+@pytest.mark.parametrize("held", [None, 1.5])
+def test_the_unhooking_legs_leave_a_hanging_hook_still(held: float | None) -> None:
+    """The bar's unhooking (the climb on the landing side and the flight over the bar to
+    the hooking start; with the hook read on the bar, ``held`` N, the reverse pass under
+    it) flies the take-up's legs (:func:`~tetherland.mission.hooking.take_up_legs`): each
+    the speed-limited smoothstep, at least one believed swing period P, at the take-up's
+    speed (the climb at ``hooking.speed``: it may draw the line of a hook on the bar
+    taut), convolved with the zero-vibration shaper (P/2 longer). Driving the pivot of an
+    undamped pendulum at rest, each leg leaves it the swing the shaper predicts: none at
+    P, |cos(pi P / (2 P'))| D_h r(T / P') at P' = P +- 1 % (D_h the leg's horizontal
+    length, r the smoothstep's velocity spectrum, :func:`smoothstep_residual`). On main
+    the legs were unshaped, at ``hooking.speed`` and at least two periods: the flight over
+    the bar (0.96 m, 3.6 periods) left 1.8 mm swinging, and the reverse pass of draw
+    60-00008 took 31 s from the climb's top (out of the 180 s)."""
+    s = load_scenario("slope50", PILOT)
+    cfg = s.mission
+    plan = plan_mission(s, Plant(s).start_state())
+    sup = MissionSupervisor(s, plan)
+    trace: list = []
+    events, _ = _climb(sup, s, 0.0, held, trace)
+    assert any("still on the bar" in e for e in events) is (held is not None), events
+    assert sup.phase == Phase.RETURN
+    P = swing_shaper(s).period
+    shortest, shaper = take_up_legs(s)
+    assert shaper is not None and shaper.period == P and shortest == max(SHORTEST_LEG, P)
+    dt = 1.0 / s.controller.rate_hz
+    t = np.array([row[0] for row in trace])
+    a_h = np.array([row[1][2, :2] for row in trace])  # horizontal reference acceleration
+    take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
+    flown: dict[int, tuple] = {}  # each path and the last tick it was flown
+    for tk, _, path in trace:
+        flown[id(path)] = (path, tk)
+    legs = []  # the moves flown to their end: (start, duration, base, horizontal length)
+    for i, (path, t_last) in enumerate(flown.values()):
+        for j, seg in enumerate(path.segments):
+            d = seg.p1 - seg.p0
+            if not d.any() or seg.t_end > t_last + dt:
+                continue  # a pause, or a move cut short by the hook read on the bar
+            speed = cfg.hooking.speed if (i, j) == (0, 0) else take_up
+            base = segment_duration(float(np.linalg.norm(d)), speed, cfg.flight.cruise_accel,
+                                    shortest)  # fmt: skip
+            assert seg.base == pytest.approx(base, abs=1e-12)
+            assert seg.duration == pytest.approx(base + 0.5 * P, abs=1e-12)
+            legs.append((seg.t0, seg.duration, base, float(np.hypot(d[0], d[1]))))
+    # the climb and the flight over the bar; or the way back to the slack point, the
+    # reverse pass under the bar and the climb beside it
+    assert len(legs) == (2 if held is None else 3)
+    assert sum(D_h > 0.1 for *_, D_h in legs) >= 1
+    for P_true in (P, 1.01 * P, 0.99 * P):
+        w = 2.0 * math.pi / P_true
+        ratio = abs(math.cos(0.5 * math.pi * P / P_true))
+        for t0, duration, T, D_h in legs:
+            k = (t >= t0 - 0.5 * dt) & (t <= t0 + duration + 0.5 * dt)
+            # x'' + w^2 x = -a_h from rest: the swing left is |int a_h e^{-iwt} dt| / w
+            z = np.trapezoid(a_h[k] * np.exp(-1j * w * t[k])[:, None], dx=dt, axis=0) / w
+            residual = float(np.linalg.norm(np.abs(z)))
+            expected = ratio * D_h * smoothstep_residual(T / P_true)
+            assert residual == pytest.approx(expected, abs=2e-5), (P_true / P, t0, D_h)
