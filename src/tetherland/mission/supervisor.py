@@ -319,7 +319,8 @@ class MissionSupervisor:
         """A free-flight path from ``start``; ``free_hook``: a leg on which a hanging hook
         swings free of the mechanism (takeoff, approach, retry, return), shaped so that it
         leaves no swing (:func:`~tetherland.mission.hooking.swing_shaper`); legs near or on
-        the mechanism (passes, take-up, release, unhooking) are not shaped."""
+        the mechanism (passes, release, the disk's unhooking) are not shaped (the take-up
+        and the bar's unhooking: :meth:`_take_up_path`)."""
         return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
                     self._min_leg, self._shaper if free_hook else None)  # fmt: skip
 
