@@ -299,7 +299,10 @@ def take_up_legs(scenario: Scenario) -> tuple[float, ZVShaper | None]:
     cable); the unshaped leg of ``mechanism.swing_periods`` = 2 periods it replaces
     leaves 11 % of its horizontal length swinging (the smoothstep's velocity spectrum
     at 2 cycles per leg, :func:`~tetherland.mission.paths.smoothstep_residual`), and
-    has its first zero only at 2.6 periods."""
+    has its first zero only at 2.6 periods.
+    The bar's unhooking flies the same legs (the supervisor's climb away from the bar,
+    the flight over it, and the reverse pass under it): the hook hangs free or on the
+    bar there too, and unshaped they had to last 3-4 periods to leave it still."""
     shaper = swing_shaper(scenario) if scenario.mechanism.kind == "bar" else None
     return (SHORTEST_LEG if shaper is None else max(SHORTEST_LEG, shaper.period)), shaper
 

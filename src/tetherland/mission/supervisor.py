@@ -343,16 +343,21 @@ class MissionSupervisor:
         """A free-flight path from ``start``; ``free_hook``: a leg on which a hanging hook
         swings free of the mechanism (takeoff, approach, retry, return), shaped so that it
         leaves no swing (:func:`~tetherland.mission.hooking.swing_shaper`); legs near or on
-        the mechanism (passes, take-up, release, unhooking) are not shaped."""
+        the mechanism (passes, release, the disk's unhooking) are not shaped (the take-up
+        and the bar's unhooking: :meth:`_take_up_path`)."""
         return Path(t, start, speed or self.cfg.flight.cruise_speed, self.cfg.flight.cruise_accel,
                     self._min_leg, self._shaper if free_hook else None)  # fmt: skip
 
-    def _take_up_path(self, t: float, start: np.ndarray, speed: float) -> Path:
-        """A take-up path from ``start`` after the hooking pass: with the bar every leg
+    def _take_up_path(self, t: float, start: np.ndarray) -> Path:
+        """A take-up path from ``start`` at the take-up's speed
+        (``stretch.take_up_speed_factor`` of the cruise speed): with the bar every leg
         shaped at the hanging hook's believed swing period and as short as the speed
-        limits allow (:func:`~tetherland.mission.hooking.take_up_legs`)."""
+        limits allow (:func:`~tetherland.mission.hooking.take_up_legs`). The bar's
+        unhooking flies its legs so too (:meth:`_climb_away`, :meth:`_unhook`)."""
         shortest, shaper = self._take_up
-        return Path(t, start, speed, self.cfg.flight.cruise_accel, shortest, shaper)
+        cfg = self.cfg
+        speed = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
+        return Path(t, start, speed, cfg.flight.cruise_accel, shortest, shaper)
 
     def _output_now(self, est: StateEstimate) -> np.ndarray:
         """Estimated y^b = [phi, delta, theta_A, psi]."""
@@ -650,8 +655,7 @@ class MissionSupervisor:
     def _hooking(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
-            take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
-            self._path = self._take_up_path(t, wp.hook_end, take_up)
+            self._path = self._take_up_path(t, wp.hook_end)
             m = self.scenario.mechanism
             if m.kind == "bar":
                 # level to the pass's mirror across the bar and climb to seat the hook in
@@ -683,9 +687,8 @@ class MissionSupervisor:
         if self._swing_at is not None and t >= self._swing_at:
             # the bar: swing from the estimated position at the end of the seat's climb
             self._swing_at = None
-            take_up = cfg.stretch.take_up_speed_factor * cfg.flight.cruise_speed
             seat = est.body.p_W.copy()
-            self._path = self._take_up_path(t, seat, take_up)
+            self._path = self._take_up_path(t, seat)
             for corner, _ in bar_swing_path(self.scenario, self.geo.p_A, seat, wp.stretch,
                                             wp.attachment_W):  # fmt: skip
                 self._path.to(corner)
@@ -1014,12 +1017,19 @@ class MissionSupervisor:
         free clears the bar, then fly over it to the hooking start. If the hook still sits
         on the bar, the climb draws the line taut: the measured tension above
         ``mission.stretch.tension_threshold`` for ``tension_dwell`` shows it
-        (:meth:`_unhook`), and the reverse pass under the bar follows instead."""
+        (:meth:`_unhook`), and the reverse pass under the bar follows instead.
+
+        The legs are the take-up's (:meth:`_take_up_path`): shaped at the hook's believed
+        swing period, so that none leaves a free hook swinging (the robot cannot tell a
+        free hook from one on the bar), at the take-up's speed but for the climb, which
+        keeps ``hooking.speed``: with a hook on the bar it draws the line taut, slowly.
+        Unshaped at ``hooking.speed`` the legs left a free hook still only by lasting
+        3-4 periods, and the unhooking took 19-25 s (the pilot, 20-60 deg)."""
         wp, cfg = self.wp, self.cfg
         climb = np.array([*slack[:2], wp.hook_start[2]])
         self._path = (
-            self._new_path(t, slack, cfg.hooking.speed)
-            .to(climb)
+            self._take_up_path(t, slack)
+            .to(climb, speed=cfg.hooking.speed)
             .to(wp.hook_start, pause=cfg.settle_time)
         )
         self._climb_slack = slack.copy()
@@ -1050,7 +1060,9 @@ class MissionSupervisor:
             x[2] = 0.0
             away = -self.scenario.mechanism.pass_offset * x / np.linalg.norm(x)
             corners, last = [p + away for p in corners], last + away
-            self._path = self._new_path(t, est.body.p_W, cfg.hooking.speed).to(slack)
+            # the take-up's legs (shaped, at its speed): main's, unshaped at hooking.speed,
+            # took 31 s from the climb's top (pilot draw 60-00008 out of the 180 s)
+            self._path = self._take_up_path(t, est.body.p_W).to(slack)
             for p in corners:
                 self._path.to(p)
             self._path.to(last, pause=cfg.settle_time)
