@@ -483,7 +483,7 @@ def _bar_standoff_note(base: Scenario, space: DesignSpace) -> str:
     return (
         f"; the bar's mechanism.standoff = {base.mechanism.standoff:g} m is the anchor height, "
         f"and the highest anchor the rotors hold at {base.surface.slope_deg:g} deg is, by "
-        f"attachment offset, {', '.join(notes)} (lower the cable attachment's offset toward "
+        f"attachment offset, {', '.join(notes)} (move the cable attachment toward "
         "the centre of mass, docs/mechanism.md)"
     )
 
