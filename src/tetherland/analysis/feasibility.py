@@ -503,6 +503,83 @@ _ROTOR_REASONS = (
 )
 
 
+def anchor_height_range(
+    slope: float, h_att: float, link_length: float, limits: VehicleLimits, g: float = GRAVITY
+) -> tuple[float, float] | None:
+    """Anchor heights h_A whose landed inclined hover keeps every rotor in [f_min +
+    control_margin, f_max - control_margin], the cable-offset torque included [m].
+
+    With t = tan(gamma) and c = sin(gamma) = (h_att - h_A)/l (6.9), the landed hover of
+    :func:`landed_hover` needs f_R = m g cos(beta - gamma)/cos(gamma) = m g (cos(beta) +
+    t sin(beta)) and f_L d~ = m g sin(beta)/cos(gamma) [cos(gamma), 0, sin(gamma)] =
+    m g sin(beta) [1, 0, t] (z_B = z_S, heading psi turning x_B from x_S), so the rotor
+    thrusts Gamma^-1 [f_R, r_att x f_L d~_B] are affine in t: u_i = a_i + b_i t. Each
+    rotor bound keeps t on one side of a value; their intersection is an interval [t_lo,
+    t_hi], and h_A = h_att - l t / sqrt(1 + t^2) falls as t rises. The anchor's height
+    above the surface (a bar's standoff) therefore bounds the slope through the offset
+    torque: a higher anchor tilts the cable away from the surface (gamma < 0), which
+    lowers f_R, while the torque a m g sin(beta) of an attachment a below the centre of
+    mass does not depend on gamma. With f_N_min no larger than n (f_min + margin) these
+    are all of :func:`landed_hover`'s landed checks (the motors-off rest has f_N = f_R
+    and no shear), the free hover aside.
+
+    Parameters
+    ----------
+    slope : float
+        beta in (0, pi) [rad].
+    h_att : float
+        Height of the cable attachment above the surface when landed
+        (:func:`tetherland.geometry.attachment_height`) [m].
+    link_length : float
+        The landed link: the cable length l, or l + s for an elastic cable [m].
+    limits : VehicleLimits
+    g : float
+        [m/s^2].
+
+    Returns
+    -------
+    (h_lo, h_hi) or None
+        The closed interval of anchor heights [m] (None: no anchor height lands; a bound is
+        h_att -+ l where the rotors bound t on one side only).
+    """
+    sb, cb = math.sin(slope), math.cos(slope)
+    if not sb > 0.0:
+        raise ValueError(f"slope = {slope!r} rad must be in (0, pi)")
+    ch, sh = math.cos(limits.heading), math.sin(limits.heading)
+    w = limits.mass * g
+
+    def rotors(t: float) -> FloatArray:
+        if limits.allocation_inverse is None:
+            return np.full(limits.n_rotors, w * (cb + t * sb) / limits.n_rotors)
+        tau = np.cross(limits.r_att_B, w * sb * np.array([ch, -sh, t]))
+        return limits.allocation_inverse @ np.array([w * (cb + t * sb), *tau])
+
+    a = rotors(0.0)
+    b = rotors(1.0) - a
+    lo_u, hi_u = limits.f_min + limits.margin, limits.f_max - limits.margin
+    t_lo, t_hi = -math.inf, math.inf
+    for ai, bi in zip(a, b, strict=True):
+        for bound, below in ((lo_u, False), (hi_u, True)):
+            # a_i + b_i t >= lo_u (below False) or <= hi_u (below True)
+            if abs(bi) < 1e-15:
+                if (ai > bound) if below else (ai < bound):
+                    return None
+                continue
+            t_star = (bound - ai) / bi
+            if (bi > 0.0) != below:
+                t_lo = max(t_lo, t_star)
+            else:
+                t_hi = min(t_hi, t_star)
+    if t_lo > t_hi:
+        return None
+
+    def height(t: float) -> float:
+        c = math.copysign(1.0, t) if math.isinf(t) else t / math.sqrt(1.0 + t * t)
+        return h_att - link_length * c
+
+    return float(height(t_hi)), float(height(t_lo))
+
+
 def landed_hover_rotor_reason(
     scenario: Scenario, g: float = GRAVITY, rotor_bounds: bool = True
 ) -> str | None:

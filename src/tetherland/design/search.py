@@ -41,6 +41,7 @@ from tetherland.analysis import (
     LandedHover,
     SlopeLimit,
     VehicleLimits,
+    anchor_height_range,
     free_hover,
     landed_hover,
     tethered_slope_limit,
@@ -59,7 +60,7 @@ from tetherland.geometry import (
     landing_geometry,
     stretched_link_length,
 )
-from tetherland.mission.hooking import hooking_pass_for, pass_clearance
+from tetherland.mission.hooking import hooking_pass, hooking_pass_for, pass_clearance
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.surface import Surface
 
@@ -403,6 +404,19 @@ def _search(
     return result(designs[: space.max_designs], None, None, "ok", len(candidates), planned)
 
 
+BAR_APPROACH_A = (0.0, 0.0, -1.0)
+"""The bar's only hooking approach, in F_A: the hanging hook is lowered beside the bar."""
+
+
+def anchor_heights(base: Scenario, space: DesignSpace) -> tuple[float, ...]:
+    """Anchor heights the search tries [m]: the space's, or for the bar the one its
+    mechanism fixes, ``mechanism.standoff`` (the bar's axis; the hook's geometry bounds it
+    from below, docs/mechanism.md), which the search keeps as built."""
+    if base.mechanism.kind == "bar":
+        return (float(base.mechanism.standoff),)
+    return tuple(float(h) for h in space.anchor_heights)
+
+
 def _analysis_stage(base: Scenario, space: DesignSpace) -> list[_Candidate]:
     geo = LandingGeometry.from_scenario(base)
     limits0 = VehicleLimits.from_scenario(base)
@@ -412,7 +426,7 @@ def _analysis_stage(base: Scenario, space: DesignSpace) -> list[_Candidate]:
     out = []
     for length in space.lengths:
         for z in space.attachment_z:
-            for h_A in space.anchor_heights:
+            for h_A in anchor_heights(base, space):
                 h = h_R + z - h_A
                 if not abs(h) < length:
                     continue
@@ -438,12 +452,39 @@ def _no_landed_hover(
         )
     best = max(candidates, key=lambda c: c.hover.margin)
     finding = best.hover.findings[0]
-    return (
-        DesignLimit.LANDED_HOVER,
-        finding.reason,
+    reason = (
         f"no design lands on {B:g} deg: {finding.reason.value} binds for every cable length "
         f"({min(space.lengths):g}-{max(space.lengths):g} m), attachment offset and anchor "
-        f"height searched; the closest ({best.describe()}): {finding.message}",
+        f"height searched; the closest ({best.describe()}): {finding.message}"
+    )
+    if base.mechanism.kind == "bar":
+        reason += _bar_standoff_note(base, space)
+    return DesignLimit.LANDED_HOVER, finding.reason, reason
+
+
+def _bar_standoff_note(base: Scenario, space: DesignSpace) -> str:
+    """For the bar: the highest anchor the rotors hold over the space's attachments (any
+    cable length of the space, :func:`~tetherland.analysis.anchor_height_range`), against
+    the bar's standoff."""
+    limits0 = VehicleLimits.from_scenario(base)
+    surface = LandingGeometry.from_scenario(base).surface
+    rx, ry, _ = base.vehicle.cable_attachment
+    notes = []
+    for z in space.attachment_z:
+        att = (float(rx), float(ry), float(z))
+        limits = replace(limits0, r_att_B=np.array(att))
+        h_att = effective_h_R(base) + z
+        highest = [
+            r[1]
+            for length in space.lengths
+            if (r := anchor_height_range(surface.slope, h_att, float(length), limits)) is not None
+        ]
+        notes.append(f"z = {z:g} m: {max(highest):.3f} m" if highest else f"z = {z:g} m: none")
+    return (
+        f"; the bar's mechanism.standoff = {base.mechanism.standoff:g} m is the anchor height, "
+        f"and the highest anchor the rotors hold at {base.surface.slope_deg:g} deg is, by "
+        f"attachment offset, {', '.join(notes)} (move the cable attachment toward "
+        "the centre of mass, docs/mechanism.md)"
     )
 
 
@@ -460,6 +501,8 @@ def _best_hooking(
 ) -> _Hooking | None:
     """The hooking approach with the most clearance for this candidate (None: no valid
     hook drop, every one leaves the cable taut at capture)."""
+    if base.mechanism.kind == "bar":
+        return _bar_hooking(base, space, cand)
     h_R = effective_h_R(base)
     h = h_R + cand.attachment[2] - cand.h_A
     geo = landing_geometry(
@@ -507,6 +550,30 @@ def _best_hooking(
         if best is None or _hook_score(option, space) > _hook_score(best, space):
             best = option
     return best
+
+
+def _bar_hooking(base: Scenario, space: DesignSpace, cand: _Candidate) -> _Hooking | None:
+    """The bar's one hooking pass for this candidate: straight down, the hanging hook
+    beside the bar, the mission's own pass (:func:`~tetherland.mission.hooking.hooking_pass`
+    of the candidate's scenario). ``tether.hook_drop`` does not place the bar's hook; it
+    stays the scenario's where the tether's check allows, else the longest one of the
+    space that does (None: none does, or the candidate is not a valid scenario)."""
+    capture = base.tether.capture_radius
+    drops = [d for d in space.hook_drops if d + capture < cand.length]
+    if base.tether.hook_drop + capture < cand.length:
+        drop = float(base.tether.hook_drop)
+    elif drops:
+        drop = float(drops[-1])
+    else:
+        return None
+    point = DesignPoint(float(base.surface.slope_deg), cand.length, cand.attachment, cand.h_A,
+                        BAR_APPROACH_A, drop)  # fmt: skip
+    try:
+        sc = point.apply(base)
+    except ConfigError:
+        return None
+    geo = LandingGeometry.from_scenario(sc)
+    return _Hooking(BAR_APPROACH_A, drop, pass_clearance(sc, geo, hooking_pass(sc, geo)))
 
 
 def _hook_score(h: _Hooking, space: DesignSpace) -> tuple[float, float]:
@@ -579,7 +646,7 @@ def landed_slope_limit(scenario: Scenario, length: float, space: DesignSpace) ->
     rx, ry, _ = base.vehicle.cable_attachment
     best = SlopeLimit(None, None)
     for z in space.attachment_z:
-        for h_A in space.anchor_heights:
+        for h_A in anchor_heights(base, space):
             h = h_R + z - h_A
             if not abs(h) < length:
                 continue

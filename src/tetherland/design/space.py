@@ -3,7 +3,9 @@
 A design fixes the cable length ``tether.length``, the attachment offset along z_B
 (``vehicle.cable_attachment`` z; x and y stay the scenario's), the anchor height
 ``anchor.h_A`` and the hooking approach (``tether.approach_direction`` in F_A and
-``tether.hook_drop``). Everything else is the scenario's.
+``tether.hook_drop``). Everything else is the scenario's. With ``mechanism.kind = "bar"``
+the anchor height is the bar's ``mechanism.standoff`` as built and the approach is
+straight down (:func:`tetherland.design.search.anchor_heights`).
 """
 
 from __future__ import annotations
@@ -41,7 +43,8 @@ class DesignSpace:
         Attachment offsets along z_B from the centre of mass, each in [-0.5, 0.5] [m]
         (the default spans 3 cm below the CoM to the top of the hub).
     anchor_heights : tuple of float
-        Anchor heights h_A above the surface, each in [0, 10] [m].
+        Anchor heights h_A above the surface, each in [0, 10] [m] (not for the bar, whose
+        anchor height is its standoff).
     approach_elevations_deg : tuple of float
         Approach directions in the x_A-z_A plane, n_A = [-cos(e), 0, -sin(e)], each e in
         [-90, 90] [deg]: 90 lowers the hook vertically (the default approach), 0 moves
