@@ -49,8 +49,8 @@ class HookingConfig(Section):
 
     speed: float = Field(0.3, gt=0, le=5)
     """Peak speed through the anchoring mechanism (hooking and unhooking passes), also of
-    the release leg and of the descent onto the start pad [m/s]. The bar's unhooking
-    flies only its climb at it, its other legs at the take-up's speed, shaped."""
+    the release leg and of the descent onto the start pad; the bar's unhooking flies only
+    its climb at it, its other legs at the take-up's speed, shaped [m/s]."""
     approach_distance: float = Field(0.3, gt=0, le=5)
     """Hook-point distance before the capture disk where the straight hooking pass starts [m]."""
     overshoot: float = Field(0.12, gt=0, le=5)
