@@ -70,6 +70,14 @@ def test_bar_config_needs_a_standoff_and_a_vertical_pass() -> None:
         load_scenario("slope50", ["mechanism.kind=bar", "mechanism.pass_margin=0.07"])
     with pytest.raises(ConfigError, match="approach_direction"):
         load_scenario("slope50", ["mechanism.kind=bar", "tether.approach_direction=[1, 0, -1]"])
+    # the crook (shank to tip, hook_reach - 2 hook_radius) must be wider than the bar's
+    # diameter: with the 4 mm bar and 2 mm capsules the reach must exceed 12 mm
+    m = s.mechanism
+    limit = 2.0 * (m.bar_radius + m.hook_radius)
+    assert limit == pytest.approx(0.012)
+    load_scenario("slope50", ["mechanism.kind=bar", f"mechanism.hook_reach={limit + 1e-3}"])
+    with pytest.raises(ConfigError, match="hook_reach"):
+        load_scenario("slope50", ["mechanism.kind=bar", f"mechanism.hook_reach={limit}"])
 
 
 def test_hooking_pass_puts_the_resting_hook_beside_the_bar(bar_plant: Plant) -> None:

@@ -201,6 +201,15 @@ class MechanismConfig(Section):
     def _hook_clears_bar(self) -> MechanismConfig:
         if self.kind != "bar":
             return self
+        # the crook takes the bar: the gap between the shank and a tip, at its narrowest
+        # (the arm), wider than the bar (at 2 bar_radius the hook misses passes)
+        crook = self.hook_reach - 2.0 * self.hook_radius
+        if crook <= 2.0 * self.bar_radius:
+            raise ValueError(
+                f"mechanism.hook_reach = {self.hook_reach:g} m must be > 2 bar_radius + "
+                f"2 hook_radius = {2.0 * (self.bar_radius + self.hook_radius):g} m (the "
+                "crook between the shank and a tip must take the bar)"
+            )
         # a tip passing up beside the bar at the pass offset must miss it
         gap = self.pass_offset - self.outer_reach - self.hook_radius - self.bar_radius
         if gap <= 0.0:
