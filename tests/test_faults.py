@@ -448,6 +448,30 @@ def test_scalar_cable_torque_agrees_with_the_reference(slope50):
         assert mon._geometry(est)[3] == pytest.approx(D, abs=1e-12)
 
 
+def test_compiled_cable_torque_is_the_plain_scalar_form_bit_for_bit(slope50):
+    """The rotor rule's compiled cable torque and distance (cable_torque_xy_of) against
+    the plain scalar forms (cable_torque_xy, _geometry), random poses and tensions (none
+    and negative ones: no pull), and against the numpy reference."""
+    from tetherland.mission.faults import cable_torque_xy_of
+
+    mon = FaultMonitor(slope50, LandingGeometry.from_scenario(slope50))
+    r_att = np.asarray(slope50.vehicle.cable_attachment, dtype=float)
+    p_A = np.asarray(LandingGeometry.from_scenario(slope50).p_A, dtype=float)
+    rng = np.random.default_rng(12)
+    for i in range(200):
+        q = rng.standard_normal(4)
+        q /= np.linalg.norm(q)
+        tension = None if i % 7 == 0 else float(rng.uniform(-2, 10))
+        est = StateEstimate(
+            t=0.0, body=RigidBodyState(rng.uniform(-2, 2, 3), np.zeros(3), q, np.zeros(3)),
+            tension=tension,
+        )  # fmt: skip
+        cx, cy, D = cable_torque_xy_of(q, est.body.p_W, tension or 0.0, r_att, p_A)
+        assert (cx, cy) == mon.cable_torque_xy(est)
+        assert D == mon._geometry(est)[3]
+        np.testing.assert_allclose((cx, cy), mon.cable_torque_B(est)[:2], atol=1e-12)
+
+
 def test_landed_rule_sees_the_vehicle_leave_its_landed_pose(slope50):
     """Motors off or spinning up: a snap when the estimated position moved more than
     landed_distance from where it was at the first landed tick (settling less is fine);

@@ -117,3 +117,50 @@ def test_a_plant_step_applies_the_kernel_thrusts(plant):
     np.testing.assert_array_equal(plant.data.qfrc_applied[0:6], wrench)
     np.testing.assert_array_equal(plant.rotor_speeds, rot[sk.R_W : sk.R_W + 4])
     assert np.all(plant.surface_factors > 1.0)  # landed: the slope under the rotors
+
+
+@pytest.mark.parametrize("aero", [True, False])
+def test_rotor_row_kernel_matches_its_plain_form_and_the_model(plant, aero):
+    # the log's rotor row from the kernel's rotor state after steps near the slope: the
+    # compiled row equals the plain one bit for bit, and its parts are the model's
+    # (thrusts c_f w^2 k, factors 1 and no force with the aero flag off)
+    rng = np.random.default_rng(11)
+    dt, tau = plant.dt, plant.scenario.vehicle.motor_time_constant
+    alpha = math.exp(-dt / tau)
+    c_f, w_max = plant.scenario.vehicle.thrust_coefficient, plant.speed_limit
+    rot = rotor_state(c_f, tau * (1.0 - alpha) / dt, alpha, 1e-12 * w_max, aero)
+    arrays, n_work = _aero_arrays(plant, aero)
+    work, ctrl = np.empty(n_work), np.zeros(4)
+    wrench = rng.normal(0.0, 1.0, 6)  # (aero off: a wrench the row must not report)
+    landed = plant.landed_state()
+    z_S = plant.layout.geometry.surface.z_S
+    for _ in range(200):
+        rot[sk.R_CMD : sk.R_CMD + 4] = rng.uniform(0.0, 1.0, 4) * w_max
+        rot[sk.R_SPINNING] = 1.0
+        qpos = np.concatenate((landed.p_W + rng.uniform(0.0, 0.5) * z_S, landed.q_WB))
+        rotor_step(rot, qpos, rng.normal(0.0, 1.0, 6), *arrays, work, ctrl, wrench)
+        row, row_ref = np.full(16, np.nan), np.full(16, np.nan)
+        sk.rotor_row_into(rot, wrench, row)
+        sk.rotor_row_reference(rot, wrench, row_ref)
+        assert np.array_equal(row[:15], row_ref[:15])
+        assert np.isnan(row[15])  # nothing written past the row
+        w, k = rot[sk.R_W : sk.R_W + 4], rot[sk.R_FACTOR : sk.R_FACTOR + 4]
+        np.testing.assert_array_equal(row[0:4], w)
+        np.testing.assert_allclose(row[4:8], c_f * w**2 * (k if aero else 1.0), rtol=1e-15)
+        np.testing.assert_array_equal(row[8:12], k if aero else 1.0)
+        np.testing.assert_array_equal(row[12:15], wrench[0:3] if aero else 0.0)
+    if aero:
+        assert np.all(k > 1.0)  # the slope was under the rotors: factors other than 1
+
+
+def test_plant_rotor_state_is_the_kernel_row(plant):
+    # Plant.rotor_state_into (the runner's log row) is the kernel's row of its own state
+    plant.reset(plant.landed_state(), cable_engaged=True)
+    plant.command(np.full(4, 0.5 * plant.speed_limit))
+    for _ in range(3):
+        plant.step()
+    out, ref = np.empty(15), np.empty(15)
+    plant.rotor_state_into(out)
+    sk.rotor_row_reference(plant._rot, plant.data.qfrc_applied[0:6], ref)
+    assert np.array_equal(out, ref)
+    np.testing.assert_array_equal(plant.rotor_thrusts, out[4:8])

@@ -32,6 +32,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from tetherland.config import FaultKind, Scenario
 from tetherland.estimation import ThresholdDwell
@@ -63,6 +64,38 @@ JAM_PHASES = frozenset({Phase.RETURN, Phase.LAND})
 _DWELL_RULE_PHASES = SNAP_PHASES | ANCHOR_PHASES | LANDED_PHASES | JAM_PHASES
 """Phases in which the snap, anchor, landed or jam rule watches; in any other phase each of
 them only stays reset."""
+
+
+@njit(cache=True)
+def cable_torque_xy_of(
+    q_WB: np.ndarray, p_W: np.ndarray, tension: float, r_att_B: np.ndarray, p_A: np.ndarray
+) -> tuple[float, float, float]:  # pragma: no cover (compiled)
+    """Compiled :meth:`FaultMonitor.cable_torque_xy` with the distance of
+    :meth:`FaultMonitor._geometry` (the same operations in the same order: the same bits;
+    a test checks it): the roll and pitch of the cable torque r_att x F_L, F_L = -f_L d,
+    in F_B [N m] and the distance D = |p_att - p_A| [m], from the estimated attitude
+    ``q_WB`` (unit, w first), position ``p_W`` [m], the tension (clamped at 0 here) [N],
+    the attachment point ``r_att_B`` [m] and the believed anchor ``p_A`` [m]. Called at
+    every control tick of the rotor rule."""
+    w, x, y, z = q_WB[0], q_WB[1], q_WB[2], q_WB[3]
+    rx, ry, rz = r_att_B[0], r_att_B[1], r_att_B[2]
+    r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
+    r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+    r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+    dx = p_W[0] + r00 * rx + r01 * ry + r02 * rz - p_A[0]
+    dy = p_W[1] + r10 * rx + r11 * ry + r12 * rz - p_A[1]
+    dz = p_W[2] + r20 * rx + r21 * ry + r22 * rz - p_A[2]
+    D = math.sqrt(dx * dx + dy * dy + dz * dz)
+    inv = 1.0 / (1e-9 if 1e-9 > D else D)  # max(D, 1e-9), as Python's max picks
+    bx = (r00 * dx + r10 * dy + r20 * dz) * inv
+    by = (r01 * dx + r11 * dy + r21 * dz) * inv
+    bz = (r02 * dx + r12 * dy + r22 * dz) * inv
+    f = 0.0 if 0.0 > tension else tension
+    fx, fy, fz = -f * bx, -f * by, -f * bz
+    return ry * fz - rz * fy, rz * fx - rx * fz, D
+
+
+_cable_torque_xy_of = cable_torque_xy_of  # (a module global: one lookup per tick)
 
 
 @dataclass(frozen=True)
@@ -98,7 +131,7 @@ class FaultMonitor:
         cfg = scenario.mission.detection
         self.cfg = cfg
         self._tension_threshold = scenario.mission.stretch.tension_threshold
-        self._p_A = geometry.p_A
+        self._p_A = np.ascontiguousarray(geometry.p_A, dtype=float)
         self._r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
         self._length = scenario.tether.length
         self._stiffness = scenario.tether.stiffness
@@ -118,6 +151,7 @@ class FaultMonitor:
         # a phase in which the snap, anchor, jam and landed rules were last found idle (all
         # reset): while it lasts, their resets are not repeated every tick
         self._idle_phase: Phase | None = None
+        self._distance: float | None = None  # D of the estimate being checked [m]
         self.torque_residual = 0.0
         """Last low-passed roll/pitch torque residual [N m]."""
         self.length_error = math.nan
@@ -188,6 +222,7 @@ class FaultMonitor:
         tension itself falls towards zero, and the slower slack-cable rule covers it).
         """
         cfg = self.cfg
+        self._distance = None  # the rotor rule's D of this estimate, when it runs
         cov = est.covariance
         if cov is not None:
             std = math.sqrt(max(cov.diagonal()[:3].tolist()))  # (one call, not 3 indexings)
@@ -227,13 +262,12 @@ class FaultMonitor:
             self.torque_residual = 0.0
             self._rotor.reset()
             return None
-        # cable_torque_xy, inlined (the control-rate path: two calls fewer)
-        tension = est.tension or 0.0
-        tension = 0.0 if 0.0 > tension else tension  # max(tension, 0.0), the same bits
-        bx, by, bz, _ = self._geometry(est)
-        fx, fy, fz = -tension * bx, -tension * by, -tension * bz
-        rx, ry, rz = self._rx, self._ry, self._rz
-        cx, cy = ry * fz - rz * fy, rz * fx - rx * fz
+        # cable_torque_xy and the distance in one compiled call (the control-rate path);
+        # the distance is kept for the anchor and jam rules of this check
+        body = est.body
+        cx, cy, self._distance = _cable_torque_xy_of(
+            body.q_WB, body.p_W, est.tension or 0.0, self._r_att, self._p_A
+        )
         if dt != self._lp_dt:  # (the tick is constant: the weight is computed once)
             self._lp_dt = dt
             self._lp_a = 1.0 - math.exp(-dt / self.cfg.rotor_torque_time_constant)
@@ -281,7 +315,8 @@ class FaultMonitor:
             self.length_error = math.nan
             return None
         stretch = 0.0 if self._stiffness is None else tension / self._stiffness
-        err = self._geometry(est)[3] - self._length - stretch
+        D = self._geometry(est)[3] if self._distance is None else self._distance
+        err = D - self._length - stretch
         self.length_error = err
         held = self._anchor.update(t, abs(err))
         if abs(err) <= self.cfg.anchor_length_error:
@@ -330,7 +365,8 @@ class FaultMonitor:
             return None
         tension = est.tension or 0.0
         if tension > self.cfg.jam_tension and (
-            self._geometry(est)[3] < self._length - self.cfg.jam_slack
+            (self._geometry(est)[3] if self._distance is None else self._distance)
+            < self._length - self.cfg.jam_slack
         ):  # the cable could be slack: it cannot be what pulls
             tension = 0.0
         if self._jam.update(t, tension):
@@ -350,4 +386,5 @@ __all__ = [
     "SNAP_PHASES",
     "FaultDetection",
     "FaultMonitor",
+    "cable_torque_xy_of",
 ]

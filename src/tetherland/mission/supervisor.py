@@ -334,9 +334,8 @@ class MissionSupervisor:
             if not rows.flags.writeable:
                 rows = rows.copy()
             rows[2] += self._lost_thrust(est)
-        return Reference(
-            t=t, mode=_FREE_FLIGHT, phase=int(self.phase), p_W=rows, yaw=self.yaw,
-        )  # fmt: skip
+        # (t, mode, phase, p_W, yaw: positional, the control-rate path)
+        return Reference(t, _FREE_FLIGHT, int(self.phase), rows, self.yaw)
 
     def _new_path(self, t: float, start: np.ndarray, speed: float | None = None,
                   free_hook: bool = False) -> Path:  # fmt: skip

@@ -57,6 +57,7 @@ from tetherland.sim.step_kernel import (
     R_FACTOR,
     R_SPINNING,
     R_W,
+    rotor_row_into,
     rotor_state,
     rotor_step,
 )
@@ -309,8 +310,7 @@ class Plant:
         if self._contact_hook is not None:
             out[:3] = self.data.site_xpos[self._crown_site]
         else:
-            out[:3] = self._p_att_view
-            out[:3] += self._hook_offset
+            np.add(self._p_att_view, self._hook_offset, out[:3])
 
     def set_state(self, state: RigidBodyState) -> None:
         """Overwrite position, attitude and velocities (time and rotors unchanged).
@@ -509,17 +509,7 @@ class Plant:
         :meth:`forward`): one physics step old in a running loop (the step loop does not
         evaluate the model twice).
         """
-        w = self._w.tolist()
-        c_f = self._c_f
-        if self.aero is None:
-            out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0], c_f * w[1] * w[1],
-                        c_f * w[2] * w[2], c_f * w[3] * w[3], 1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
-                        0.0]  # fmt: skip
-            return
-        k, F = self._factors.tolist(), self._wrench
-        out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0] * k[0], c_f * w[1] * w[1] * k[1],
-                    c_f * w[2] * w[2] * k[2], c_f * w[3] * w[3] * k[3], k[0], k[1], k[2], k[3],
-                    F[0], F[1], F[2]]  # fmt: skip
+        rotor_row_into(self._rot, self._wrench, out)  # (sim/step_kernel.py)
 
     # -- cable ----------------------------------------------------------------------------
 

@@ -144,3 +144,41 @@ def rotor_step_reference(
             rot[R_BASE : R_BASE + 4] = [c_f * c * c for c in cmd]
             rot[R_SPINNING] = 0.0
         rot[R_W : R_W + 4] = w
+
+
+@njit(cache=True)
+def rotor_row_into(rot: FloatArray, wrench: FloatArray, out: FloatArray) -> None:
+    """The plant's rotor row of the log (:meth:`~tetherland.sim.plant.Plant.rotor_state_into`)
+    in one compiled call: [w (4) rad/s, thrusts c_f w_i^2 k_i (4) N, surface factors k_i
+    (4), aero force F_W (3) N] into ``out[:15]`` from the rotor state ``rot`` and the aero
+    ``wrench`` (with the aero flag off: factors 1 and no force). Its plain form is
+    :func:`rotor_row_reference` (a test compares the bits)."""
+    c_f = rot[R_CF]
+    aero = rot[R_AERO] != 0.0
+    for i in range(4):
+        w = rot[R_W + i]
+        out[i] = w
+        if aero:
+            k = rot[R_FACTOR + i]
+            out[4 + i] = c_f * w * w * k
+            out[8 + i] = k
+        else:
+            out[4 + i] = c_f * w * w
+            out[8 + i] = 1.0
+    for j in range(3):
+        out[12 + j] = wrench[j] if aero else 0.0
+
+
+def rotor_row_reference(rot: FloatArray, wrench: FloatArray, out: FloatArray) -> None:
+    """:func:`rotor_row_into` written plainly (Python floats), for tests."""
+    w = rot[R_W : R_W + 4].tolist()
+    c_f = float(rot[R_CF])
+    if not rot[R_AERO]:
+        out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0], c_f * w[1] * w[1],
+                    c_f * w[2] * w[2], c_f * w[3] * w[3], 1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
+                    0.0]  # fmt: skip
+        return
+    k, F = rot[R_FACTOR : R_FACTOR + 4].tolist(), wrench
+    out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0] * k[0], c_f * w[1] * w[1] * k[1],
+                c_f * w[2] * w[2] * k[2], c_f * w[3] * w[3] * k[3], k[0], k[1], k[2], k[3],
+                F[0], F[1], F[2]]  # fmt: skip
