@@ -164,3 +164,43 @@ def test_plant_rotor_state_is_the_kernel_row(plant):
     sk.rotor_row_reference(plant._rot, plant.data.qfrc_applied[0:6], ref)
     assert np.array_equal(out, ref)
     np.testing.assert_array_equal(plant.rotor_thrusts, out[4:8])
+
+
+def test_command_kernel_matches_its_plain_form(plant):
+    # random command sequences with repeats (no change: the flag stays as the last step
+    # left it), out-of-range values (clamped), infinities and NaNs (the commands before
+    # the NaN held, the rest not, False): the compiled and the plain form leave the
+    # same rotor state bit for bit and agree on the outcome
+    rng = np.random.default_rng(5)
+    w_max = plant.speed_limit
+    rot = rotor_state(plant.scenario.vehicle.thrust_coefficient, 0.5, 0.9, 1e-9, True)
+    ref = rot.copy()
+    outcomes = set()
+    cmd = rng.uniform(-0.2, 1.2, 4) * w_max
+    for i in range(2000):
+        if rng.random() < 0.6:
+            cmd = rng.uniform(-0.2, 1.2, 4) * w_max
+            if rng.random() < 0.2:
+                cmd[rng.integers(4)] = rng.choice([np.nan, np.inf, -np.inf])
+        if i % 3 == 0:  # the kernel's step settles the rotors: the flag goes down
+            rot[sk.R_SPINNING] = ref[sk.R_SPINNING] = 0.0
+        ok = sk.command_rotors(rot, cmd, w_max)
+        assert ok == sk.command_rotors_reference(ref, cmd, w_max)
+        assert np.array_equal(rot, ref)
+        held = rot[sk.R_CMD : sk.R_CMD + 4]
+        assert np.all((held >= 0.0) & (held <= w_max))
+        outcomes.add((ok, rot[sk.R_SPINNING]))
+    assert outcomes == {(True, 0.0), (True, 1.0), (False, 0.0), (False, 1.0)}
+
+
+def test_plant_command_clamps_and_names_a_nan(plant):
+    plant.reset()
+    w_max = plant.speed_limit
+    plant.command([-1.0, 0.5 * w_max, 2.0 * w_max, np.inf])
+    np.testing.assert_array_equal(plant.commanded_speeds, [0.0, 0.5 * w_max, w_max, w_max])
+    with pytest.raises(Exception, match="non-finite rotor speed command"):
+        plant.command([0.1 * w_max, np.nan, 0.0, 0.0])
+    # the command before the NaN is held, the ones after it are not
+    np.testing.assert_array_equal(plant.commanded_speeds, [0.1 * w_max, 0.5 * w_max, w_max, w_max])
+    with pytest.raises(Exception, match="expected 4 rotor speed commands, got 3"):
+        plant.command([1.0, 2.0, 3.0])

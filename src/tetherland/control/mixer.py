@@ -63,9 +63,5 @@ class Mixer:
 def command_from(out: FloatArray, diagnostics: Mapping[str, float]) -> Command:
     """The :class:`Command` of a compiled law's ``out`` (speeds, achieved wrench; views)."""
     wrench = out[kernel.OUT_WRENCH]
-    return Command(
-        rotor_speeds=out[kernel.OUT_SPEEDS],
-        thrust=float(wrench[0]),
-        torque_B=wrench[1:4],
-        diagnostics=diagnostics,
-    )
+    # (rotor_speeds, thrust, torque_B, diagnostics: positional, the control-rate path)
+    return Command(out[kernel.OUT_SPEEDS], float(wrench[0]), wrench[1:4], diagnostics)

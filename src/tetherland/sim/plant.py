@@ -57,6 +57,7 @@ from tetherland.sim.step_kernel import (
     R_FACTOR,
     R_SPINNING,
     R_W,
+    command_rotors,
     rotor_row_into,
     rotor_state,
     rotor_step,
@@ -142,7 +143,6 @@ class Plant:
                                 self.aero is not None)  # fmt: skip
         self._w = self._rot[R_W : R_W + 4]
         self._w_cmd = self._rot[R_CMD : R_CMD + 4]
-        self._cmd_list = [0.0, 0.0, 0.0, 0.0]  # the commands as Python floats (command())
         self._f_base = self._rot[R_BASE : R_BASE + 4]  # c_f wbar^2 [N]
         self._factors = self._rot[R_FACTOR : R_FACTOR + 4]  # surface factors, last step [-]
         if self.aero is not None:
@@ -408,27 +408,14 @@ class Plant:
 
         The caller validates (finite, shape 4); this is on the control path.
         """
-        w_max = self._w_max
-        values = np.asarray(rotor_speeds, dtype=float).tolist()
-        if len(values) != 4:
-            raise SimulationError(f"expected 4 rotor speed commands, got {len(values)}")
-        cmd = self._cmd_list
-        changed = False
-        for i, w in enumerate(values):
-            if w != w:
-                if changed:  # (the commands before it are held, as before the check)
-                    self._w_cmd[:] = cmd
-                    self._rot[R_SPINNING] = 1.0
-                raise SimulationError(
-                    f"non-finite rotor speed command {values} at t = {self.time:.4f} s"
-                )
-            w = 0.0 if w < 0.0 else (w_max if w > w_max else w)
-            if w != cmd[i]:
-                cmd[i] = w
-                changed = True
-        if changed:
-            self._w_cmd[:] = cmd
-            self._rot[R_SPINNING] = 1.0
+        speeds = np.asarray(rotor_speeds, dtype=float)
+        if speeds.shape != (4,):
+            n = len(speeds) if speeds.ndim else 1
+            raise SimulationError(f"expected 4 rotor speed commands, got {n}")
+        if not command_rotors(self._rot, speeds, self._w_max):  # (sim/step_kernel.py)
+            raise SimulationError(
+                f"non-finite rotor speed command {speeds.tolist()} at t = {self.time:.4f} s"
+            )
 
     def set_rotor_efficiency(self, efficiency: ArrayLike) -> None:
         """Scale each rotor's thrust and drag torque by ``efficiency`` (4 factors in (0, 1],

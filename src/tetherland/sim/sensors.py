@@ -84,10 +84,12 @@ class Imu:
 
         ``truth`` may be a view (e.g. into MuJoCo's ``sensordata``); it is not kept.
         """
-        if self._i == NOISE_BLOCK:
+        i = self._i
+        if i == NOISE_BLOCK:
             self._refill()
-        y = truth + self._noise[self._i]
-        self._i += 1
+            i = 0
+        y = truth + self._noise[i]
+        self._i = i + 1
         return ImuSample(t, y[0:3], y[3:6])
 
     @property

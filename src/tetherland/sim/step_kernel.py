@@ -182,3 +182,45 @@ def rotor_row_reference(rot: FloatArray, wrench: FloatArray, out: FloatArray) ->
     out[:15] = [w[0], w[1], w[2], w[3], c_f * w[0] * w[0] * k[0], c_f * w[1] * w[1] * k[1],
                 c_f * w[2] * w[2] * k[2], c_f * w[3] * w[3] * k[3], k[0], k[1], k[2], k[3],
                 F[0], F[1], F[2]]  # fmt: skip
+
+
+@njit(cache=True)
+def command_rotors(rot: FloatArray, speeds: FloatArray, w_max: float) -> bool:
+    """Hold new ESC speed commands ``speeds`` (4) [rad/s] in the rotor state ``rot``,
+    clamped to [0, w_max] [rad/s]; a changed command sets the spinning flag. False at the
+    first NaN command (the commands before it are held, the rest not; the caller
+    raises). The plant's :meth:`~tetherland.sim.plant.Plant.command` in one compiled call;
+    its plain form is :func:`command_rotors_reference` (a test compares the bits)."""
+    changed = False
+    ok = True
+    for i in range(4):
+        w = speeds[i]
+        if w != w:
+            ok = False
+            break
+        w = 0.0 if w < 0.0 else (w_max if w > w_max else w)
+        if w != rot[R_CMD + i]:
+            rot[R_CMD + i] = w
+            changed = True
+    if changed:
+        rot[R_SPINNING] = 1.0
+    return ok
+
+
+def command_rotors_reference(rot: FloatArray, speeds: FloatArray, w_max: float) -> bool:
+    """:func:`command_rotors` written plainly (Python floats), for tests."""
+    cmd = rot[R_CMD : R_CMD + 4].tolist()
+    changed = False
+    ok = True
+    for i, w in enumerate(np.asarray(speeds, dtype=float).tolist()):
+        if w != w:
+            ok = False
+            break
+        w = 0.0 if w < 0.0 else (w_max if w > w_max else w)
+        if w != cmd[i]:
+            cmd[i] = w
+            changed = True
+    if changed:
+        rot[R_CMD : R_CMD + 4] = cmd
+        rot[R_SPINNING] = 1.0
+    return ok
