@@ -27,6 +27,15 @@ def _aero_arrays(plant: Plant, aero: bool):
     return (np.zeros((0, 3)), np.zeros((0, 2)), np.zeros((0, 16)), np.zeros(0)), 0
 
 
+def _plant_rotor_state(plant: Plant, aero: bool):
+    """A rotor state at rest with the plant's lag constants (the plant's own, built
+    here from the scenario)."""
+    dt, tau = plant.dt, plant.scenario.vehicle.motor_time_constant
+    alpha = math.exp(-dt / tau)
+    c_f, w_max = plant.scenario.vehicle.thrust_coefficient, plant.speed_limit
+    return rotor_state(c_f, tau * (1.0 - alpha) / dt, alpha, 1e-12 * w_max, aero)
+
+
 @pytest.mark.parametrize("aero", [True, False])
 def test_kernel_matches_the_plain_reference_bit_for_bit(plant, aero):
     # random commands held for random spans (some repeated: the speeds settle), poses
@@ -125,10 +134,8 @@ def test_rotor_row_kernel_matches_its_plain_form_and_the_model(plant, aero):
     # compiled row equals the plain one bit for bit, and its parts are the model's
     # (thrusts c_f w^2 k, factors 1 and no force with the aero flag off)
     rng = np.random.default_rng(11)
-    dt, tau = plant.dt, plant.scenario.vehicle.motor_time_constant
-    alpha = math.exp(-dt / tau)
     c_f, w_max = plant.scenario.vehicle.thrust_coefficient, plant.speed_limit
-    rot = rotor_state(c_f, tau * (1.0 - alpha) / dt, alpha, 1e-12 * w_max, aero)
+    rot = _plant_rotor_state(plant, aero)
     arrays, n_work = _aero_arrays(plant, aero)
     work, ctrl = np.empty(n_work), np.zeros(4)
     wrench = rng.normal(0.0, 1.0, 6)  # (aero off: a wrench the row must not report)
