@@ -180,3 +180,31 @@ def test_the_simulator_imports_no_robot_logic():
     reached = {m.split(".")[1] for m in _reachable(graph, sim)}
     assert "models" in reached and "config" in reached  # the vehicle model and the scenario
     assert reached.isdisjoint(ROBOT_PACKAGES), sorted(reached & set(ROBOT_PACKAGES))
+
+
+def test_a_command_loads_its_own_modules_only():
+    """`tetherland show` loads neither the simulator, the solvers, numba nor matplotlib
+    (nor does a campaign's spawned worker, which runs the console script again as its
+    ``__main__``): the commands' modules are imported when a command runs. And the closed
+    loop does not load scipy.optimize (0.5 s per process), which no mission calls."""
+    code = (
+        "import sys\n"
+        "from tetherland.cli import main\n"
+        "assert main(['show', 'slope50']) == 0\n"
+        "heavy = ('mujoco', 'casadi', 'numba', 'matplotlib', 'scipy', 'tetherland.campaign',\n"
+        "         'tetherland.analysis', 'tetherland.sim.plant', 'tetherland.runs')\n"
+        "print('loaded', sorted(m for m in heavy if m in sys.modules))\n"
+        "import tetherland.runs.closed_loop\n"
+        "print('scipy.optimize', 'scipy.optimize' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.splitlines()[-2:] == ["loaded []", "scipy.optimize False"], out.stdout
+
+
+def test_the_help_lists_every_command_built_from_its_module():
+    from tetherland.cli import COMMANDS, _command
+
+    group = _command()
+    assert list(group.commands) == list(COMMANDS)
+    for name in COMMANDS:
+        assert group.commands[name].name == name

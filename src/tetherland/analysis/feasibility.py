@@ -19,7 +19,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
 
 from tetherland import GRAVITY
 from tetherland.analysis.statics import (
@@ -637,6 +636,8 @@ def max_feasible_slope(
         return lo
     # margin + tol changes sign on [lo, hi] (a margin of exactly zero, such as the shear
     # of a frictionless tethered rest, counts as met up to rounding)
+    from scipy.optimize import brentq  # 0.5 s to import: only where it is needed
+
     return float(brentq(lambda b: margin(b) + _TOL, lo, hi, xtol=1e-10))
 
 

@@ -7,8 +7,11 @@ on stderr with exit code 2 and no traceback.
 from __future__ import annotations
 
 import functools
+import importlib
 import os
 import sys
+from collections.abc import Iterator, MutableMapping
+from typing import Any
 
 # Offscreen rendering (``--video``) on a machine without a display: MuJoCo picks its GL
 # backend at import, so choose EGL before anything imports it.
@@ -21,17 +24,10 @@ import typer.main
 from typer.exceptions import TyperException
 
 from tetherland import __version__
-from tetherland.cli.analyze import analyze
-from tetherland.cli.campaign import campaign_app
-from tetherland.cli.common import INTERRUPTED
-from tetherland.cli.design import design
-from tetherland.cli.export import export
-from tetherland.cli.judge import judge
-from tetherland.cli.mission import mission
-from tetherland.cli.plan import plan
-from tetherland.cli.replay import replay
-from tetherland.cli.scenarios import scenarios, show
 from tetherland.errors import InfeasibleError, TetherlandError
+
+INTERRUPTED = 130
+"""Exit code after Ctrl-C or SIGTERM (128 + SIGINT)."""
 
 app = typer.Typer(
     name="tetherland",
@@ -58,16 +54,65 @@ def _root(
     """Tethered landing and takeoff of aerial robots on steep slopes and pipes."""
 
 
-app.command()(scenarios)
-app.command()(show)
-app.command()(analyze)
-app.add_typer(campaign_app)
-app.command()(design)
-app.command()(mission)
-app.command()(judge)
-app.command()(export)
-app.command()(plan)
-app.command()(replay)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "scenarios": ("tetherland.cli.scenarios", "scenarios"),
+    "show": ("tetherland.cli.scenarios", "show"),
+    "analyze": ("tetherland.cli.analyze", "analyze"),
+    "design": ("tetherland.cli.design", "design"),
+    "mission": ("tetherland.cli.mission", "mission"),
+    "judge": ("tetherland.cli.judge", "judge"),
+    "export": ("tetherland.cli.export", "export"),
+    "plan": ("tetherland.cli.plan", "plan"),
+    "replay": ("tetherland.cli.replay", "replay"),
+    "campaign": ("tetherland.cli.campaign", "campaign_app"),
+}
+"""The subcommands, in the order of ``tetherland --help``: name -> (module, function or
+Typer app). A command's module is imported when the command runs (or the help lists it):
+``tetherland show`` does not load the simulator, the solvers and matplotlib, and neither
+does a campaign's spawned worker, which runs the console script again as its ``__main__``
+(3 s of imports per process before)."""
+
+
+def _subcommand(name: str) -> typer.core.TyperCommand | typer.core.TyperGroup:
+    """The click command of subcommand ``name``, built as :data:`app` would build it."""
+    module, attr = COMMANDS[name]
+    target = getattr(importlib.import_module(module), attr)
+    if isinstance(target, typer.Typer):  # a group of its own (campaign run / report)
+        command = typer.main.get_command(target)
+    else:
+        single = typer.Typer(
+            add_completion=False, pretty_exceptions_enable=False, rich_markup_mode=None
+        )
+        single.command(name)(target)
+        command = typer.main.get_command(single)
+    assert isinstance(command, typer.core.TyperCommand | typer.core.TyperGroup)
+    return command
+
+
+class _LazyCommands(MutableMapping[str, Any]):
+    """The root group's ``commands``: each built by :func:`_subcommand` on first use."""
+
+    def __init__(self) -> None:
+        self._built: dict[str, Any] = {}
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in self._built:
+            if name not in COMMANDS:
+                raise KeyError(name)
+            self._built[name] = _subcommand(name)
+        return self._built[name]
+
+    def __setitem__(self, name: str, command: Any) -> None:
+        raise TypeError(f"the tetherland commands are listed in COMMANDS (not {name!r})")
+
+    def __delitem__(self, name: str) -> None:
+        raise TypeError(f"the tetherland commands are listed in COMMANDS (not {name!r})")
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(COMMANDS)
+
+    def __len__(self) -> int:
+        return len(COMMANDS)
 
 
 MESSAGE_CHARS = 300
@@ -88,10 +133,12 @@ def _error(err: BaseException | str) -> None:
 
 @functools.cache
 def _command() -> typer.core.TyperGroup:
-    """The click command of :data:`app`, built once (building it takes 0.1 s: calling
-    :func:`main` many times in one process, as the tests do, stays fast)."""
+    """The click command of :data:`app` with the subcommands of :data:`COMMANDS`, built
+    once (building them takes 0.1 s: calling :func:`main` many times in one process, as
+    the tests do, stays fast), each subcommand when it is first used."""
     command = typer.main.get_command(app)
     assert isinstance(command, typer.core.TyperGroup)
+    command.commands = _LazyCommands()
     return command
 
 

@@ -19,11 +19,11 @@ from rich.progress import (
     TimeElapsedColumn,
 )
 
+from tetherland.cli import INTERRUPTED as INTERRUPTED  # the exit code after Ctrl-C, SIGTERM
 from tetherland.config import Scenario, load_scenario
 from tetherland.config.checks import check_name
 from tetherland.errors import ConfigError
 from tetherland.sim.video import DEFAULT_FPS, DEFAULT_SIZE, FrameProgress, VideoOptions
-from tetherland.verdict import Outcome
 
 ScenarioArg = Annotated[
     str,
@@ -66,9 +66,6 @@ VideoSizeOption = Annotated[
                  metavar="WxH"),
 ]  # fmt: skip
 McapOption = Annotated[bool, typer.Option("--mcap", help="Also write run.mcap (Foxglove, Rerun).")]
-
-INTERRUPTED = 130
-"""Exit code after Ctrl-C or SIGTERM (128 + SIGINT)."""
 
 OUTPUT_ROOT = Path("out")
 """Root of the default output directories, out/<scenario name>/<command>."""
@@ -154,6 +151,8 @@ _COLOURS = {"success": "green", "safe stop": "yellow"}
 def outcome_text(summary: dict) -> str:
     """The verdict's outcome as one coloured word: success, failure, safe stop, crash or
     not flown (:attr:`tetherland.verdict.Outcome.label`)."""
+    from tetherland.verdict import Outcome  # the judge loads numba: not for `show`
+
     label = Outcome(summary["outcome"]).label
     return f"[{_COLOURS.get(label, 'red')}]{label}[/{_COLOURS.get(label, 'red')}]"
 

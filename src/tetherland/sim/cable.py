@@ -29,7 +29,6 @@ from typing import Protocol, runtime_checkable
 
 import mujoco
 import numpy as np
-from scipy.optimize import least_squares
 
 from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray
@@ -416,6 +415,8 @@ def hanging_chain_angles(
 
     starts = [(math.log(h), f * n) for h in (1e-2, 1.0, 1e2) for f in (0.25, 0.5, 0.75)]
     best = min(starts, key=lambda x: float(np.sum(residual(np.array(x)) ** 2)))
+    from scipy.optimize import least_squares  # 0.5 s to import: only where it is needed
+
     sol = least_squares(residual, best, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=500)
     if float(np.max(np.abs(sol.fun))) > 1e-9:
         return None

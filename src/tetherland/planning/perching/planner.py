@@ -24,7 +24,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import minimize_scalar
 
 from tetherland.config import PerchingConfig, Scenario
 from tetherland.planning.driver import (
@@ -232,6 +231,8 @@ class _PerchOcp:
         lo = float(grid[min(i + 1, GRID - 1)])
         hi = float(grid[max(i - 1, 0)])
         if hi > lo:
+            from scipy.optimize import minimize_scalar  # 0.5 s to import: only when needed
+
             minimize_scalar(
                 evaluate, bounds=(lo, hi), method="bounded", options={"xatol": SEARCH_TOL}
             )
