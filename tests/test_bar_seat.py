@@ -91,7 +91,7 @@ def test_flat_arms_have_no_single_low_point() -> None:
 def test_line_length_puts_the_bar_axis_a_cable_length_from_the_attachment() -> None:
     """The plan's line plus the eye's distance from the seated bar's axis (the plant's
     hook geometry) is the cable length l; flat arms keep the former formula bit for bit."""
-    s = load_scenario("slope50", BAR)
+    s = load_scenario("slope50", [*BAR, "mechanism.hook_arm_rise_deg=0"])
     m = s.mechanism
     l_t = s.tether.length
     assert bar_line_length(l_t, m) == l_t - (m.hook_shank - m.hook_radius - m.bar_radius)
@@ -114,3 +114,33 @@ def test_rise_beyond_the_tip_is_refused_with_one_line() -> None:
     with pytest.raises(ConfigError, match="hook_arm_rise_deg") as err:
         load_scenario("slope50", [*BAR, f"mechanism.hook_arm_rise_deg={limit + 0.3}"])
     assert "\n" not in str(err.value).strip()
+
+
+@pytest.mark.slow
+def test_pilot_draw_50_00008_lands_with_rising_arms() -> None:
+    """Closed loop, the campaign's way: the pilot's draw 50-00008 (slope50 at 50 deg,
+    cable 1.2 m, hook drop 1.0 m, bar; seed 2298760360), which failed condition (4) with
+    flat arms (the shallow seat rolled into the arm-tip corner on the surface: slack, then a
+    26 N snatch), lands and returns with 25 deg arms; the bar sits in the corner from the
+    hand-over through the touchdown (the crown's distance from the bar's axis within 1 mm
+    of the seat's, :func:`bar_seat`), and the true tension never drops to zero there.
+    About 60 s of CPU."""
+    from tetherland.campaign.jobs import draw_run, fly_perturbed
+
+    truth = load_scenario("slope50", ["tether.length=1.2", "tether.hook_drop=1.0", *BAR,
+                                      "mechanism.hook_arm_rise_deg=25"])  # fmt: skip
+    drawn = draw_run(truth, 2298760360)
+    r = fly_perturbed(drawn, "tethered")
+    assert r.summary["success"], r.summary["reason"]
+    geo = Plant(drawn.plant).layout.geometry
+    y = geo.R_WA[:, 1]
+    off = np.asarray(r.log["hook_p_W"], float) - geo.p_A
+    dist = np.linalg.norm(off - np.outer(off @ y, y), axis=1)
+    u, z = bar_seat(truth.mechanism)
+    seat = math.hypot(u, z)
+    phases = {p["name"]: p for p in r.summary["phases"]}
+    t = r.log["t"]
+    held = (t >= phases["tethered_landing"]["start"]) & (t < phases["touchdown"]["end"])
+    assert float(np.max(np.abs(dist[held] - seat))) < 1e-3
+    landed = (t >= phases["touchdown"]["start"]) & (t < phases["touchdown"]["end"])
+    assert float(np.min(r.log["tension"][landed])) > 1.0
