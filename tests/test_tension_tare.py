@@ -290,7 +290,7 @@ def test_the_reverse_pass_climbs_away_from_the_bar() -> None:
     assert any("still on the bar" in e for e in events), events
     assert sup.phase == Phase.RETURN
     geo = sup.geo
-    hang = bar_line_length(s.tether.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    hang = bar_line_length(s.tether.length, m)
     crown = flown + sup.wp.attachment_W - np.array([0.0, 0.0, hang + m.hook_shank])
     x = geo.R_WA[:, 0].copy()
     x[2] = 0.0

@@ -48,6 +48,13 @@ class MechanismConfig(Section):
     hook_tip_angle_deg: float = Field(0.0, ge=0, le=80)
     """Angle of each tip from the shank's axis, leaning outward: 0 points it straight back
     up along the shank (a closed crook), larger opens the crook [deg]."""
+    hook_arm_rise_deg: float = Field(0.0, ge=0, le=60)
+    """Rise of each arm toward the shank, from the horizontal of the hanging hook: 0 keeps
+    the arms flat (the crook has no low point, and the bar seats anywhere along the arm
+    that friction holds it), larger lets each arm fall from the crown to its tip, so that
+    the crook's one low point is the corner between the arm and the tip; above the
+    friction angle atan(bar_friction) a bar pulled into the crook slides to it
+    (docs/mechanism.md) [deg]."""
     hook_radius: float = Field(0.002, ge=0.0005, le=0.02)
     """Radius of the hook's capsules (shank, arms, tips) [m]."""
     line_segments: int = Field(20, ge=4, le=60)
@@ -219,21 +226,36 @@ class MechanismConfig(Section):
                 f"+ bar_radius = "
                 f"{self.pass_offset - gap:g} m (the hook must pass beside the bar)"
             )
+        if self.hook_arm_rise_deg > 0.0:
+            from tetherland.models.hook import bar_seat, bar_seat_foot
+
+            foot = bar_seat_foot(self)
+            arm = self.hook_reach / math.cos(math.radians(self.hook_arm_rise_deg))
+            if not foot < min(arm, self.hook_tip_length) or bar_seat(self)[0] <= (
+                self.bar_radius + self.hook_radius
+            ):
+                raise ValueError(
+                    f"mechanism.hook_arm_rise_deg = {self.hook_arm_rise_deg:g} deg: the bar "
+                    f"seated in the arm-tip corner touches them {foot:g} m from it, beyond "
+                    "the arm or the tip, or touches the shank (lower the rise)"
+                )
         lo = self.hook_tip_length * math.cos(math.radians(self.hook_tip_angle_deg)) + (
-            self.hook_radius + self.bar_radius)
+            self.hook_radius + self.bar_radius) - self.arm_fall
         hi = self.hook_shank - self.bar_radius - self.line_radius
         if not lo < self.pass_depth < hi:
             raise ValueError(
                 f"mechanism.pass_depth = {self.pass_depth:g} m must be in ({lo:g}, {hi:g}) m: "
-                "the tips under the bar (> tip height + hook_radius + bar_radius) and the "
+                "the tips under the bar (> tip height - arm fall + hook_radius + bar_radius) "
+                "and the "
                 "eye above it (< hook_shank - bar_radius - line_radius)"
             )
-        deepest = self.pass_depth + self.pass_margin + self.hook_radius
+        deepest = self.pass_depth + self.pass_margin + self.hook_radius + self.arm_fall
         if deepest >= self.standoff - self.pass_offset:
+            room = self.standoff - self.pass_offset - self.pass_depth - self.hook_radius
             raise ValueError(
                 f"mechanism.pass_margin = {self.pass_margin:g} m must be < standoff - "
-                f"pass_offset - pass_depth - hook_radius = "
-                f"{self.standoff - self.pass_offset - self.pass_depth - self.hook_radius:g} m "
+                f"pass_offset - pass_depth - hook_radius - arm fall = "
+                f"{room - self.arm_fall:g} m "
                 "(the hook's bottom above the surface at the pass's end, any slope)"
             )
         if self.standoff <= self.bar_radius + 2.0 * self.hook_radius:
@@ -241,6 +263,11 @@ class MechanismConfig(Section):
                 f"mechanism.standoff = {self.standoff:g} m must be > bar_radius + 2 hook_radius"
             )
         return self
+
+    @property
+    def arm_fall(self) -> float:
+        """Drop of each arm's end below the crown, hook_reach tan(hook_arm_rise_deg) [m]."""
+        return self.hook_reach * math.tan(math.radians(self.hook_arm_rise_deg))
 
     @property
     def outer_reach(self) -> float:

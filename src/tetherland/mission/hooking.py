@@ -39,6 +39,7 @@ from tetherland.mission.paths import ZVShaper
 from tetherland.models.hook import (
     bar_hook_offset,
     bar_line_length,
+    bar_seat,
     hook_offset,
     magnet_boom,
     swing_period,
@@ -112,7 +113,7 @@ def scenario_hook_offset(scenario: Scenario, geometry: LandingGeometry) -> Float
     if m.kind == "magnet":  # the eye on the unfolded boom's tip
         return geometry.R_WA @ magnet_boom(scenario).offset_B
     if m.kind == "bar":
-        line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+        line = bar_line_length(t.length, m)
         return bar_hook_offset(geometry.R_WA[:, 0], line, m.hook_shank, m.pass_offset)
     n_W = geometry.R_WA @ np.asarray(t.approach_direction, dtype=float)
     return hook_offset(n_W / np.linalg.norm(n_W), t.hook_drop)
@@ -275,7 +276,7 @@ def shortest_leg(scenario: Scenario) -> float:
                    m.swing_periods * swing_period_magnet(t.length, m.magnet_thickness))
     if m.kind != "bar":
         return SHORTEST_LEG
-    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    line = bar_line_length(t.length, m)
     return max(SHORTEST_LEG, m.swing_periods * swing_period(line, m.hook_shank))
 
 
@@ -317,7 +318,7 @@ def swing_shaper(scenario: Scenario) -> ZVShaper | None:
         return ZVShaper(swing_period_magnet(t.length, m.magnet_thickness))
     if m.kind != "bar":
         return None
-    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    line = bar_line_length(t.length, m)
     return ZVShaper(swing_period(line, m.hook_shank))
 
 
@@ -331,7 +332,7 @@ def takeoff_height(scenario: Scenario) -> float:
     m, t = scenario.mechanism, scenario.tether
     if m.kind != "bar":
         return h
-    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    line = bar_line_length(t.length, m)
     hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
     return max(h, hang + m.lift_margin)
 
@@ -345,7 +346,7 @@ def lift_off_band(scenario: Scenario) -> tuple[float, float] | None:
     m, t = scenario.mechanism, scenario.tether
     if m.kind != "bar" or m.lift_band <= 0.0:
         return None
-    line = bar_line_length(t.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    line = bar_line_length(t.length, m)
     hang = line + m.hook_shank - scenario.vehicle.cable_attachment[2] - scenario.vehicle.h_R
     top = takeoff_height(scenario)
     lo, hi = max(0.0, hang - m.lift_band), min(top, hang + m.lift_band)
@@ -406,14 +407,19 @@ def bar_climb_path(
        pass_margin``); from there the seated hook holds the line, and the line the
        vehicle: the climb ends where the hook seats, up to ``pass_depth + pass_margin -
        hook_radius - bar_radius`` higher for the bar where believed, and the line just
-       taut over a seated hook. Climbing only ``pass_depth`` left the hook unseated,
+       taut over a seated hook. Rising arms (``hook_arm_rise_deg``) seat the bar lower,
+       in the arm-tip corner (:func:`tetherland.models.hook.bar_seat`): the climb is
+       longer by the seat's drop. Climbing only ``pass_depth`` left the hook unseated,
        ``pass_margin`` under the bar (pipe60, the line taut only on the stretch, with a
        31 N snatch, and the hook slipped).
     """
     m = scenario.mechanism
     x = np.array([x_A_W[0], x_A_W[1], 0.0])
     mirror = np.asarray(hook_end_W, float) + 2.0 * m.pass_offset * x / np.linalg.norm(x)
-    seat = mirror + np.array([0.0, 0.0, m.pass_depth + m.pass_margin])
+    climb = m.pass_depth + m.pass_margin
+    if m.hook_arm_rise_deg > 0.0:  # rising arms seat the bar lower, in the arm-tip corner
+        climb += m.hook_radius + m.bar_radius - bar_seat(m)[1]
+    seat = mirror + np.array([0.0, 0.0, climb])
     return [(mirror, None), (seat, m.lift_speed)]
 
 

@@ -778,7 +778,7 @@ def line_spec(scenario: Scenario) -> LineSpec:
     from tetherland.models.hook import bar_line_length
 
     m = scenario.mechanism
-    length = bar_line_length(scenario.tether.length, m.hook_shank, m.hook_radius, m.bar_radius)
+    length = bar_line_length(scenario.tether.length, m)
     n = m.line_segments
     l_s = length / n
     m_s = m.line_density * l_s
@@ -791,7 +791,8 @@ def add_hanging_line(scene: SceneXml) -> None:
     Bodies ``line_link0`` (ball-jointed to the vehicle at the attachment point) to
     ``line_link{N-1}``, each a capsule along its local x, then the body ``hook``
     (ball-jointed at its eye): the shank along its local x, three arms at 120 deg at the
-    crown and a tip pointing back up from each arm's end, capsules of
+    crown (falling ``mechanism.arm_fall`` to their ends) and a tip pointing back up from
+    each arm's end, capsules of
     ``mechanism.hook_radius``, mass ``mechanism.hook_mass`` spread over them by length.
     At qpos0 the line hangs straight down from the level vehicle. Site ``line_root`` at
     the first joint carries the force sensor ``line_force`` (the line's pull on the
@@ -829,14 +830,15 @@ def add_hanging_line(scene: SceneXml) -> None:
          armature=f"{m.hook_mass * m.hook_shank**2:.12g}")  # fmt: skip
     s, r, tip = m.hook_shank, m.hook_reach, m.hook_tip_length
     lean = math.radians(m.hook_tip_angle_deg)
+    fall = m.arm_fall  # each arm falls from the crown to its tip (0: flat arms)
     pieces = [((0.0, 0.0, 0.0), (s, 0.0, 0.0))]
     for k in range(3):
         a = 2.0 * math.pi * k / 3.0
         c, si = math.cos(a), math.sin(a)
-        end = (s, r * c, r * si)
+        end = (s + fall, r * c, r * si)
         out = r + tip * math.sin(lean)
         pieces.append(((s, 0.0, 0.0), end))
-        pieces.append((end, (s - tip * math.cos(lean), out * c, out * si)))
+        pieces.append((end, (s + fall - tip * math.cos(lean), out * c, out * si)))
     total = sum(math.dist(a, b) for a, b in pieces)
     for j, (a, b) in enumerate(pieces):
         _sub(hook, "geom", name=f"hook{j}", type="capsule", fromto=_fmt((*a, *b)),
