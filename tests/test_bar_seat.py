@@ -12,7 +12,7 @@ import pytest
 
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
-from tetherland.models.hook import bar_line_length, bar_seat
+from tetherland.models.hook import bar_line_length
 from tetherland.sim.plant import Plant
 
 BAR = ["mechanism.kind=bar"]
@@ -62,7 +62,7 @@ def _lowest_bar_positions(rise_deg: float, step: float = 1e-4) -> tuple[np.ndarr
 def test_rising_arms_give_the_crook_one_low_point_where_the_plan_seats_the_bar() -> None:
     low, plant = _lowest_bar_positions(25.0)
     m = plant.scenario.mechanism
-    u, z = bar_seat(m)
+    u, z = m.bar_seat
     # derived: the tip stands straight up at hook_reach, so the seat is hook_radius +
     # bar_radius inside it, on the corner's bisector (the corner's angle 90 deg - rise)
     rad = m.hook_radius + m.bar_radius
@@ -85,7 +85,7 @@ def test_flat_arms_have_no_single_low_point() -> None:
     m = plant.scenario.mechanism
     spread = float(np.ptp(low[:, 1]))
     assert spread > m.hook_reach - 2.0 * (m.hook_radius + m.bar_radius) - 1e-3
-    assert bar_seat(m) == (0.0, m.hook_radius + m.bar_radius)
+    assert m.bar_seat == (0.0, m.hook_radius + m.bar_radius)
 
 
 def test_line_length_puts_the_bar_axis_a_cable_length_from_the_attachment() -> None:
@@ -123,7 +123,7 @@ def test_pilot_draw_50_00008_lands_with_rising_arms() -> None:
     flat arms (the shallow seat rolled into the arm-tip corner on the surface: slack, then a
     26 N snatch), lands and returns with 25 deg arms; the bar sits in the corner from the
     hand-over through the touchdown (the crown's distance from the bar's axis within 1 mm
-    of the seat's, :func:`bar_seat`), and the true tension never drops to zero there.
+    of the seat's, ``MechanismConfig.bar_seat``), and the true tension never drops to zero there.
     About 60 s of CPU."""
     from tetherland.campaign.jobs import draw_run, fly_perturbed
 
@@ -136,7 +136,7 @@ def test_pilot_draw_50_00008_lands_with_rising_arms() -> None:
     y = geo.R_WA[:, 1]
     off = np.asarray(r.log["hook_p_W"], float) - geo.p_A
     dist = np.linalg.norm(off - np.outer(off @ y, y), axis=1)
-    u, z = bar_seat(truth.mechanism)
+    u, z = truth.mechanism.bar_seat
     seat = math.hypot(u, z)
     phases = {p["name"]: p for p in r.summary["phases"]}
     t = r.log["t"]

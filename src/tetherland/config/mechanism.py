@@ -227,11 +227,9 @@ class MechanismConfig(Section):
                 f"{self.pass_offset - gap:g} m (the hook must pass beside the bar)"
             )
         if self.hook_arm_rise_deg > 0.0:
-            from tetherland.models.hook import bar_seat, bar_seat_foot
-
-            foot = bar_seat_foot(self)
+            foot = self.bar_seat_foot
             arm = self.hook_reach / math.cos(math.radians(self.hook_arm_rise_deg))
-            if not foot < min(arm, self.hook_tip_length) or bar_seat(self)[0] <= (
+            if not foot < min(arm, self.hook_tip_length) or self.bar_seat[0] <= (
                 self.bar_radius + self.hook_radius
             ):
                 raise ValueError(
@@ -268,6 +266,41 @@ class MechanismConfig(Section):
     def arm_fall(self) -> float:
         """Drop of each arm's end below the crown, hook_reach tan(hook_arm_rise_deg) [m]."""
         return self.hook_reach * math.tan(math.radians(self.hook_arm_rise_deg))
+
+    @property
+    def bar_seat(self) -> tuple[float, float]:
+        """The bar's axis where it seats in the hook's crook, in the plane of one arm: (u, z),
+        u out along the arm from the shank's axis, z up along the shank from the crown [m].
+
+        Flat arms (``hook_arm_rise_deg`` = 0): the crook has no low point; the design takes
+        the bar on the arm at the shank, (0, hook_radius + bar_radius). Rising arms: each
+        arm falls from the crown to its tip, so the crook's one low point is the corner
+        between the arm and the tip: the bar's axis lies on the corner's bisector,
+        hook_radius + bar_radius from both the arm and the tip.
+        """
+        rad = self.hook_radius + self.bar_radius
+        rise = math.radians(self.hook_arm_rise_deg)
+        if rise == 0.0:
+            return 0.0, rad
+        lean = math.radians(self.hook_tip_angle_deg)
+        ax, az = -math.cos(rise), math.sin(rise)  # the corner toward the crown
+        tx, tz = math.sin(lean), math.cos(lean)  # the corner toward the tip's end
+        half = 0.5 * math.acos(ax * tx + az * tz)
+        bx, bz = ax + tx, az + tz
+        n = math.hypot(bx, bz)
+        d = rad / math.sin(half) / n
+        return self.hook_reach + d * bx, -self.arm_fall + d * bz
+
+    @property
+    def bar_seat_foot(self) -> float:
+        """Distance from the arm-tip corner to where the seated bar touches the arm and the
+        tip (:attr:`bar_seat`; rising arms only, 0 for flat ones) [m]."""
+        rise = math.radians(self.hook_arm_rise_deg)
+        if rise == 0.0:
+            return 0.0
+        lean = math.radians(self.hook_tip_angle_deg)
+        half = 0.5 * (0.5 * math.pi - rise + lean)
+        return (self.hook_radius + self.bar_radius) / math.tan(half)
 
     @property
     def outer_reach(self) -> float:

@@ -39,7 +39,6 @@ from tetherland.mission.paths import ZVShaper
 from tetherland.models.hook import (
     bar_hook_offset,
     bar_line_length,
-    bar_seat,
     hook_offset,
     magnet_boom,
     swing_period,
@@ -408,7 +407,7 @@ def bar_climb_path(
        vehicle: the climb ends where the hook seats, up to ``pass_depth + pass_margin -
        hook_radius - bar_radius`` higher for the bar where believed, and the line just
        taut over a seated hook. Rising arms (``hook_arm_rise_deg``) seat the bar lower,
-       in the arm-tip corner (:func:`tetherland.models.hook.bar_seat`): the climb is
+       in the arm-tip corner (``MechanismConfig.bar_seat``): the climb is
        longer by the seat's drop. Climbing only ``pass_depth`` left the hook unseated,
        ``pass_margin`` under the bar (pipe60, the line taut only on the stretch, with a
        31 N snatch, and the hook slipped).
@@ -418,7 +417,7 @@ def bar_climb_path(
     mirror = np.asarray(hook_end_W, float) + 2.0 * m.pass_offset * x / np.linalg.norm(x)
     climb = m.pass_depth + m.pass_margin
     if m.hook_arm_rise_deg > 0.0:  # rising arms seat the bar lower, in the arm-tip corner
-        climb += m.hook_radius + m.bar_radius - bar_seat(m)[1]
+        climb += m.hook_radius + m.bar_radius - m.bar_seat[1]
     seat = mirror + np.array([0.0, 0.0, climb])
     return [(mirror, None), (seat, m.lift_speed)]
 

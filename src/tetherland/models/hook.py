@@ -33,46 +33,10 @@ def hook_offset(n_W: FloatArray, hook_drop: float) -> FloatArray:
     return hook_drop * n_W
 
 
-def bar_seat(mechanism: MechanismConfig) -> tuple[float, float]:
-    """The bar's axis where it seats in the hook's crook, in the plane of one arm: (u, z),
-    u out along the arm from the shank's axis, z up along the shank from the crown [m].
-
-    Flat arms (``hook_arm_rise_deg`` = 0): the crook has no low point; the design takes
-    the bar on the arm at the shank, (0, hook_radius + bar_radius). Rising arms: each arm
-    falls from the crown to its tip, so the crook's one low point is the corner between
-    the arm and the tip: the bar's axis lies on the corner's bisector, hook_radius +
-    bar_radius from both the arm and the tip.
-    """
-    m = mechanism
-    rad = m.hook_radius + m.bar_radius
-    rise = math.radians(m.hook_arm_rise_deg)
-    if rise == 0.0:
-        return 0.0, rad
-    lean = math.radians(m.hook_tip_angle_deg)
-    a = np.array([-math.cos(rise), math.sin(rise)])  # the corner toward the crown
-    t = np.array([math.sin(lean), math.cos(lean)])  # the corner toward the tip's end
-    half = 0.5 * math.acos(float(a @ t))
-    b = (a + t) / np.linalg.norm(a + t)
-    u, z = np.array([m.hook_reach, -m.hook_reach * math.tan(rise)]) + rad / math.sin(half) * b
-    return float(u), float(z)
-
-
-def bar_seat_foot(mechanism: MechanismConfig) -> float:
-    """Distance from the arm-tip corner to where the seated bar touches the arm and the
-    tip (:func:`bar_seat`; rising arms only, 0 for flat ones) [m]."""
-    m = mechanism
-    rise = math.radians(m.hook_arm_rise_deg)
-    if rise == 0.0:
-        return 0.0
-    lean = math.radians(m.hook_tip_angle_deg)
-    half = 0.5 * (0.5 * math.pi - rise + lean)
-    return (m.hook_radius + m.bar_radius) / math.tan(half)
-
-
 def bar_line_length(tether_length: float, mechanism: MechanismConfig) -> float:
     """Length of the hanging line of the bar mechanism, attachment to the hook's eye [m].
 
-    Caught, the bar rests in the crook at :func:`bar_seat`, the line pulling the eye
+    Caught, the bar rests in the crook at ``MechanismConfig.bar_seat``, the line pulling the eye
     straight away from the bar's axis: the line is shorter than ``tether_length`` by the
     eye's distance from the bar's axis, so that the anchor p_A (the bar's axis) to the
     attachment is l when taut. Flat arms: ``hook_shank - hook_radius - bar_radius``.
@@ -80,7 +44,7 @@ def bar_line_length(tether_length: float, mechanism: MechanismConfig) -> float:
     m = mechanism
     if m.hook_arm_rise_deg == 0.0:
         return tether_length - (m.hook_shank - m.hook_radius - m.bar_radius)
-    u, z = bar_seat(m)
+    u, z = m.bar_seat
     return tether_length - math.hypot(u, m.hook_shank - z)
 
 
