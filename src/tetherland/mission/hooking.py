@@ -415,9 +415,8 @@ def bar_climb_path(
     m = scenario.mechanism
     x = np.array([x_A_W[0], x_A_W[1], 0.0])
     mirror = np.asarray(hook_end_W, float) + 2.0 * m.pass_offset * x / np.linalg.norm(x)
-    climb = m.pass_depth + m.pass_margin
-    if m.hook_arm_rise_deg > 0.0:  # rising arms seat the bar lower, in the arm-tip corner
-        climb += m.hook_radius + m.bar_radius - m.bar_seat[1]
+    # the seat's drop below the flat arm's (0 for flat arms; rising arms seat the bar lower)
+    climb = m.pass_depth + m.pass_margin + (m.hook_radius + m.bar_radius - m.bar_seat[1])
     seat = mirror + np.array([0.0, 0.0, climb])
     return [(mirror, None), (seat, m.lift_speed)]
 
