@@ -22,6 +22,7 @@ from tetherland.mission import MissionSupervisor, Phase, plan_mission
 from tetherland.mission.hooking import bar_seating_path, swing_shaper, take_up_legs
 from tetherland.mission.paths import segment_duration
 from tetherland.mission.supervisor import handover_tension
+from tetherland.models.hook import bar_line_length
 from tetherland.rotations import rotation_from_z_and_yaw, rotmat_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import LinkState, RigidBodyState
@@ -87,6 +88,21 @@ def _fly(scenario, limit: float = 170.0, trace: list | None = None, taut: float 
     pytest.fail(f"no {until.name} within {limit} s (phase {sup.phase.name})")
 
 
+def _swing_radius(scenario) -> float:
+    """The take-up swing's radius about the anchor, from the hook's geometry: the seat
+    climb (:func:`tetherland.mission.hooking.bar_climb_path`) ends with the crown
+    ``pass_offset`` beside the believed bar's axis and ``hook_radius + bar_radius - z``
+    above it, (u, z) = ``MechanismConfig.bar_seat``; the attachment hangs the line
+    (``bar_line_length``) plus the shank above the crown; the swing runs at that distance
+    less ``hook_radius + bar_radius``, the crook just touching the bar
+    (tests/test_sim_mechanism.py). Flat arms: hypot(l + gap, pass_offset) - gap, gap =
+    hook_radius + bar_radius [m]."""
+    m, l = scenario.mechanism, scenario.tether.length
+    gap = m.hook_radius + m.bar_radius
+    up = bar_line_length(l, m) + m.hook_shank + gap - m.bar_seat[1]
+    return math.hypot(up, m.pass_offset) - gap
+
+
 def test_the_bar_hands_over_at_the_landing_plans_start_tension() -> None:
     """With the bar the stretch hands over once the line holds the tension the landing
     plan starts with (``planner.start_tension``), not the taut threshold: a hook caught
@@ -113,10 +129,8 @@ def test_a_line_holding_less_than_the_start_tension_is_not_handed_over() -> None
     flight and, without the start tension by ``mission.stretch.timeout`` after the
     stretch target, counts the hook as missed and retries."""
     s = load_scenario("slope50", ["mechanism.kind=bar"])
-    m, l = s.mechanism, s.tether.length
     low = 0.5 * (s.mission.stretch.tension_threshold + s.planner.start_tension)
-    gap = m.hook_radius + m.bar_radius  # the swing's radius (test above): the line holds there
-    held = math.hypot(l + gap, m.pass_offset) - gap
+    held = _swing_radius(s)  # the swing's radius (test below): the line holds there
     sup, _, t_retry, _, t_on = _fly(s, taut=low, until=Phase.RETRY, held=held)
     assert t_on is not None and t_on < t_retry
     assert all(p.phase != Phase.TETHERED_LANDING for p in sup.records)
@@ -136,15 +150,13 @@ def test_a_taut_reading_on_the_take_up_swing_hands_over_only_on_the_stretch_dire
     leg began; the whole seating swing (from above the bar, 90 deg, down to phi_0) is
     flown first."""
     s = load_scenario("slope50", ["mechanism.kind=bar", *overrides])
-    m, l = s.mechanism, s.tether.length
     sup, plan, t_h, est, t_on = _fly(s)
     phi0 = float(plan.landing_trajectory.output(0.0).phi[0])
     assert est.link is not None
     assert est.link.phi == pytest.approx(phi0, abs=1e-6)
     assert abs(est.link.delta) < 1e-6
     # the swing's radius: the crook just touching the bar (tests/test_sim_mechanism.py)
-    gap = m.hook_radius + m.bar_radius
-    r_swing = math.hypot(l + gap, m.pass_offset) - gap
+    r_swing = _swing_radius(s)
     geo = plan.geometry
     r_att_W = est.body.R_WB @ np.asarray(s.vehicle.cable_attachment)
     r = float(np.linalg.norm(est.body.p_W + r_att_W - geo.p_A))

@@ -79,8 +79,9 @@ def test_rising_arms_give_the_crook_one_low_point_where_the_plan_seats_the_bar()
 
 
 def test_flat_arms_have_no_single_low_point() -> None:
-    """The default flat arm: the bar rests anywhere along it (the pilot's shallow seats,
-    9.5 mm from the crown, and the corner 19 mm out are equally low)."""
+    """The flat arm (``hook_arm_rise_deg = 0``, the default before rising arms): the bar
+    rests anywhere along it (the pilot's shallow seats, 9.5 mm from the crown, and the
+    corner 19 mm out are equally low)."""
     low, plant = _lowest_bar_positions(0.0)
     m = plant.scenario.mechanism
     spread = float(np.ptp(low[:, 1]))

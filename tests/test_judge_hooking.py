@@ -24,19 +24,25 @@ DT = 0.01
 """Tick of the built logs [s] (coarser than the missions': the rules count no ticks)."""
 
 
-@pytest.fixture(scope="module")
-def bar() -> Scenario:
+@pytest.fixture(scope="module", params=[None, 0.0], ids=["rising", "flat"])
+def bar(request: pytest.FixtureRequest) -> Scenario:
+    """The bar mechanism, the default rising arms or the flat arm."""
     data = load_scenario("slope50").model_dump(mode="python")
     data["mechanism"]["kind"], data["anchor"]["h_A"] = "bar", 0.0
+    if request.param is not None:
+        data["mechanism"]["hook_arm_rise_deg"] = request.param
     return scenario_from_dict(data, "slope50")
 
 
 def near(s: Scenario) -> float:
     """The farthest crown-to-axis distance at which a part of the hook can touch the bar,
-    from the hook's dimensions: the arms' reach, a tip's length, the two radii."""
+    from the hook's dimensions, bounded leg by leg from the crown: the arm, ``hook_reach``
+    out and its fall ``hook_reach tan(hook_arm_rise_deg)`` down (0 for flat arms), a
+    tip's length up, the two radii."""
     m = s.mechanism
     assert m.hook_tip_angle_deg == 0.0  # tips straight up: the outer reach is the arm's
-    return m.hook_reach + m.hook_tip_length + m.hook_radius + m.bar_radius
+    fall = m.hook_reach * np.tan(np.radians(m.hook_arm_rise_deg))
+    return m.hook_reach + fall + m.hook_tip_length + m.hook_radius + m.bar_radius
 
 
 def catch_load(s: Scenario) -> float:
@@ -77,14 +83,20 @@ def record(s: Scenario, phases: list[tuple[str, float, float]]) -> RunRecord:
     )  # fmt: skip
 
 
-AWAY = (-0.05, 0.0, -0.03)
-"""The pass's end: pass_offset on the far side of the bar, pass_depth under its axis."""
+def away(s: Scenario) -> tuple[float, float, float]:
+    """The pass's end, crown relative to the bar's axis in F_A: ``pass_offset`` on the far
+    side of the bar, ``pass_depth + pass_margin`` under its axis (the bar where believed)
+    [m]; beyond the hook's reach of the bar (:func:`near`)."""
+    m = s.mechanism
+    p = (-m.pass_offset, 0.0, -(m.pass_depth + m.pass_margin))
+    assert float(np.linalg.norm(p)) > near(s)
+    return p
 
 
 def test_a_hook_caught_held_and_released_is_caught_then_released(bar):
     phases = [("hooking", 1.0, 2.0), ("stretch", 2.0, 3.0), ("tethered_landing", 3.0, 5.0),
               ("release", 5.0, 6.0), ("unhook", 6.0, 7.0)]  # fmt: skip
-    log = story(bar, 8.0, [(0.0, *AWAY), (2.0, 0.0, 0.0, -0.008), (6.5, *AWAY)],
+    log = story(bar, 8.0, [(0.0, *away(bar)), (2.0, 0.0, 0.0, -0.008), (6.5, *away(bar))],
                 caught=[(2.2, 6.5)], tension=[(2.5, 5.0, 9.0)])  # fmt: skip
     report = judge_hooking(log, record(bar, phases), bar)
     (a,) = report.attempts
@@ -114,7 +126,7 @@ def test_a_hook_that_comes_off_under_the_landing_load_is_lost_at_that_time(bar):
 def test_caught_then_off_before_the_landing_is_a_bounce_and_the_retry_counts_apart(bar):
     phases = [("hooking", 1.0, 2.0), ("stretch", 2.0, 4.0), ("retry", 4.0, 5.0),
               ("hooking", 5.0, 6.0), ("tethered_landing", 7.0, 8.0)]  # fmt: skip
-    log = story(bar, 8.0, [(0.0, *AWAY), (2.0, 0.0, 0.0, -0.008), (3.0, *AWAY),
+    log = story(bar, 8.0, [(0.0, *away(bar)), (2.0, 0.0, 0.0, -0.008), (3.0, *away(bar)),
                            (6.0, 0.0, 0.0, -0.008)],
                 caught=[(2.2, 2.6), (6.3, 9.0)], tension=[])  # fmt: skip
     report = judge_hooking(log, record(bar, phases), bar)
@@ -128,7 +140,7 @@ def test_never_caught_is_a_bounce_within_the_hooks_reach_of_the_bar_else_a_miss(
     loaded: a part of the hook could touch the bar (bounced) or could not (missed)."""
     d = near(bar) + margin
     phases = [("hooking", 1.0, 2.0), ("stretch", 2.0, 4.0)]
-    log = story(bar, 4.0, [(0.0, *AWAY), (2.0, 0.0, 0.0, -d), (3.0, *AWAY)],
+    log = story(bar, 4.0, [(0.0, *away(bar)), (2.0, 0.0, 0.0, -d), (3.0, *away(bar))],
                 caught=[], tension=[])  # fmt: skip
     (a,) = judge_hooking(log, record(bar, phases), bar).attempts
     assert a.min_distance_m == pytest.approx(d, abs=1e-12)
@@ -138,7 +150,7 @@ def test_never_caught_is_a_bounce_within_the_hooks_reach_of_the_bar_else_a_miss(
 
 def test_a_hook_along_the_bar_beyond_its_end_is_measured_from_the_end(bar):
     """On the axis's line but 8 cm past the bar's end: 8 cm from the bar, not 0, beyond
-    the hook's reach (5.1 cm for the defaults)."""
+    the hook's reach (6.3 cm for the defaults, 5.1 cm with flat arms)."""
     half = 0.5 * bar.mechanism.bar_length
     phases = [("hooking", 1.0, 2.0)]
     log = story(bar, 3.0, [(0.0, 0.0, half + 0.08, 0.0)], caught=[], tension=[])
@@ -156,15 +168,17 @@ def test_a_line_loaded_without_the_catch_is_wrong_side_away_from_the_bar_else_ta
     something else; with it 1 cm from the axis the line is wound on the bar."""
     load = catch_load(bar)
     phases = [("hooking", 1.0, 2.0), ("stretch", 2.0, 4.0)]
-    log = story(bar, 4.0, [(0.0, *AWAY), (2.0, 0.0, 0.0, z)], caught=[],
+    log = story(bar, 4.0, [(0.0, *away(bar)), (2.0, 0.0, 0.0, z)], caught=[],
                 tension=[(2.5, 3.0, 1.5 * load)])  # fmt: skip
     (a,) = judge_hooking(log, record(bar, phases), bar).attempts
     assert a.outcome is kind and a.max_free_tension_N == pytest.approx(1.5 * load)
     # just under the catch load it is not loaded: a bounce at the bar, or a miss
-    log = story(bar, 4.0, [(0.0, *AWAY), (2.0, 0.0, 0.0, z)], caught=[],
+    log = story(bar, 4.0, [(0.0, *away(bar)), (2.0, 0.0, 0.0, z)], caught=[],
                 tension=[(2.5, 3.0, 0.99 * load)])  # fmt: skip
     (a,) = judge_hooking(log, record(bar, phases), bar).attempts
-    assert a.outcome is (HookingOutcome.BOUNCED if abs(z) <= near(bar) else HookingOutcome.MISSED)
+    d = min(abs(z), float(np.linalg.norm(away(bar))))  # the story's closest crown
+    assert a.min_distance_m == pytest.approx(d, abs=1e-12)
+    assert a.outcome is (HookingOutcome.BOUNCED if d <= near(bar) else HookingOutcome.MISSED)
 
 
 def test_the_point_hook_is_judged_on_its_caught_state_alone():

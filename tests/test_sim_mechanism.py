@@ -17,6 +17,7 @@ from tetherland.config import Scenario, load_scenario
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry
 from tetherland.mission.hooking import hooking_pass, scenario_hook_offset
+from tetherland.models.hook import bar_line_length
 from tetherland.sim.cable import ARMATURE_DECAY, LINE_TENSION_FLOOR, HangingLine
 from tetherland.sim.mjcf import chain_armature
 from tetherland.sim.plant import Plant
@@ -52,32 +53,47 @@ def _drive(plant: Plant, points: list[np.ndarray], speed: float, hold: float, ea
     drive(plant, points, speed, hold, each)
 
 
-def test_bar_config_needs_a_standoff_and_a_vertical_pass() -> None:
-    s = load_scenario("slope50", ["mechanism.kind=bar"])
+@pytest.mark.parametrize("arms", [[], ["mechanism.hook_arm_rise_deg=0"]],
+                         ids=["rising", "flat"])  # fmt: skip
+def test_bar_config_needs_a_standoff_and_a_vertical_pass(arms: list[str]) -> None:
+    """The validator's bounds, derived from the hook's geometry: the default rising arms
+    (their ends ``arm_fall`` under the crown) and the flat arm."""
+    bar = ["mechanism.kind=bar", *arms]
+    s = load_scenario("slope50", bar)
     assert s.anchor.h_A == s.mechanism.standoff  # h_A = 0 means "fixed on the surface"
     assert load_scenario("slope50").mechanism.kind == "disk"
     with pytest.raises(ConfigError, match=r"anchor\.h_A"):
-        load_scenario("slope50", ["mechanism.kind=bar", "anchor.h_A=0.3"])
+        load_scenario("slope50", [*bar, "anchor.h_A=0.3"])
     with pytest.raises(ConfigError, match="pass_offset"):
-        load_scenario("slope50", ["mechanism.kind=bar", "mechanism.pass_offset=0.02"])
-    for depth in (0.02, 0.04):  # tips at the bar / eye under the bar
+        load_scenario("slope50", [*bar, "mechanism.pass_offset=0.02"])
+    # the pass's depth: the tips' tops (a tip's height less the arm's fall, plus the two
+    # radii) under the bar, the eye (hook_shank less the bar and line radii) above it
+    m = s.mechanism
+    lo = m.hook_tip_length + m.hook_radius + m.bar_radius - m.arm_fall  # upright tips
+    hi = m.hook_shank - m.bar_radius - m.line_radius
+    assert lo < m.pass_depth < hi
+    for depth in (lo - 1e-3, hi + 1e-3):  # tips at the bar / eye under the bar
         with pytest.raises(ConfigError, match="pass_depth"):
-            load_scenario("slope50", ["mechanism.kind=bar", f"mechanism.pass_depth={depth}"])
-    # the pass's deepest point (pass_depth + pass_margin + hook_radius) must stay above the
-    # surface: standoff - pass_offset = 0.10 m bounds it on any slope
-    load_scenario("slope50", ["mechanism.kind=bar", "mechanism.pass_margin=0.06"])
+            load_scenario("slope50", [*bar, f"mechanism.pass_depth={depth}"])
+    for depth in (lo + 1e-3, hi - 1e-3):
+        load_scenario("slope50", [*bar, f"mechanism.pass_depth={depth}"])
+    # the pass's deepest point (pass_depth + pass_margin + hook_radius, the arms' ends
+    # arm_fall lower) must stay above the surface: standoff - pass_offset bounds it on any
+    # slope
+    room = m.standoff - m.pass_offset - m.pass_depth - m.hook_radius - m.arm_fall
+    assert m.pass_margin < room
+    load_scenario("slope50", [*bar, f"mechanism.pass_margin={room - 1e-3}"])
     with pytest.raises(ConfigError, match="pass_margin"):
-        load_scenario("slope50", ["mechanism.kind=bar", "mechanism.pass_margin=0.07"])
+        load_scenario("slope50", [*bar, f"mechanism.pass_margin={room + 1e-3}"])
     with pytest.raises(ConfigError, match="approach_direction"):
-        load_scenario("slope50", ["mechanism.kind=bar", "tether.approach_direction=[1, 0, -1]"])
+        load_scenario("slope50", [*bar, "tether.approach_direction=[1, 0, -1]"])
     # the crook (shank to tip, hook_reach - 2 hook_radius) must be wider than the bar's
     # diameter: with the 4 mm bar and 2 mm capsules the reach must exceed 12 mm
-    m = s.mechanism
     limit = 2.0 * (m.bar_radius + m.hook_radius)
     assert limit == pytest.approx(0.012)
-    load_scenario("slope50", ["mechanism.kind=bar", f"mechanism.hook_reach={limit + 1e-3}"])
+    load_scenario("slope50", [*bar, f"mechanism.hook_reach={limit + 1e-3}"])
     with pytest.raises(ConfigError, match="hook_reach"):
-        load_scenario("slope50", ["mechanism.kind=bar", f"mechanism.hook_reach={limit}"])
+        load_scenario("slope50", [*bar, f"mechanism.hook_reach={limit}"])
 
 
 def test_hooking_pass_puts_the_resting_hook_beside_the_bar(bar_plant: Plant) -> None:
@@ -480,17 +496,21 @@ def test_slope50_mission_hooks_lands_and_releases_through_contact() -> None:
     assert not bool(log["hook"][-1])
 
 
-def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> None:
+@pytest.mark.parametrize("arms", [[], ["mechanism.hook_arm_rise_deg=0"]],
+                         ids=["rising", "flat"])  # fmt: skip
+def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length(
+        arms: list[str]) -> None:  # fmt: skip
     """The bar's take-up as planned (the supervisor swings from where the climb left the
     vehicle): level to the pass's mirror, a climb of the pass's depth ``pass_depth +
-    pass_margin`` at ``lift_speed`` that lifts the crook into the bar, then chords
-    around p_A at the radius where the crook just touches the bar (the cable length, up
-    to the pass's offset), ending on the stretch direction,
-    none of them sagging more than a third of a tip below the arc; the plan (its leg
-    clearances and time bound) accepts it."""
+    pass_margin`` and the seat's drop below a flat arm's at ``lift_speed`` that lifts the
+    crook into the bar, then chords around p_A at the radius where the crook just touches
+    the bar (the cable length, up to the pass's offset, and with rising arms less the
+    seat's horizontal offset's shortening of the line's last leg, 4 mm at 25 deg), ending
+    on the stretch direction, none of them sagging more than a third of a tip below the
+    arc; the plan (its leg clearances and time bound) accepts it."""
     from tetherland.mission.plan import plan_mission, take_up_path
 
-    s = load_scenario("slope50", ["mechanism.kind=bar"])
+    s = load_scenario("slope50", ["mechanism.kind=bar", *arms])
     m, l = s.mechanism, s.tether.length
     plan = plan_mission(s, Plant(s).start_state())
     geo, wp = plan.geometry, plan.waypoints
@@ -499,17 +519,28 @@ def test_bar_take_up_seats_the_hook_and_swings_down_at_the_cable_length() -> Non
     x = np.array([*geo.R_WA[:2, 0], 0.0])
     x /= np.linalg.norm(x)
     np.testing.assert_allclose(mirror, wp.hook_end + 2.0 * m.pass_offset * x, atol=1e-12)
-    climb = m.pass_depth + m.pass_margin  # the pass's depth
+    # the pass's depth, and the seat's drop below a flat arm's: the bar seated at (u, z)
+    # from the crown (``bar_seat``; on a flat arm z = hook_radius + bar_radius)
+    gap = m.hook_radius + m.bar_radius
+    u, z = m.bar_seat
+    climb = m.pass_depth + m.pass_margin + (gap - z)
     np.testing.assert_allclose(seat, mirror + climb * np.array([0.0, 0.0, 1.0]), atol=1e-12)
     assert v0 is None and v1 == m.lift_speed
-    # the seat: the attachment (l - (shank - hook_radius - bar_radius)) + shank above the
-    # seated crown, i.e. l + hook_radius + bar_radius above the bar's axis, pass_offset aside
-    gap = m.hook_radius + m.bar_radius
+    # the seat: the attachment (the line, bar_line_length) + shank above the crown, itself
+    # gap - z above the bar's axis, pass_offset aside. The line is l less the eye's
+    # distance from the seated bar's axis, hypot(u, shank - z); the hook hanging straight,
+    # the attachment is the seat's horizontal offset's shortening of that distance,
+    # short = hypot(u, shank - z) - (shank - z), lower than l + gap (flat arms: u = 0, 0)
+    line = bar_line_length(l, m)
+    assert line == pytest.approx(l - math.hypot(u, m.hook_shank - z), abs=1e-12)
+    short = math.hypot(u, m.hook_shank - z) - (m.hook_shank - z)
     a_seat = seat + wp.attachment_W - geo.p_A
     assert float(a_seat @ x) == pytest.approx(m.pass_offset, abs=1e-9)
-    assert float(a_seat[2]) == pytest.approx(l + gap, abs=1e-9)
-    r = math.hypot(l + gap, m.pass_offset) - gap
-    assert 0.0 < r - l < m.pass_offset**2 / l
+    assert float(a_seat[2]) == pytest.approx(line + m.hook_shank + gap - z, abs=1e-9)
+    assert float(a_seat[2]) == pytest.approx(l + gap - short, abs=1e-9)
+    # the swing's radius: the cable length, less that shortening, up to the pass's offset
+    r = math.hypot(l + gap - short, m.pass_offset) - gap
+    assert 0.0 < r - (l - short) < m.pass_offset**2 / l
     corners = [seat, *(c for c, _ in arc)]
     for c, speed in arc:
         assert speed is None
