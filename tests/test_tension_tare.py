@@ -358,22 +358,30 @@ def test_the_unhooking_legs_leave_a_hanging_hook_still(held: float | None) -> No
 
 
 @pytest.mark.slow
-def test_the_campaign_draw_whose_hook_stayed_on_the_bar_returns() -> None:
+@pytest.mark.parametrize(("arms", "on_bar"), [(["mechanism.hook_arm_rise_deg=0"], True),
+                                              ([], False)], ids=["flat", "rising"])  # fmt: skip
+def test_the_campaign_draw_whose_hook_stayed_on_the_bar_returns(
+        arms: list[str], on_bar: bool) -> None:  # fmt: skip
     """Closed loop, the pilot campaign's draw 60-00008 (slope 60 deg, the campaign's
-    cable, seed 1546276784): the hook stays seated through the release, the unhooking
-    climb reads it on the bar and the reverse pass under the bar unhooks it. On main its
-    legs (unshaped, at ``hooking.speed``) took 41.7 s of unhooking and the return ran out
-    of the 180 s limit in the descent onto the pad. Here the judge rules a success: the
-    true hook released once for good (never caught again after its first release), the
-    robot read it on the bar in the climb, and the vehicle is back on the pad."""
+    cable, seed 1546276784). Flat arms: the hook stays seated through the release, the
+    unhooking climb reads it on the bar and the reverse pass under the bar unhooks it. On
+    main its legs (unshaped, at ``hooking.speed``) took 41.7 s of unhooking and the return
+    ran out of the 180 s limit in the descent onto the pad. Rising arms (the default): the
+    bar seated in the arm-tip corner, the hook drops off it once the line slackens, and
+    the unhooking climb reads the line slack (no reverse pass). Either way the judge
+    rules a success: the true hook released once for good (never caught again after its
+    first release), the robot read it on the bar or free in the climb, and the vehicle
+    is back on the pad."""
     from tetherland.campaign.jobs import draw_run, fly_perturbed
 
-    truth = load_scenario("slope50", [*PILOT, "surface.slope_deg=60"])
+    truth = load_scenario("slope50", [*PILOT, "surface.slope_deg=60", *arms])
     r = fly_perturbed(draw_run(truth, 1546276784), "tethered")
     assert r.summary["success"], r.summary["reason"]
     assert r.summary["return"]["completed"] and r.summary["return"]["unhooked"]
     events = r.log.events
-    assert any("still on the bar" in e.get("message", "") for e in events)
+    messages = [e.get("message", "") for e in events]
+    assert any("climbing clear of the bar" in msg for msg in messages)  # the climb began
+    assert any("still on the bar" in msg for msg in messages) is on_bar  # the reverse pass
     kinds = [e["kind"] for e in events if e.get("source") == "hook"]
     assert "RELEASED" in kinds
     first = kinds.index("RELEASED")
