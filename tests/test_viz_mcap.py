@@ -20,18 +20,24 @@ from tetherland.viz.layout import build_layout, layout_path, layout_topics
 from tetherland.viz.scene import SLACK_TENSION, static_scene, tension_rgba
 
 
-def read(path: Path, topics=None):
-    """(summary, {topic: [(log_time, decoded)]}) of an MCAP file."""
+def read(path: Path, topics=None, decode=None):
+    """(summary, {topic: [(log_time, decoded)]}) of an MCAP file, each topic in time order.
+
+    JSON messages are decoded on the topics in ``decode`` (None: every topic); the others
+    stay encoded, as protobuf messages do (decoded where a test needs them). The file is
+    read in its own order and each topic sorted by time (stable), which gives the same
+    lists as the reader's time-ordered merge of all topics, at a fraction of its cost."""
     out: dict[str, list] = {}
     with open(path, "rb") as f:
-        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        reader = make_reader(f)
         summary = reader.get_summary()
-        for schema, channel, message in reader.iter_messages(topics=topics):
-            if schema.encoding == "jsonschema":
-                value = json.loads(message.data)
-            else:
-                value = message.data  # protobuf: decoded where a test needs it
+        for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=False):
+            value = message.data
+            if schema.encoding == "jsonschema" and (decode is None or channel.topic in decode):
+                value = json.loads(value)
             out.setdefault(channel.topic, []).append((message.log_time, value))
+    for messages in out.values():
+        messages.sort(key=lambda m: m[0])
     return summary, out
 
 
@@ -55,10 +61,11 @@ def decode(message):
     return DecoderFactory().decoder_for("protobuf", schema)(message.encode())
 
 
-def decoded(path: Path, topic: str):
-    with open(path, "rb") as f:
-        reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        return [(m.log_time, d) for _, _, m, d in reader.iter_decoded_messages(topics=[topic])]
+def protobuf_decoder(summary, topic: str):
+    """The decoder of ``topic``'s protobuf messages (encoded bytes -> message), from the
+    schema the file's summary gives the topic's channel."""
+    (channel,) = [c for c in summary.channels.values() if c.topic == topic]
+    return DecoderFactory().decoder_for("protobuf", summary.schemas[channel.schema_id])
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +82,7 @@ pytestmark = pytest.mark.slow
 
 def test_channels_schemas_and_one_message_per_tick(run_dir):
     log = SimLog.load(run_dir / "log.npz")
-    summary, messages = read(run_dir / "run.mcap")
+    summary, messages = read(run_dir / "run.mcap", decode={"/mission/state", "/verdict"})
     schemas = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
     assert {t: s.name for t, s in schemas.items()} == TOPICS
     for topic in TOPICS:
@@ -97,7 +104,8 @@ def test_channels_schemas_and_one_message_per_tick(run_dir):
     assert verdict["success"] is doc["success"] is True
     assert verdict["conditions"] == doc["landing"]["conditions"]
     # every phase change and hook event of the run is a Log message
-    texts = [m for m in decoded(run_dir / "run.mcap", "/mission/events")]
+    to_log = protobuf_decoder(summary, "/mission/events")
+    texts = [(t, to_log(data)) for t, data in messages["/mission/events"]]
     assert len(texts) == len(log.events) + 1  # + the verdict line
     assert sum("ENGAGED" in d.message for _, d in texts) == sum(
         e["kind"] == "ENGAGED" for e in log.events
@@ -106,12 +114,17 @@ def test_channels_schemas_and_one_message_per_tick(run_dir):
 
 def test_replayed_pose_and_series_match_the_log(run_dir):
     log = SimLog.load(run_dir / "log.npz")
-    tf = decoded(run_dir / "run.mcap", "/tf")
+    # one pass over the file; the sampled ticks' messages decoded (the tension's all)
+    topics = ["/tf", "/tension", "/angles/phi", "/rotor_thrusts"]
+    summary, series = read(run_dir / "run.mcap", topics, decode={"/tension"})
+    tf = series["/tf"]
     assert len(tf) == len(log)
     k = np.linspace(0, len(log) - 1, 400).astype(int)
     by_time = dict(tf)
+    to_transforms = protobuf_decoder(summary, "/tf")
     for i in k:
-        frames = {x.child_frame_id: x for x in by_time[round(log["t"][i] * 1e9)].transforms}
+        transforms = to_transforms(by_time[round(log["t"][i] * 1e9)]).transforms
+        frames = {x.child_frame_id: x for x in transforms}
         body, est = frames["body"], frames["body_estimated"]
         p = [body.translation.x, body.translation.y, body.translation.z]
         q = [body.rotation.w, body.rotation.x, body.rotation.y, body.rotation.z]
@@ -122,10 +135,12 @@ def test_replayed_pose_and_series_match_the_log(run_dir):
         anchor = frames["anchor"].translation
         geo_p_A = log.metadata["anchor_W"]
         np.testing.assert_allclose([anchor.x, anchor.y, anchor.z], geo_p_A, atol=1e-12)
-    _, series = read(run_dir / "run.mcap", ["/tension", "/angles/phi", "/rotor_thrusts"])
     tension = dict(series["/tension"])
-    phi = dict(series["/angles/phi"])
-    thrusts = dict(series["/rotor_thrusts"])
+    encoded_phi = dict(series["/angles/phi"])
+    encoded_thrusts = dict(series["/rotor_thrusts"])
+    sampled = [round(log["t"][i] * 1e9) for i in k]
+    phi = {ns: json.loads(encoded_phi[ns]) for ns in sampled}
+    thrusts = {ns: json.loads(encoded_thrusts[ns]) for ns in sampled}
     for i in k:
         ns = round(log["t"][i] * 1e9)
         assert tension[ns]["actual"] == pytest.approx(log["tension"][i], abs=1e-12)
