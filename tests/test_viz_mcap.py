@@ -20,27 +20,6 @@ from tetherland.viz.layout import build_layout, layout_path, layout_topics
 from tetherland.viz.scene import SLACK_TENSION, static_scene, tension_rgba
 
 
-def read(path: Path, topics=None, decode=None):
-    """(summary, {topic: [(log_time, decoded)]}) of an MCAP file, each topic in time order.
-
-    JSON messages are decoded on the topics in ``decode`` (None: every topic); the others
-    stay encoded, as protobuf messages do (decoded where a test needs them). The file is
-    read in its own order and each topic sorted by time (stable), which gives the same
-    lists as the reader's time-ordered merge of all topics, at a fraction of its cost."""
-    out: dict[str, list] = {}
-    with open(path, "rb") as f:
-        reader = make_reader(f)
-        summary = reader.get_summary()
-        for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=False):
-            value = message.data
-            if schema.encoding == "jsonschema" and (decode is None or channel.topic in decode):
-                value = json.loads(value)
-            out.setdefault(channel.topic, []).append((message.log_time, value))
-    for messages in out.values():
-        messages.sort(key=lambda m: m[0])
-    return summary, out
-
-
 def raw(path: Path) -> dict[str, list[tuple[int, bytes]]]:
     """{topic: [(log_time, encoded message)]} of an MCAP file, nothing decoded, each topic
     in the order written."""
@@ -48,6 +27,23 @@ def raw(path: Path) -> dict[str, list[tuple[int, bytes]]]:
     with open(path, "rb") as f:
         for _, channel, message in make_reader(f).iter_messages(log_time_order=False):
             out.setdefault(channel.topic, []).append((message.log_time, message.data))
+    return out
+
+
+def summary_of(path: Path):
+    """The summary section of an MCAP file (its schemas and channels)."""
+    with open(path, "rb") as f:
+        return make_reader(f).get_summary()
+
+
+def in_time_order(messages: dict[str, list], decode=()) -> dict[str, list]:
+    """``messages`` (:func:`raw`) with each topic's messages sorted by time (stable), the
+    JSON messages of the topics in ``decode`` decoded; the others stay encoded (protobuf
+    ones are decoded where a test needs them)."""
+    out = {}
+    for topic, written in messages.items():
+        ordered = sorted(written, key=lambda m: m[0])
+        out[topic] = [(t, json.loads(m)) for t, m in ordered] if topic in decode else ordered
     return out
 
 
@@ -77,12 +73,19 @@ def run_dir(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(scope="module")
+def mission_messages(run_dir) -> dict[str, list[tuple[int, bytes]]]:
+    """The messages of the mission's MCAP file (:func:`raw`), read once for the module."""
+    return raw(run_dir / "run.mcap")
+
+
 pytestmark = pytest.mark.slow
 
 
-def test_channels_schemas_and_one_message_per_tick(run_dir):
+def test_channels_schemas_and_one_message_per_tick(run_dir, mission_messages):
     log = SimLog.load(run_dir / "log.npz")
-    summary, messages = read(run_dir / "run.mcap", decode={"/mission/state", "/verdict"})
+    summary = summary_of(run_dir / "run.mcap")
+    messages = in_time_order(mission_messages, decode={"/mission/state", "/verdict"})
     schemas = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
     assert {t: s.name for t, s in schemas.items()} == TOPICS
     for topic in TOPICS:
@@ -112,11 +115,12 @@ def test_channels_schemas_and_one_message_per_tick(run_dir):
     )
 
 
-def test_replayed_pose_and_series_match_the_log(run_dir):
+def test_replayed_pose_and_series_match_the_log(run_dir, mission_messages):
     log = SimLog.load(run_dir / "log.npz")
-    # one pass over the file; the sampled ticks' messages decoded (the tension's all)
+    # the sampled ticks' messages decoded (the tension's all)
+    summary = summary_of(run_dir / "run.mcap")
     topics = ["/tf", "/tension", "/angles/phi", "/rotor_thrusts"]
-    summary, series = read(run_dir / "run.mcap", topics, decode={"/tension"})
+    series = in_time_order({t: mission_messages[t] for t in topics}, decode={"/tension"})
     tf = series["/tf"]
     assert len(tf) == len(log)
     k = np.linspace(0, len(log) - 1, 400).astype(int)
@@ -160,12 +164,12 @@ def test_replayed_pose_and_series_match_the_log(run_dir):
     assert all("nominal" not in v for v in outside)
 
 
-def test_export_of_the_saved_run_matches_the_mission_file(run_dir, tmp_path):
+def test_export_of_the_saved_run_matches_the_mission_file(run_dir, mission_messages, tmp_path):
     """`tetherland export RUN_DIR --mcap` (from disk) gives the messages the mission wrote
     from memory (the plans round-trip through their CSV files)."""
     target = tmp_path / "exported.mcap"
     assert main(["export", str(run_dir), "--mcap", "--out", str(target), "--json"]) == 0
-    a, b = raw(run_dir / "run.mcap"), raw(target)
+    a, b = mission_messages, raw(target)
     assert a.keys() == b.keys()
     for topic in a:
         assert len(a[topic]) == len(b[topic]), topic
