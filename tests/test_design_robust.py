@@ -33,6 +33,14 @@ WALL_VEHICLE = ["vehicle.mass=0.5", "vehicle.arm_length=0.15", "vehicle.f_min=0.
 """The new user's 0.5 kg wall vehicle of issue 24."""
 
 
+@pytest.fixture(scope="module")
+def wall_vehicle():
+    """The wall vehicle's scenario and its design search (searched once for the module's
+    tests: the search is deterministic and its designs are frozen)."""
+    sc = load_scenario("wall90", WALL_VEHICLE)
+    return sc, search_designs(sc)
+
+
 def test_a_surface_offset_error_shrinks_the_clearance_by_exactly_that_offset():
     # a plane moved by o along its normal is o closer to every point of the pass; with no
     # other error the robust clearance is the nominal one less o
@@ -135,9 +143,10 @@ def test_verified_designs_rank_by_the_wilson_lower_bound_then_by_robust_margins(
     assert v(10, 10).ci_low == pytest.approx(10 / (10 + 1.959963984540054**2), rel=1e-12)
 
 
-def test_the_search_ranks_designs_that_keep_their_margins_under_the_belief_errors_first():
-    sc = load_scenario("wall90", WALL_VEHICLE)
-    result = search_designs(sc)
+def test_the_search_ranks_designs_that_keep_their_margins_under_the_belief_errors_first(
+    wall_vehicle,
+):
+    sc, result = wall_vehicle
     first = result.chosen
     assert first is not None
     floor, least = sc.vehicle.control_margin, sc.mission.hooking.min_clearance
@@ -151,13 +160,12 @@ def test_the_search_ranks_designs_that_keep_their_margins_under_the_belief_error
 
 
 @pytest.mark.slow
-def test_the_wall_vehicle_first_verified_design_lands_9_of_10_perturbed_runs():
+def test_the_wall_vehicle_first_verified_design_lands_9_of_10_perturbed_runs(wall_vehicle):
     # issue 24's new user: 0.5 kg, 0.15 m arm, rotors 0.05-3 N, control margin 0.2 N. The
     # 0.32 m cable that led while gusts were ignored keeps 3.1 cm from the wall with the
     # belief off, but a 0.5 N gust moves this light vehicle ~3.8 cm: it crashed while
     # unhooking. Counting the gust, the first design keeps min_clearance.
-    sc = load_scenario("wall90", WALL_VEHICLE)
-    result = search_designs(sc)
+    sc, result = wall_vehicle
     bounds = BeliefBounds.from_scenario(sc)
     first_only = result.designs[0]
     assert first_only.robust_clearance >= sc.mission.hooking.min_clearance

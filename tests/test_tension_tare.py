@@ -10,6 +10,7 @@ read a free hook as still on the bar.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -140,7 +141,21 @@ def test_the_tare_needs_a_thrust_axis_along_the_link() -> None:
         TensionTare(-0.1)
 
 
+_STORIES: dict[tuple, MissionSupervisor] = {}
+"""The stories flown in this process, by their arguments (:func:`_story`)."""
+
+
 def _story(overrides: list[str], bias: float, taut: float = 2.5, limit: float = 170.0):
+    """:func:`_fly_story`, flown once per process for the same arguments: each call gets
+    its own copy of the supervisor (deep: the caller may fly on with it), the same
+    supervisor as a fresh story's (the story is deterministic)."""
+    key = (tuple(overrides), bias, taut, limit)
+    if key not in _STORIES:
+        _STORIES[key] = _fly_story(overrides, bias, taut, limit)
+    return copy.deepcopy(_STORIES[key])
+
+
+def _fly_story(overrides: list[str], bias: float, taut: float, limit: float):
     """Fly the supervisor with perfect tracking (the estimate is the last reference, level)
     through approach, hooking and take-up, told the truth: the line hangs free (the
     estimate reads W (d . z_W)), taut (``taut`` N, above the bar's hand-over tension, the

@@ -20,21 +20,6 @@ from tetherland.viz.layout import build_layout, layout_path, layout_topics
 from tetherland.viz.scene import SLACK_TENSION, static_scene, tension_rgba
 
 
-def read(path: Path, topics=None):
-    """(summary, {topic: [(log_time, decoded)]}) of an MCAP file."""
-    out: dict[str, list] = {}
-    with open(path, "rb") as f:
-        reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        summary = reader.get_summary()
-        for schema, channel, message in reader.iter_messages(topics=topics):
-            if schema.encoding == "jsonschema":
-                value = json.loads(message.data)
-            else:
-                value = message.data  # protobuf: decoded where a test needs it
-            out.setdefault(channel.topic, []).append((message.log_time, value))
-    return summary, out
-
-
 def raw(path: Path) -> dict[str, list[tuple[int, bytes]]]:
     """{topic: [(log_time, encoded message)]} of an MCAP file, nothing decoded, each topic
     in the order written."""
@@ -42,6 +27,23 @@ def raw(path: Path) -> dict[str, list[tuple[int, bytes]]]:
     with open(path, "rb") as f:
         for _, channel, message in make_reader(f).iter_messages(log_time_order=False):
             out.setdefault(channel.topic, []).append((message.log_time, message.data))
+    return out
+
+
+def summary_of(path: Path):
+    """The summary section of an MCAP file (its schemas and channels)."""
+    with open(path, "rb") as f:
+        return make_reader(f).get_summary()
+
+
+def in_time_order(messages: dict[str, list], decode=()) -> dict[str, list]:
+    """``messages`` (:func:`raw`) with each topic's messages sorted by time (stable), the
+    JSON messages of the topics in ``decode`` decoded; the others stay encoded (protobuf
+    ones are decoded where a test needs them)."""
+    out = {}
+    for topic, written in messages.items():
+        ordered = sorted(written, key=lambda m: m[0])
+        out[topic] = [(t, json.loads(m)) for t, m in ordered] if topic in decode else ordered
     return out
 
 
@@ -55,10 +57,11 @@ def decode(message):
     return DecoderFactory().decoder_for("protobuf", schema)(message.encode())
 
 
-def decoded(path: Path, topic: str):
-    with open(path, "rb") as f:
-        reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        return [(m.log_time, d) for _, _, m, d in reader.iter_decoded_messages(topics=[topic])]
+def protobuf_decoder(summary, topic: str):
+    """The decoder of ``topic``'s protobuf messages (encoded bytes -> message), from the
+    schema the file's summary gives the topic's channel."""
+    (channel,) = [c for c in summary.channels.values() if c.topic == topic]
+    return DecoderFactory().decoder_for("protobuf", summary.schemas[channel.schema_id])
 
 
 @pytest.fixture(scope="module")
@@ -70,12 +73,19 @@ def run_dir(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(scope="module")
+def mission_messages(run_dir) -> dict[str, list[tuple[int, bytes]]]:
+    """The messages of the mission's MCAP file (:func:`raw`), read once for the module."""
+    return raw(run_dir / "run.mcap")
+
+
 pytestmark = pytest.mark.slow
 
 
-def test_channels_schemas_and_one_message_per_tick(run_dir):
+def test_channels_schemas_and_one_message_per_tick(run_dir, mission_messages):
     log = SimLog.load(run_dir / "log.npz")
-    summary, messages = read(run_dir / "run.mcap")
+    summary = summary_of(run_dir / "run.mcap")
+    messages = in_time_order(mission_messages, decode={"/mission/state", "/verdict"})
     schemas = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
     assert {t: s.name for t, s in schemas.items()} == TOPICS
     for topic in TOPICS:
@@ -97,21 +107,28 @@ def test_channels_schemas_and_one_message_per_tick(run_dir):
     assert verdict["success"] is doc["success"] is True
     assert verdict["conditions"] == doc["landing"]["conditions"]
     # every phase change and hook event of the run is a Log message
-    texts = [m for m in decoded(run_dir / "run.mcap", "/mission/events")]
+    to_log = protobuf_decoder(summary, "/mission/events")
+    texts = [(t, to_log(data)) for t, data in messages["/mission/events"]]
     assert len(texts) == len(log.events) + 1  # + the verdict line
     assert sum("ENGAGED" in d.message for _, d in texts) == sum(
         e["kind"] == "ENGAGED" for e in log.events
     )
 
 
-def test_replayed_pose_and_series_match_the_log(run_dir):
+def test_replayed_pose_and_series_match_the_log(run_dir, mission_messages):
     log = SimLog.load(run_dir / "log.npz")
-    tf = decoded(run_dir / "run.mcap", "/tf")
+    # the sampled ticks' messages decoded (the tension's all)
+    summary = summary_of(run_dir / "run.mcap")
+    topics = ["/tf", "/tension", "/angles/phi", "/rotor_thrusts"]
+    series = in_time_order({t: mission_messages[t] for t in topics}, decode={"/tension"})
+    tf = series["/tf"]
     assert len(tf) == len(log)
     k = np.linspace(0, len(log) - 1, 400).astype(int)
     by_time = dict(tf)
+    to_transforms = protobuf_decoder(summary, "/tf")
     for i in k:
-        frames = {x.child_frame_id: x for x in by_time[round(log["t"][i] * 1e9)].transforms}
+        transforms = to_transforms(by_time[round(log["t"][i] * 1e9)]).transforms
+        frames = {x.child_frame_id: x for x in transforms}
         body, est = frames["body"], frames["body_estimated"]
         p = [body.translation.x, body.translation.y, body.translation.z]
         q = [body.rotation.w, body.rotation.x, body.rotation.y, body.rotation.z]
@@ -122,10 +139,12 @@ def test_replayed_pose_and_series_match_the_log(run_dir):
         anchor = frames["anchor"].translation
         geo_p_A = log.metadata["anchor_W"]
         np.testing.assert_allclose([anchor.x, anchor.y, anchor.z], geo_p_A, atol=1e-12)
-    _, series = read(run_dir / "run.mcap", ["/tension", "/angles/phi", "/rotor_thrusts"])
     tension = dict(series["/tension"])
-    phi = dict(series["/angles/phi"])
-    thrusts = dict(series["/rotor_thrusts"])
+    encoded_phi = dict(series["/angles/phi"])
+    encoded_thrusts = dict(series["/rotor_thrusts"])
+    sampled = [round(log["t"][i] * 1e9) for i in k]
+    phi = {ns: json.loads(encoded_phi[ns]) for ns in sampled}
+    thrusts = {ns: json.loads(encoded_thrusts[ns]) for ns in sampled}
     for i in k:
         ns = round(log["t"][i] * 1e9)
         assert tension[ns]["actual"] == pytest.approx(log["tension"][i], abs=1e-12)
@@ -145,12 +164,12 @@ def test_replayed_pose_and_series_match_the_log(run_dir):
     assert all("nominal" not in v for v in outside)
 
 
-def test_export_of_the_saved_run_matches_the_mission_file(run_dir, tmp_path):
+def test_export_of_the_saved_run_matches_the_mission_file(run_dir, mission_messages, tmp_path):
     """`tetherland export RUN_DIR --mcap` (from disk) gives the messages the mission wrote
     from memory (the plans round-trip through their CSV files)."""
     target = tmp_path / "exported.mcap"
     assert main(["export", str(run_dir), "--mcap", "--out", str(target), "--json"]) == 0
-    a, b = raw(run_dir / "run.mcap"), raw(target)
+    a, b = mission_messages, raw(target)
     assert a.keys() == b.keys()
     for topic in a:
         assert len(a[topic]) == len(b[topic]), topic
