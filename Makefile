@@ -27,9 +27,11 @@ demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/tetherland mission $(SCENARIO) --out $(OUT) --overwrite
 
 test: $(STAMP)
+	$(BIN)/python -m tetherland.warmup --jobs $(JOBS)
 	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS) --dist worksteal
 
 test-fast: $(STAMP)
+	$(BIN)/python -m tetherland.warmup --jobs $(JOBS)
 	MPLBACKEND=Agg MUJOCO_GL=egl $(BIN)/python -m pytest -n $(JOBS) --dist worksteal -m "not slow"
 
 lint: $(STAMP)

@@ -1,70 +1,70 @@
-"""The warm-up compiles exactly the kernel specialisations the closed loop uses."""
+"""The warm-up compiles every kernel specialisation the closed loop uses.
+
+``make test`` runs ``python -m tetherland.warmup --jobs 2`` before the test workers start,
+so that they (and the campaign workers they spawn) load the compiled kernels instead of
+all compiling them at once. That only helps if the warm-up leaves nothing for a mission
+to compile: here a fresh process runs the warm-up, notes the signatures of every numba
+kernel of tetherland, flies the whole default mission (every phase, both controllers'
+wrappers as a mission composes them) and compares.
+"""
 
 from __future__ import annotations
 
-import numpy as np
+import json
+import os
+import subprocess
+import sys
 
-from tetherland import state, warmup
-from tetherland.config import load_scenario, with_overrides
-from tetherland.control import DflController, HierarchicalController
-from tetherland.control.kernels import dfl, free_flight, hierarchical, tracker
-from tetherland.control.tracking import FreeFlightTracker
-from tetherland.estimation import UkfEstimator, ukf_kernels
-from tetherland.estimation import kernels as estimation_kernels
-from tetherland.geometry import LandingGeometry
-from tetherland.interfaces import ImuSample, Reference
-from tetherland.methods import Planners
-from tetherland.planning import Planner
-from tetherland.planning.tracking import TrajectoryTrack
-from tetherland.rotations import rotmat_to_quat
+import pytest
+
+from tetherland import warmup
+
+SCRIPT = """
+import json, sys
+from numba.core.registry import CPUDispatcher
+
+def signatures():
+    out = {}
+    for name, module in list(sys.modules.items()):
+        if name.split(".")[0] != "tetherland":
+            continue
+        for obj in list(vars(module).values()):
+            if isinstance(obj, CPUDispatcher):
+                key = obj.py_func.__module__ + "." + obj.py_func.__qualname__
+                out[key] = sorted(map(str, obj.signatures))
+    return out
+
+from tetherland.config import load_scenario
 from tetherland.runs import run_mission
-from tetherland.sim.analytic import estimate_of
+from tetherland.warmup import warm_up
 
-KERNELS = (
-    free_flight.free_flight_into,
-    tracker.tracker_into,
-    hierarchical.hierarchical_into,
-    dfl.dfl_into,
-    ukf_kernels.predict_ws,
-    ukf_kernels.update_pose_ws,
-    estimation_kernels.push_imu,
-    estimation_kernels.estimate_tick,
-    estimation_kernels.fuse_pose,
-    estimation_kernels.command_into,
-    state.link_kernel,
-)
+warm_up()
+warmed = signatures()
+result = run_mission(load_scenario("slope50"))
+flown = signatures()
+print(json.dumps({
+    "success": bool(result.summary["success"]),
+    "warmed": len([k for k, v in warmed.items() if v]),
+    "new": {k: sorted(set(v) - set(warmed.get(k, []))) for k, v in flown.items()
+            if set(v) - set(warmed.get(k, []))},
+}))
+"""
 
 
-def _signatures() -> dict[str, set]:
-    return {k.__name__: set(k.signatures) for k in KERNELS}
+@pytest.mark.slow
+def test_a_whole_mission_after_the_warm_up_compiles_nothing_more():
+    done = subprocess.run(
+        [sys.executable, "-c", SCRIPT], capture_output=True, text=True, check=True,
+        env={**os.environ, "MPLBACKEND": "Agg"},
+    )  # fmt: skip
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    assert got["success"]
+    assert got["warmed"] >= 40  # the loop's kernels, not an empty warm-up
+    assert got["new"] == {}, got["new"]
 
 
-def test_the_loop_needs_no_specialisation_beyond_the_warm_up():
-    warmup.warm_up()
-    warmed = _signatures()
-    assert all(warmed.values())  # every kernel compiled (or loaded from the cache)
-    sc = load_scenario("slope50")
-    planners = Planners()
-    # free flight, the estimator and mocap in the mission loop ...
-    short = ["mission.abort_time=0.25", "mission.safe_hover_time=0.25"]  # ends at 0.5 s
-    run_mission(with_overrides(sc, short), planners=planners)
-    # ... and the tethered controllers on a planned track's references, from the estimator
-    traj = Planner().plan(sc, "landing").require()
-    track = TrajectoryTrack(traj, 0.0, sc.controller.rate_hz)
-    nom, out = traj.nominal(1.0), traj.output(1.0)
-    x = np.concatenate(([out.phi[0], 0.0, out.phi[1], 0.0], rotmat_to_quat(nom.R_WB), nom.omega_B))
-    body = estimate_of(x, 1.0, LandingGeometry.from_scenario(sc), sc.tether.length).body
-    estimator = UkfEstimator(sc, body, 1.0)
-    estimator.predict(ImuSample(1.001, np.array([0.0, 0.0, 9.81]), np.zeros(3)))
-    estimate = estimator.estimate()
-    for ctrl in (HierarchicalController(sc), DflController(sc)):
-        ctrl.update(1.0, estimate, track.reference(1.0))
-        ctrl.update(1.002, estimate, track.reference(traj.duration + 0.5))  # held end
-    # ... and the contact-free tracker on hover, continuation and maneuver rows (read-only
-    # or views of a larger array, as the perching reference hands them out)
-    free = FreeFlightTracker(sc)
-    held = np.zeros((3, 3))
-    held.setflags(write=False)
-    for i, rows in enumerate((np.zeros((1, 3)), held, np.zeros((2, 5, 3))[1])):
-        free.update(1.0 + 2e-3 * i, estimate, Reference(t=1.0, p_W=rows))
-    assert _signatures() == warmed
+def test_jobs_below_one_is_refused_in_one_line(capsys):
+    with pytest.raises(SystemExit) as err:
+        warmup.main(["--jobs", "0"])
+    assert err.value.code == 2
+    assert "--jobs = 0: must be at least 1" in capsys.readouterr().err

@@ -2,31 +2,51 @@
 
 numba compiles a kernel on its first call and caches the machine code on disk
 (``cache=True``, in ``__pycache__`` beside the source). On a fresh installation that first
-call costs about 20 s of CPU for all kernels together, paid by the first mission or the
-first test that needs them (by every test worker at once). Running this module right
-after installation pays it once; later processes only load the cache (about 0.1 s). The
-calls use the same argument types as the mission loop, so the loop finds every
-specialisation it needs.
+call costs about 50 s of CPU for all kernels together, paid by the first mission or the
+first test that needs them, and by every process that starts before the cache is written
+(two test workers and the campaign workers they spawn all compile the same kernels at
+once). Running this module right after installation pays it once; later processes only
+load the cache (about 0.1 s). The calls use the same argument types as the mission loop,
+so the loop finds every specialisation it needs (``tests/test_warmup.py`` flies a whole
+mission after the warm-up and checks that it compiles nothing more).
+
+The kernels fall in two groups of about equal compile time, which ``--jobs 2`` compiles
+in two processes at once: the estimator and the controllers (:func:`warm_estimation_and_control`),
+and the plant, the planner and the mission's supervisor and fault rules
+(:func:`warm_plant_and_mission`).
 """
 
 from __future__ import annotations
 
+import argparse
+import multiprocessing
 import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
 from tetherland.config import load_scenario
-from tetherland.control import DflController, FreeFlightController, HierarchicalController
-from tetherland.control.tracking import FreeFlightTracker
-from tetherland.estimation import UkfEstimator
-from tetherland.geometry import LandingGeometry
-from tetherland.interfaces import ControlMode, Feedforward, ImuSample, MocapSample, Reference
-from tetherland.state import RigidBodyState, link_state_of
+from tetherland.interfaces import (
+    ControlMode,
+    Feedforward,
+    ImuSample,
+    MocapSample,
+    Reference,
+    StateEstimate,
+)
 
 
-def warm_up() -> float:
-    """Call every kernel once with the loop's argument types; returns the time taken [s]."""
-    t0 = time.perf_counter()
+def warm_estimation_and_control() -> None:
+    """The UKF, the free-flight, tracking, hierarchical and DFL controllers, each alone and
+    wrapped as a mission composes them (believed ground effect and rotor drag)."""
+    from tetherland.control import DflController, FreeFlightController, HierarchicalController
+    from tetherland.control.rotor_drag import with_aero_belief
+    from tetherland.control.tracking import FreeFlightTracker
+    from tetherland.estimation import UkfEstimator
+    from tetherland.geometry import LandingGeometry
+    from tetherland.state import RigidBodyState, link_state_of
+
     sc = load_scenario("slope50")
     geo = LandingGeometry.from_scenario(sc)
     start = RigidBodyState.at_rest(geo.p_A + np.array([-0.5, 0.0, 0.5]))
@@ -40,20 +60,79 @@ def warm_up() -> float:
     held.setflags(write=False)  # a free-flight path's pause hands out read-only rows
     for rows in (np.zeros((3, 3)), held):
         FreeFlightController(sc).update(2e-3, e, Reference(t=2e-3, p_W=rows))
+        with_aero_belief(FreeFlightController(sc), sc).update(2e-3, e, Reference(t=2e-3, p_W=rows))
     FreeFlightTracker(sc).update(2e-3, e, Reference(t=2e-3, p_W=np.zeros((5, 3))))
     output = np.zeros((5, 4))
     output[0, 0] = e.link.phi if e.link is not None else 0.5
     ff = Feedforward(omega_B=np.zeros(3), omega_dot_B=np.zeros(3), f_R=sc.vehicle.mass * 9.81)
     ref = Reference(t=2e-3, mode=ControlMode.TETHERED, output=output, feedforward=ff)
-    HierarchicalController(sc).update(2e-3, e, ref)
-    DflController(sc).update(2e-3, e, ref)
+    for ctrl in (HierarchicalController(sc), DflController(sc)):
+        ctrl.update(2e-3, e, ref)
+        with_aero_belief(ctrl, sc).update(2e-3, e, ref)
     x = np.concatenate((start.p_W, start.q_WB, start.v_W, start.omega_B))
     link_state_of(x, np.asarray(sc.vehicle.cable_attachment, dtype=float), geo.p_A, geo.R_WA)
+
+
+def warm_plant_and_mission() -> None:
+    """The plant's rotor step, aerodynamics and log row (the point hook's and the bar's
+    plant, whose hanging line has its drag), the landing plan's verification, the
+    supervisor's paths and the fault rules' cable torque."""
+    from tetherland.mission import MissionSupervisor, plan_mission
+    from tetherland.mission.faults import cable_torque_xy_of
+    from tetherland.sim.plant import ROTOR_STATE_WIDTH, Plant
+
+    sc = load_scenario("slope50")
+    for plant in (Plant(sc), Plant(load_scenario("pipe60", ["mechanism.kind=bar"]))):
+        hover = np.full(4, 0.9 * plant.speed_limit)
+        plant.reset(rotor_speeds=hover)
+        plant.command(hover)
+        plant.step(2)
+        plant.rotor_state_into(np.empty(ROTOR_STATE_WIDTH))
+    start = Plant(sc).start_state()
+    plan = plan_mission(sc, start)  # verifies its trajectories with the compiled RK4
+    supervisor = MissionSupervisor(sc, plan)
+    supervisor.reference(0.0, StateEstimate(t=0.0, body=start))
+    r_att = np.asarray(sc.vehicle.cable_attachment, dtype=float)
+    cable_torque_xy_of(start.q_WB, start.p_W, 0.0, r_att, np.asarray(plan.geometry.p_A))
+
+
+GROUPS: tuple[Callable[[], None], ...] = (warm_estimation_and_control, warm_plant_and_mission)
+"""The warm-up's independent parts (each compiles its own kernels)."""
+
+
+def _timed(part: Callable[[], None]) -> float:
+    t0 = time.perf_counter()
+    part()
     return time.perf_counter() - t0
 
 
-def main() -> None:
-    print(f"compiled kernels ready ({warm_up():.1f} s)")
+def warm_up(jobs: int = 1) -> float:
+    """Call every kernel once with the loop's argument types; returns the time taken [s].
+
+    Parameters
+    ----------
+    jobs : int
+        Processes to compile in (1: in this process; more: the :data:`GROUPS` in a pool of
+        fresh processes, which write the shared on-disk cache).
+    """
+    t0 = time.perf_counter()
+    if jobs <= 1:
+        for part in GROUPS:
+            part()
+    else:
+        spawn = multiprocessing.get_context("spawn")  # (no half-initialised numba state)
+        with ProcessPoolExecutor(min(jobs, len(GROUPS)), mp_context=spawn) as pool:
+            list(pool.map(_timed, GROUPS))
+    return time.perf_counter() - t0
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m tetherland.warmup", description=__doc__)
+    parser.add_argument("--jobs", type=int, default=1, help="processes to compile in (>= 1)")
+    args = parser.parse_args(argv)
+    if args.jobs < 1:
+        parser.error(f"--jobs = {args.jobs}: must be at least 1")
+    print(f"compiled kernels ready ({warm_up(args.jobs):.1f} s)")
 
 
 if __name__ == "__main__":
