@@ -185,6 +185,9 @@ class MissionSupervisor:
         self._magnet = scenario.mechanism.kind == "magnet"
         self._magnet_on = False
         self._latch_open = False
+        self._hook_end = wp.hook_end
+        """End of the hooking pass, F_W [m]: the plan's, or with the magnet a plate not
+        met moves it ``press_depth`` deeper for the next pass (:meth:`_plate_met`)."""
         self._latch_at: float | None = None
         """Magnet mechanism: when the robot decides whether to open its clip's latch (the
         EPM's switching time and ``mechanism.latch_settle`` after the on command) [s]."""
@@ -660,7 +663,7 @@ class MissionSupervisor:
             if tare is not None and tare.bias is None:
                 self._close_tare(t, tare)
             self._path = self._new_path(t, wp.hook_start, cfg.hooking.speed).to(
-                wp.hook_end, pause=cfg.settle_time
+                self._hook_end, pause=cfg.settle_time
             )
             self.hook_attempts += 1
             self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
@@ -671,7 +674,7 @@ class MissionSupervisor:
     def _hooking(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
-            self._path = self._take_up_path(t, wp.hook_end)
+            self._path = self._take_up_path(t, self._hook_end)
             m = self.scenario.mechanism
             if m.kind == "bar":
                 # level to the pass's mirror across the bar and climb to seat the hook in
@@ -685,10 +688,11 @@ class MissionSupervisor:
                 self._handover.reset()
                 self._enter(Phase.STRETCH, t, "hooking pass done")
                 return self._free(t, est)
-            if self._magnet and not self._pressed(t, est):
+            if self._magnet and not self._plate_met(t, est):
                 return self._free(t, est)
             if self._magnet:  # straight back first: out of the clip, not along the plate
-                for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
+                for corner in magnet_pull_out_path(self.scenario, self._hook_end,
+                                                   self.geo.R_WA):  # fmt: skip
                     self._path.to(corner)
                 # pressed on the plate while the EPM switches on and settles, then while
                 # the latch opens (_open_latch)
@@ -710,15 +714,16 @@ class MissionSupervisor:
         boom = magnet_boom(self.scenario)
         R_WA = self.geo.R_WA
         n_W = R_WA @ boom.n_B
-        eye_end = self.wp.hook_end + R_WA @ boom.eye_B
+        eye_end = self._hook_end + R_WA @ boom.eye_B
         eye_est = est.body.p_W + est.body.R_WB @ boom.eye_B
         return float((eye_end - eye_est) @ n_W)
 
-    def _pressed(self, t: float, est: StateEstimate) -> bool:
+    def _plate_met(self, t: float, est: StateEstimate) -> bool:
         """Magnet mechanism, at the end of a hooking pass: whether the plate stopped it
         (:meth:`_pressed_on_plate` beyond half of ``press_depth``: the magnet pressed on
-        the plate, the EPM may be switched on); if not, the pass is flown again with the
-        EPM off and the magnet clipped (RETRY), or the mission aborts after
+        the plate, the EPM may be switched on); if not (the plate deeper than believed, or
+        missed), the pass is flown again, ``press_depth`` deeper, with the EPM off and the
+        magnet clipped (RETRY), or the mission aborts after
         ``mission.hooking.max_attempts``."""
         short = self._pressed_on_plate(est)
         if short > 0.5 * self.scenario.mechanism.press_depth:
@@ -728,7 +733,11 @@ class MissionSupervisor:
         if self.hook_attempts >= self.cfg.hooking.max_attempts:
             self.abort(t, est, f"hook missed {self.hook_attempts} times")
         else:
-            self._retry(t, est, "the pass did not meet the plate: EPM off, retrying")
+            m = self.scenario.mechanism
+            self._hook_end = self._hook_end + m.press_depth * (
+                self.geo.R_WA @ magnet_boom(self.scenario).n_B)
+            self._retry(t, est, "the pass did not meet the plate: EPM off, retrying "
+                        f"{1e3 * m.press_depth:.0f} mm deeper")  # fmt: skip
         return False
 
     def _open_latch(self, t: float) -> None:
