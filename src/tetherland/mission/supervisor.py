@@ -688,8 +688,12 @@ class MissionSupervisor:
                 self._handover.reset()
                 self._enter(Phase.STRETCH, t, "hooking pass done")
                 return self._free(t, est)
-            if self._magnet and not self._plate_met(t, est):
-                return self._free(t, est)
+            why = "end of the hooking pass, the magnet on the plate"
+            if self._magnet:
+                if not self._plate_met(t, est):
+                    return self._free(t, est)
+                short = self._pressed_on_plate(est)
+                why = f"{why} (the pass stopped {1e3 * short:.1f} mm short of its end)"
             if self._magnet:  # straight back first: out of the clip, not along the plate
                 for corner in magnet_pull_out_path(self.scenario, self._hook_end,
                                                    self.geo.R_WA):  # fmt: skip
@@ -700,7 +704,7 @@ class MissionSupervisor:
                 self._path.delay(m.epm_on_time + m.latch_settle + m.latch_time)
             self._path.to(wp.slack_out)
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
-            self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
+            self._switch_magnet(t, True, why)
             self._handover.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
