@@ -130,8 +130,8 @@ def inner(scenario_name: str, controller: str) -> None:
         (Mocap, ("measure",), "starmap"),
         log_row,
         (RotorDragCompensation, ("update",), "groupby"),
-        (Plant, ("rotor_state_into", "hook_point_into", "contact_peaks_into", "set_magnet"),
-         "methodcaller"),
+        (Plant, ("rotor_state_into", "hook_point_into", "contact_peaks_into", "set_magnet",
+                 "set_latch"), "methodcaller"),
         (MissionSupervisor, ("command_sent",), "islice"),
     ):
         for name in names:

@@ -17,6 +17,7 @@ from tetherland.interfaces import Command, StateEstimate
 from tetherland.mission import MissionSupervisor, Phase, plan_mission
 from tetherland.models.hook import (
     MAGNET_BALANCE,
+    magnet_boom,
     magnet_centre_B,
     magnet_load,
     weight_torque_B,
@@ -114,12 +115,20 @@ def test_with_torque_adds_the_torque_and_keeps_the_thrust() -> None:
     assert float(np.min(c_f * np.asarray(out.rotor_speeds) ** 2)) >= layout.f_min - 1e-12
 
 
-def test_the_supervisor_feeds_the_believed_moment_forward() -> None:
-    """Flown with perfect tracking (the estimate is the last reference), the supervisor's
-    references carry the clipped magnet's weight torque up to the end of the hooking pass
-    and the EPM's switching time after it (the pull-out then takes the magnet off the
-    clip), the held one from there; the fault monitor is told the law's own torque, the
-    command less that feed-forward."""
+@pytest.mark.parametrize("deeper", [0.0, 0.8, None])
+def test_the_supervisor_feeds_the_believed_moment_forward(deeper: float | None) -> None:
+    """Flown with perfect tracking (the estimate is the last reference), but stopped by
+    the plate (the vehicle no farther along the approach than where the face meets it,
+    ``press_depth`` short of the pass's end when it is where believed; ``deeper`` times
+    ``press_depth`` farther; None: no plate), the supervisor's references carry the
+    clipped magnet's weight torque up to the end of the hooking pass, the EPM's switching
+    time, ``latch_settle`` and ``latch_time`` after it (the latch, opened at the settle's
+    end, takes the magnet off the clip), the held one from there; the fault monitor is
+    told the law's own torque, the command less that feed-forward. A pass that reaches
+    within half of ``press_depth`` of its end (0.8 deeper, or no plate) switches nothing
+    on, keeps the latch shut and the magnet clipped, and the pass is flown again
+    ``press_depth`` deeper: the plate 0.8 ``press_depth`` deeper is pressed on the second
+    pass; with none the supervisor retries until ``max_attempts`` and aborts."""
     s = load_scenario("wall90", ["mechanism.kind=magnet"])
     m = s.mechanism
     plan = plan_mission(s, Plant(s).start_state())
@@ -127,6 +136,10 @@ def test_the_supervisor_feeds_the_believed_moment_forward() -> None:
     told: list[np.ndarray] = []
     sup.monitor.command_sent = lambda t, c: told.append(np.asarray(c.torque_B))
     geo = plan.geometry
+    n_W = geo.R_WA @ magnet_boom(s).n_B
+    stop = None if deeper is None else (  # the face on the plate
+        float(plan.waypoints.hook_end @ n_W) - m.press_depth + deeper * m.press_depth)
+    passes = 1 if deeper == 0.0 else 2 if deeper is not None else s.mission.hooking.max_attempts
     dt = 1.0 / s.controller.rate_hz
     rows = np.zeros((3, 3))
     rows[0] = plan.start.p_W
@@ -139,7 +152,8 @@ def test_the_supervisor_feeds_the_believed_moment_forward() -> None:
         np.linalg.norm(np.cross(magnet_centre_B(s), [0.0, 0.0, 1.0]))
     )
     t_on = None
-    for k in range(round(25.0 / dt)):
+    t_latch = None  # when the robot opens the latch
+    for k in range(round(80.0 / dt)):
         t = k * dt
         phi, delta = link_angles(geo.R_WA.T @ (rows[0] - geo.p_A))
         est = StateEstimate(t=t, body=RigidBodyState(rows[0].copy(), rows[1].copy(), q,
@@ -148,13 +162,28 @@ def test_the_supervisor_feeds_the_believed_moment_forward() -> None:
         ref = sup.reference(t, est)
         if t_on is None and sup.magnet_on:
             t_on = t
+            t_latch = t_on + m.epm_on_time + m.latch_settle
             assert sup.phase == Phase.STRETCH  # on at the pass's end
-        pulling = t_on is not None and t >= t_on + m.epm_on_time - 1e-9
+            assert sup.hook_attempts == passes
+        deciding = t_latch is not None and t >= t_latch - 1e-9
+        assert sup.latch_open == deciding
+        pulling = deciding and t >= t_latch + m.latch_time - 1e-9
         np.testing.assert_allclose(ref.torque_ff_B, held if pulling else clipped, atol=1e-12)
         law = np.array([0.01, -0.02, 0.003])
         sup.command_sent(t + dt, Command(np.zeros(4), 9.0, law + ref.torque_ff_B))
         np.testing.assert_allclose(told[-1], law, atol=1e-15)
-        if pulling and t > t_on + m.epm_on_time + 1.0:
+        if pulling and t > t_latch + m.latch_time + 1.0:
+            assert sup.phase == Phase.STRETCH
+            break
+        if sup.abort_reason is not None:  # no plate: every pass missed
+            assert deeper is None and t_on is None and not sup.latch_open
+            assert sup.abort_reason == f"hook missed {passes} times"
+            assert sup.hook_attempts == passes
             break
         rows = np.asarray(ref.p_W)[:3]
-    assert t_on is not None and sup.phase == Phase.STRETCH
+        if stop is not None and float(rows[0] @ n_W) > stop:  # the plate stops the vehicle
+            rows = rows.copy()
+            rows[0] -= (float(rows[0] @ n_W) - stop) * n_W
+            rows[1] = 0.0
+    else:
+        raise AssertionError("neither the latch nor the abort came")

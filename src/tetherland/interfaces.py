@@ -355,13 +355,19 @@ class InnerLoop(Protocol):
 
 @runtime_checkable
 class MagnetCommander(Protocol):
-    """Optional reference-source capability: the robot's command to an electro-permanent
-    magnet it carries (the magnet mechanism, docs/mechanism.md), read by the runner at
-    every control tick."""
+    """Optional reference-source capability: the robot's commands to an electro-permanent
+    magnet it carries and to the latch of the clip that holds it on its boom (the magnet
+    mechanism, docs/mechanism.md), read by the runner at every control tick."""
 
     @property
     def magnet_on(self) -> bool:
         """True: the magnet switched on (held), False: off (released)."""
+        ...
+
+    @property
+    def latch_open(self) -> bool:
+        """True: the latch of the clip that holds the magnet on its boom opened (the clip
+        lets the magnet go), False: closed."""
         ...
 
 

@@ -27,10 +27,11 @@ class MechanismConfig(Section):
 
     ``kind = "magnet"``: for walls and overhangs, an electro-permanent magnet (EPM) body
     clipped to the tip of a folding boom on the vehicle is pressed on a steel plate at the
-    anchor, switched on by the robot (adhesion through the contact only), pulled off its
-    clip, and tied to the vehicle by the elastic cable; switched off, it lets go and hangs
-    on the cable. The anchor height ``anchor.h_A`` is the cable's eye on the held magnet,
-    ``plate_thickness + magnet_thickness`` (0 is replaced by it).
+    anchor, switched on by the robot (adhesion through the contact only), let out of its
+    clip by the latch the robot opens, and tied to the vehicle by the elastic cable;
+    switched off, it lets go and hangs on the cable. The anchor height ``anchor.h_A`` is
+    the cable's eye on the held magnet, ``plate_thickness + magnet_thickness`` (0 is
+    replaced by it).
     """
 
     kind: Literal["disk", "bar", "magnet"] = "disk"
@@ -172,7 +173,18 @@ class MechanismConfig(Section):
     clip_force: float = Field(20.0, gt=0, le=1000)
     """The spring clip that holds the magnet on the boom's tip lets go when the magnet is
     pulled out of it along its axis harder than this (its socket carries the shear and
-    the moments) [N]."""
+    the moments), or when the robot opens its latch (``latch_time``) [N]."""
+    latch_time: float = Field(0.2, ge=0, le=5)
+    """Time the clip's latch takes to open after the robot's command (a micro servo
+    pulling the clip's pin: about 0.1 s for its 60 deg at no load, doubled for the pin's
+    friction under the magnet's weight): the plant lets the magnet out of its clip then.
+    The clip still lets go by itself when pulled harder than ``clip_force`` [s]."""
+    latch_settle: float = Field(0.25, ge=0, le=5)
+    """The robot commands the latch open this long after the EPM's switching time
+    ``epm_on_time`` has passed since its on command (the held magnet settled on the
+    plate). It switches the EPM on only at the end of a pass its estimate shows stopped by
+    the plate (the believed eye at least half of ``press_depth`` short of the pass's end);
+    otherwise it flies the pass again, the magnet still clipped [s]."""
     press_depth: float = Field(0.01, gt=0, le=0.2)
     """Depth of the magnet's eye beyond the anchor where the hooking pass ends (replaces
     ``mission.hooking.overshoot`` for the magnet): the position loop presses the magnet on

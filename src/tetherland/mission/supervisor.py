@@ -74,7 +74,13 @@ from tetherland.mission.paths import Path
 from tetherland.mission.phases import Phase, PhaseRecord
 from tetherland.mission.plan import Z_W, MissionPlan, unhook_reach
 from tetherland.mission.release import ReleasePull
-from tetherland.models.hook import MagnetWhere, bar_hanging_weight, magnet_load, weight_torque_B
+from tetherland.models.hook import (
+    MagnetWhere,
+    bar_hanging_weight,
+    magnet_boom,
+    magnet_load,
+    weight_torque_B,
+)
 from tetherland.planning.tracking import TrajectoryTrack
 from tetherland.rotations import quat_to_rotmat
 
@@ -82,7 +88,7 @@ _P = Phase
 TRANSITIONS: Mapping[Phase, frozenset[Phase]] = MappingProxyType({
     _P.TAKEOFF: frozenset({_P.APPROACH, _P.SAFE_HOVER}),
     _P.APPROACH: frozenset({_P.HOOKING, _P.SAFE_HOVER}),
-    _P.HOOKING: frozenset({_P.STRETCH, _P.SAFE_HOVER}),
+    _P.HOOKING: frozenset({_P.STRETCH, _P.RETRY, _P.SAFE_HOVER}),
     _P.STRETCH: frozenset({_P.TETHERED_LANDING, _P.RETRY, _P.SAFE_HOVER}),
     _P.RETRY: frozenset({_P.HOOKING, _P.SAFE_HOVER}),
     _P.TETHERED_LANDING: frozenset({_P.TOUCHDOWN, _P.SAFE_HOVER}),
@@ -178,6 +184,13 @@ class MissionSupervisor:
         self._unhook_reach = unhook_reach(scenario, plan.geometry, wp)
         self._magnet = scenario.mechanism.kind == "magnet"
         self._magnet_on = False
+        self._latch_open = False
+        self._hook_end = wp.hook_end
+        """End of the hooking pass, F_W [m]: the plan's, or with the magnet a plate not
+        met moves it ``press_depth`` deeper for the next pass (:meth:`_plate_met`)."""
+        self._latch_at: float | None = None
+        """Magnet mechanism: when the robot decides whether to open its clip's latch (the
+        EPM's switching time and ``mechanism.latch_settle`` after the on command) [s]."""
         self._magnet_moves: list[tuple[float, MagnetWhere]] = [(0.0, "clipped")]
         """Magnet mechanism: from when the robot believes its magnet clipped on the boom,
         held on the plate or hanging on the cable (its EPM commands and switching times),
@@ -292,6 +305,13 @@ class MissionSupervisor:
         """The EPM command of the magnet mechanism (``MagnetCommander``): on from the end
         of a hooking pass until the release after the takeoff [-]."""
         return self._magnet_on
+
+    @property
+    def latch_open(self) -> bool:
+        """The command to the latch of the clip that holds the magnet on its boom
+        (``MagnetCommander``): open once the robot believes the magnet held on the plate
+        (:meth:`_latch_or_retry`), never closed again in the run [-]."""
+        return self._latch_open
 
     def _switch_magnet(self, t: float, on: bool, why: str) -> None:
         if self._magnet and on != self._magnet_on:
@@ -643,7 +663,7 @@ class MissionSupervisor:
             if tare is not None and tare.bias is None:
                 self._close_tare(t, tare)
             self._path = self._new_path(t, wp.hook_start, cfg.hooking.speed).to(
-                wp.hook_end, pause=cfg.settle_time
+                self._hook_end, pause=cfg.settle_time
             )
             self.hook_attempts += 1
             self._enter(Phase.HOOKING, t, f"at the hooking start (attempt {self.hook_attempts})")
@@ -654,7 +674,7 @@ class MissionSupervisor:
     def _hooking(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
         if t >= self._path.t_end:
-            self._path = self._take_up_path(t, wp.hook_end)
+            self._path = self._take_up_path(t, self._hook_end)
             m = self.scenario.mechanism
             if m.kind == "bar":
                 # level to the pass's mirror across the bar and climb to seat the hook in
@@ -668,21 +688,88 @@ class MissionSupervisor:
                 self._handover.reset()
                 self._enter(Phase.STRETCH, t, "hooking pass done")
                 return self._free(t, est)
+            why = "end of the hooking pass, the magnet on the plate"
+            if self._magnet:
+                if not self._plate_met(t, est):
+                    return self._free(t, est)
+                short = self._pressed_on_plate(est)
+                why = f"{why} (the pass stopped {1e3 * short:.1f} mm short of its end)"
             if self._magnet:  # straight back first: out of the clip, not along the plate
-                for corner in magnet_pull_out_path(self.scenario, wp.hook_end, self.geo.R_WA):
+                for corner in magnet_pull_out_path(self.scenario, self._hook_end,
+                                                   self.geo.R_WA):  # fmt: skip
                     self._path.to(corner)
-                self._path.delay(m.epm_on_time)  # pressed on the plate while it switches on
+                # pressed on the plate while the EPM switches on and settles, then while
+                # the latch opens (_open_latch)
+                self._latch_at = t + m.epm_on_time + m.latch_settle
+                self._path.delay(m.epm_on_time + m.latch_settle + m.latch_time)
             self._path.to(wp.slack_out)
             self._path.to(wp.stretch, speed=cfg.stretch.speed)
-            self._switch_magnet(t, True, "end of the hooking pass, the magnet on the plate")
-            if self._magnet:  # the pull-out (after the EPM's switching time) unclips it
-                self._magnet_moves.append((t + m.epm_on_time, "held"))
+            self._switch_magnet(t, True, why)
             self._handover.reset()
             self._enter(Phase.STRETCH, t, "hooking pass done")
         return self._free(t, est)
 
+    def _pressed_on_plate(self, est: StateEstimate) -> float:
+        """Magnet mechanism: how far short of the hooking pass's end the estimate puts the
+        magnet's eye along the approach direction (the believed boom on the estimated
+        attitude) [m]. The pass ends ``press_depth`` beyond the believed plate: a vehicle
+        stopped well short of it was stopped by the plate (the position loop yields to the
+        magnet's push); one at the end met nothing."""
+        boom = magnet_boom(self.scenario)
+        R_WA = self.geo.R_WA
+        n_W = R_WA @ boom.n_B
+        eye_end = self._hook_end + R_WA @ boom.eye_B
+        eye_est = est.body.p_W + est.body.R_WB @ boom.eye_B
+        return float((eye_end - eye_est) @ n_W)
+
+    def _plate_met(self, t: float, est: StateEstimate) -> bool:
+        """Magnet mechanism, at the end of a hooking pass: whether the plate stopped it
+        (:meth:`_pressed_on_plate` beyond half of ``press_depth``: the magnet pressed on
+        the plate, the EPM may be switched on); if not (the plate deeper than believed, or
+        missed), the pass is flown again, ``press_depth`` deeper, with the EPM off and the
+        magnet clipped (RETRY), or the mission aborts after
+        ``mission.hooking.max_attempts``."""
+        short = self._pressed_on_plate(est)
+        if short > 0.5 * self.scenario.mechanism.press_depth:
+            return True
+        self._event(t, "hook", f"missed plate (attempt {self.hook_attempts}): the pass "
+                    f"stopped {1e3 * short:.1f} mm short of its end, nothing pressed")  # fmt: skip
+        if self.hook_attempts >= self.cfg.hooking.max_attempts:
+            self.abort(t, est, f"hook missed {self.hook_attempts} times")
+        else:
+            m = self.scenario.mechanism
+            self._hook_end = self._hook_end + m.press_depth * (
+                self.geo.R_WA @ magnet_boom(self.scenario).n_B)
+            self._retry(t, est, "the pass did not meet the plate: EPM off, retrying "
+                        f"{1e3 * m.press_depth:.0f} mm deeper")  # fmt: skip
+        return False
+
+    def _open_latch(self, t: float) -> None:
+        """Magnet mechanism: the EPM on for its switching time and ``latch_settle`` after a
+        pass the plate stopped: the robot believes the magnet held and opens the clip's
+        latch; the magnet leaves the boom ``latch_time`` later (:meth:`_weight_torque`)."""
+        self._latch_at = None
+        m = self.scenario.mechanism
+        self._latch_open = True
+        self._event(t, "magnet", f"latch open: the EPM on for {m.epm_on_time + m.latch_settle:g} "
+                    "s after a pass the plate stopped")  # fmt: skip
+        self._magnet_moves.append((t + m.latch_time, "held"))
+
+    def _retry(self, t: float, est: StateEstimate, reason: str) -> None:
+        """Back to the hooking start over the safe height from the estimated position."""
+        wp = self.wp
+        above = np.array([*wp.hook_start[:2], wp.z_safe])
+        self._path = (
+            self._new_path(t, est.body.p_W, free_hook=True)
+            .to(above)
+            .to(wp.hook_start, pause=self.cfg.settle_time)
+        )
+        self._enter(Phase.RETRY, t, reason)
+
     def _stretch(self, t: float, est: StateEstimate) -> Reference:
         wp, cfg = self.wp, self.cfg
+        if self._latch_at is not None and t >= self._latch_at:
+            self._open_latch(t)
         if self._swing_at is not None and t >= self._swing_at:
             # the bar: swing from the estimated position at the end of the seat's climb
             self._swing_at = None
@@ -719,16 +806,11 @@ class MissionSupervisor:
             if self.hook_attempts >= cfg.hooking.max_attempts:
                 self.abort(t, est, f"hook missed {self.hook_attempts} times")
                 return self._free(t, est)
-            if self._magnet:  # not held: still on the boom as far as the robot can tell
-                self._switch_magnet(t, False, "no tension: the magnet did not hold, retrying")
-                self._magnet_moves.append((t, "clipped"))
-            above = np.array([*wp.hook_start[:2], wp.z_safe])
-            self._path = (
-                self._new_path(t, est.body.p_W, free_hook=True)
-                .to(above)
-                .to(wp.hook_start, pause=cfg.settle_time)
-            )
-            self._enter(Phase.RETRY, t, "no tension after stretching: hook missed, retrying")
+            if self._latch_open:  # let out of its clip, not held: nothing to retry with
+                self.abort(t, est, "magnet lost: no tension after the latch opened (the "
+                           "magnet did not hold and hangs on the cable)")  # fmt: skip
+                return self._free(t, est)
+            self._retry(t, est, "no tension after stretching: hook missed, retrying")
         return self._free(t, est)
 
     def _swinging(self, t: float) -> bool:

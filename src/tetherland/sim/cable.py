@@ -775,14 +775,17 @@ class MagnetCable(ElasticCable):
     """The magnet mechanism's cable and magnet (docs/mechanism.md): the massless elastic
     cable of :class:`ElasticCable` from the magnet's eye to the vehicle's attachment, always
     tied (its force acts on the magnet body and the vehicle), the magnet clipped to the
-    boom's tip, and the EPM the robot switches (:meth:`set_epm`).
+    boom's tip, the EPM the robot switches (:meth:`set_epm`) and the clip's latch it opens
+    (:meth:`set_latch`).
 
     Plant behaviour, after every step:
 
     - the clip (the weld ``clip``) lets go for good once the force with which it holds
       the magnet back along the magnet's axis (the magnet pulled out of its socket)
       exceeds ``mechanism.clip_force`` (a spring clip pulled apart; the socket carries the
-      shear and the moments); :meth:`lay_out` clips it again;
+      shear and the moments), or ``mechanism.latch_time`` after the robot's command to open
+      its latch, whatever holds the magnet then (the EPM off or not on the plate: it
+      drops and hangs on the cable); :meth:`lay_out` clips it again and closes the latch;
     - :attr:`caught` (the plant's truth for the log and the judge, never the robot's):
       set once the magnet's face has touched the plate with the EPM on for
       ``mechanism.catch_time``, cleared at once when the EPM is off or the face leaves the
@@ -816,6 +819,10 @@ class MagnetCable(ElasticCable):
         self._command = False
         self._pending = 0
         """Physics steps until the commanded state takes effect (0: none pending)."""
+        self._latch_steps = round(mech.latch_time / dt)
+        self._latch_command = False
+        self._latch_pending = 0
+        """Physics steps until the latch opens (0: none pending)."""
         self.clip_force = mech.clip_force
         self._catch_steps = max(1, round(mech.catch_time / scenario.sim.timestep))
         self._touching = 0
@@ -851,6 +858,29 @@ class MagnetCable(ElasticCable):
         if self._pending == 0:
             self._data.ctrl[self._epm] = 1.0 if on else 0.0
 
+    @property
+    def latch_open(self) -> bool:
+        """Whether the robot's last latch command was to open it [-]."""
+        return self._latch_command
+
+    def set_latch(self, open_: bool) -> None:
+        """The robot's command to the clip's latch: open (the clip lets the magnet go
+        ``mechanism.latch_time`` later, held by the EPM or not) or closed (a pending opening
+        is cancelled; a clip already open stays open: nothing puts the magnet back in its
+        socket). A command repeated meanwhile changes nothing."""
+        open_ = bool(open_)
+        if open_ == self._latch_command:
+            return
+        self._latch_command = open_
+        self._latch_pending = self._latch_steps if open_ else 0
+        if open_ and not self._latch_pending:
+            self._unclip()
+
+    def _unclip(self) -> None:
+        self._data.eq_active[self._eq] = 0
+        self.clipped = False
+        self.clip_pull = 0.0
+
     def _set_now(self, on: bool) -> None:
         self._command = bool(on)
         self._pending = 0
@@ -875,15 +905,17 @@ class MagnetCable(ElasticCable):
             self._pending -= 1
             if not self._pending:
                 d.ctrl[self._epm] = 1.0 if self._command else 0.0
+        if self._latch_pending:
+            self._latch_pending -= 1
+            if not self._latch_pending and self.clipped:
+                self._unclip()  # the latch opened
         if self.clipped:
             f = self.clip_force_W()
             n = d.xmat[self._body].reshape(3, 3)[:, 2]  # the magnet's axis, face-ward
             pull = -float(f @ n)  # pulled out of its socket (the tip holds it back)
             self.clip_pull = pull
             if pull > self.clip_force:
-                d.eq_active[self._eq] = 0
-                self.clipped = False
-                self.clip_pull = 0.0
+                self._unclip()
         s = d.sensordata
         if s[self._contact] > 0.0 and d.ctrl[self._epm] > 0.5:
             self._touching += 1
@@ -935,6 +967,8 @@ class MagnetCable(ElasticCable):
         d.eq_active[self._eq] = 0 if on_plate else 1
         self.clipped = not on_plate
         self.clip_pull = 0.0
+        self._latch_command = on_plate
+        self._latch_pending = 0
         self._set_now(on_plate)
         self.caught = on_plate
         self._touching = self._catch_steps if on_plate else 0

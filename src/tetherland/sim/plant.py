@@ -436,7 +436,8 @@ class Plant:
 
     @property
     def has_magnet(self) -> bool:
-        """True with the magnet mechanism (the robot commands its EPM)."""
+        """True with the magnet mechanism (the robot commands its EPM and its clip's
+        latch)."""
         return self._magnet is not None
 
     def set_magnet(self, on: bool) -> None:
@@ -444,6 +445,13 @@ class Plant:
         or off. Ignored without the magnet mechanism."""
         if self._magnet is not None:
             self._magnet.set_epm(on)
+
+    def set_latch(self, open_: bool) -> None:
+        """The robot's command to the latch of the clip that holds the magnet on its boom:
+        open (the clip lets the magnet go ``mechanism.latch_time`` later, whether the EPM
+        holds it on the plate or not) or closed. Ignored without the magnet mechanism."""
+        if self._magnet is not None:
+            self._magnet.set_latch(open_)
 
     def snap_cable(self) -> None:
         """The cable breaks now: detached, and the hook can never engage it again."""

@@ -313,7 +313,8 @@ class Runner:
         # told each command sent (CommandAware): e.g. tension estimation, a fault monitor
         estimator_sent = estimator.command_sent if isinstance(estimator, CommandAware) else None
         reference_sent = reference.command_sent if isinstance(reference, CommandAware) else None
-        # the robot's EPM command (the magnet mechanism), passed on at every control tick
+        # the robot's EPM and latch commands (the magnet mechanism), passed on at every
+        # control tick
         magnet = reference if plant.has_magnet and isinstance(reference, MagnetCommander) else None
 
         n_ctrl = sched.control_every
@@ -407,6 +408,7 @@ class Runner:
                 ref = get_reference(t_k, est)
                 if magnet is not None:
                     plant.set_magnet(magnet.magnet_on)
+                    plant.set_latch(magnet.latch_open)
                 cmd = (yield ControlTick(t_k, est, ref)) if external else control(t_k, est, ref)
                 if inner is None:
                     command(cmd.rotor_speeds)
