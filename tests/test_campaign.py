@@ -489,3 +489,17 @@ def test_a_magnet_anchor_height_error_moves_the_believed_plate_and_not_the_plant
         plate + m.magnet_thickness, abs=1e-12
     )
     assert plant.mechanism == truth.mechanism and plant.anchor == truth.anchor
+
+
+def test_a_magnet_believed_plate_at_its_floor_is_exactly_the_floor():
+    """A 3 mm plate under a 1 cm magnet believed 1 cm lower: the believed plate is clamped
+    to MAGNET_PLATE_MIN (1 mm) exactly, and the believed anchor is that plus the magnet, so
+    the belief is a valid scenario (h_A - t rounded to 0.999... mm was refused)."""
+    truth = load_scenario("overhang93", ["mechanism.kind=magnet", "mechanism.boom_length=0.3",
+                                         "mechanism.boom_angle_deg=20", "tether.length=0.36",
+                                         "mechanism.plate_thickness=0.003",
+                                         "mechanism.magnet_thickness=0.01"])  # fmt: skip
+    m = truth.mechanism
+    _, belief = apply_perturbation(truth, Perturbation(anchor_error_S=(0.0, 0.0, -0.01)))
+    assert belief.mechanism.plate_thickness == 1e-3
+    assert belief.anchor.h_A == 1e-3 + m.magnet_thickness

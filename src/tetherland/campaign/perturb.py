@@ -229,8 +229,10 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
         # the anchor is the eye on the magnet held on the plate: the plate's height is
         # what the robot does not know (its own magnet's thickness it does)
         m = truth.mechanism
-        h_A = max(h_A, m.magnet_thickness + MAGNET_PLATE_MIN)
-        belief["mechanism"]["plate_thickness"] = h_A - m.magnet_thickness
+        plate = h_A - m.magnet_thickness
+        if plate < MAGNET_PLATE_MIN:  # the thinnest plate, exactly (h_A - t rounds below it)
+            plate, h_A = MAGNET_PLATE_MIN, MAGNET_PLATE_MIN + m.magnet_thickness
+        belief["mechanism"]["plate_thickness"] = plate
     p_A = p_A - (z_S @ (p_A - origin) - h_A) * z_S
     belief["anchor"] = {"position": tuple(p_A), "landing_point": None, "h_A": h_A}
     return scenario_from_dict(plant, truth.name), scenario_from_dict(belief, truth.name)

@@ -61,7 +61,10 @@ from tetherland.geometry import (
     stretched_link_length,
 )
 from tetherland.mission.hooking import hooking_pass, hooking_pass_for, pass_clearance
+from tetherland.mission.plan import MissionError, design_hint, plan_mission
+from tetherland.models.hook import magnet_reach_margin
 from tetherland.planning import Maneuver, Planner, PlanResult
+from tetherland.sim.mjcf import SceneLayout
 from tetherland.surface import Surface
 
 _TOL = 1e-9
@@ -82,6 +85,10 @@ class DesignLimit(enum.Enum):
     """The planner found no verified landing and takeoff for the shortlisted candidates."""
     PLAN_ROTOR_MARGIN = "plan_rotor_margin"
     """The plans exist, but with the cable-offset torque a rotor leaves the control margin."""
+    MISSION_PLAN = "mission_plan"
+    """The plans keep the control margin, but the mission's plan refuses the design
+    (:func:`~tetherland.mission.plan.plan_mission` from the start pad: e.g. the take-up or
+    a free-flight leg too close to the surface, the magnet's face not beyond the frame)."""
     INVALID_CONFIG = "invalid_config"
     """The shortlisted candidates are not valid scenarios (a validator of the
     configuration refuses them, e.g. an attachment point below the landers)."""
@@ -396,7 +403,8 @@ def _search(
             failures.append(outcome)
     if not designs:
         # the best-ranked candidate that got furthest: its failure is what binds
-        order = (DesignLimit.PLAN_ROTOR_MARGIN, DesignLimit.PLAN, DesignLimit.INVALID_CONFIG)
+        order = (DesignLimit.MISSION_PLAN, DesignLimit.PLAN_ROTOR_MARGIN, DesignLimit.PLAN,
+                 DesignLimit.INVALID_CONFIG)  # fmt: skip
         limit, why = min(failures, key=lambda f: order.index(f[0]))
         reason = f"no design lands on {B:g} deg: {why}"
         return result((), limit, None, reason, len(candidates), planned)
@@ -408,23 +416,51 @@ BAR_APPROACH_A = (0.0, 0.0, -1.0)
 """The bar's only hooking approach, in F_A: the hanging hook is lowered beside the bar."""
 
 
+def magnet_approach_A(slope: float) -> tuple[float, float, float]:
+    """The magnet's only hooking approach on a surface of slope ``slope`` [rad], in F_A:
+    along the surface's normal, -z_S = (-cos(e), 0, -sin(e)) with e = pi/2 - slope
+    (rounded to 1e-6 as written in an override) [-]. The pass presses the magnet's face,
+    across the approach, on the plate until the plate stops it (the supervisor switches
+    the EPM on only then); an oblique pass would slide the face along the plate once the
+    tangential push exceeds the face's friction (0.25: 14 deg off the normal)."""
+    e = 0.5 * math.pi - slope
+    return (round(-math.cos(e), 6) + 0.0, 0.0, round(-math.sin(e), 6) + 0.0)
+
+
 def anchor_heights(base: Scenario, space: DesignSpace) -> tuple[float, ...]:
-    """Anchor heights the search tries [m]: the space's, or for the bar the one its
-    mechanism fixes, ``mechanism.standoff`` (the bar's axis; the hook's geometry bounds it
-    from below, docs/mechanism.md), which the search keeps as built."""
+    """Anchor heights the search tries [m]: the space's, or the one the mechanism fixes:
+    for the bar ``mechanism.standoff`` (the bar's axis; the hook's geometry bounds it
+    from below, docs/mechanism.md), for the magnet ``plate_thickness +
+    magnet_thickness`` (the cable's eye on the held magnet), which the search keeps as
+    built."""
     if base.mechanism.kind == "bar":
         return (float(base.mechanism.standoff),)
+    if base.mechanism.kind == "magnet":
+        return (float(base.mechanism.magnet_eye_height),)
     return tuple(float(h) for h in space.anchor_heights)
 
 
-def _analysis_stage(base: Scenario, space: DesignSpace) -> list[_Candidate]:
+def cable_lengths(base: Scenario, space: DesignSpace) -> tuple[float, ...]:
+    """Cable lengths the search tries [m]: the space's, for the magnet only those longer
+    than its boom as built (``mechanism.boom_length``: the cable from the attachment to the
+    clipped magnet must be slack, a check of the configuration)."""
+    if base.mechanism.kind == "magnet":
+        return tuple(float(v) for v in space.lengths if v > base.mechanism.boom_length)
+    return tuple(float(v) for v in space.lengths)
+
+
+def _analysis_stage(
+    base: Scenario, space: DesignSpace, lengths: Sequence[float] | None = None
+) -> list[_Candidate]:
+    """The landed hover of every grid point; ``lengths`` [m] instead of
+    :func:`cable_lengths`."""
     geo = LandingGeometry.from_scenario(base)
     limits0 = VehicleLimits.from_scenario(base)
     v = base.vehicle
     h_R = effective_h_R(base)
     rx, ry, _ = v.cable_attachment
     out = []
-    for length in space.lengths:
+    for length in cable_lengths(base, space) if lengths is None else lengths:
         for z in space.attachment_z:
             for h_A in anchor_heights(base, space):
                 h = h_R + z - h_A
@@ -443,23 +479,55 @@ def _no_landed_hover(
     base: Scenario, space: DesignSpace, candidates: list[_Candidate]
 ) -> tuple[DesignLimit, Infeasibility | None, str]:
     B = base.surface.slope_deg
+    lengths = cable_lengths(base, space)
+    if not lengths:
+        return (
+            DesignLimit.LANDED_HOVER,
+            None,
+            f"no design lands on {B:g} deg: no cable length searched "
+            f"({min(space.lengths):g}-{max(space.lengths):g} m) is longer than the magnet's "
+            f"mechanism.boom_length = {base.mechanism.boom_length:g} m",
+        )
+    span = f"{min(lengths):g}-{max(lengths):g} m"
     if not candidates:
         return (
             DesignLimit.LANDED_HOVER,
             None,
             f"no design lands on {B:g} deg: |h_att - h_A| >= l for every cable length searched "
-            f"({min(space.lengths):g}-{max(space.lengths):g} m)",
+            f"({span})",
         )
     best = max(candidates, key=lambda c: c.hover.margin)
     finding = best.hover.findings[0]
     reason = (
         f"no design lands on {B:g} deg: {finding.reason.value} binds for every cable length "
-        f"({min(space.lengths):g}-{max(space.lengths):g} m), attachment offset and anchor "
+        f"({span}), attachment offset and anchor "
         f"height searched; the closest ({best.describe()}): {finding.message}"
     )
     if base.mechanism.kind == "bar":
         reason += _bar_standoff_note(base, space)
+    if base.mechanism.kind == "magnet":
+        reason += _magnet_boom_note(base, space)
     return DesignLimit.LANDED_HOVER, finding.reason, reason
+
+
+def _magnet_boom_note(base: Scenario, space: DesignSpace) -> str:
+    """For the magnet: the longest cable of the space whose landed hover holds (with the
+    magnet's anchor height, any attachment offset of the space, cables as short as the
+    boom included), against the boom, which the cable must outreach."""
+    boom = base.mechanism.boom_length
+    held = [c.length for c in _analysis_stage(base, space, space.lengths) if c.hover.feasible]
+    prefix = (
+        f"; the magnet's anchor height is mechanism.plate_thickness + magnet_thickness = "
+        f"{base.mechanism.magnet_eye_height:g} m and the cable must be longer than its "
+        f"mechanism.boom_length = {boom:g} m"
+    )
+    if not held:
+        return f"{prefix}: no cable length searched holds the landed hover either"
+    return (
+        f"{prefix}: the longest cable searched that holds the landed hover is "
+        f"{max(held):g} m (a shorter boom that still reaches beyond the frame, at a smaller "
+        "boom_angle_deg, docs/mechanism.md)"
+    )
 
 
 def _bar_standoff_note(base: Scenario, space: DesignSpace) -> str:
@@ -503,6 +571,8 @@ def _best_hooking(
     hook drop, every one leaves the cable taut at capture)."""
     if base.mechanism.kind == "bar":
         return _bar_hooking(base, space, cand)
+    if base.mechanism.kind == "magnet":
+        return _magnet_hooking(base, cand)
     h_R = effective_h_R(base)
     h = h_R + cand.attachment[2] - cand.h_A
     geo = landing_geometry(
@@ -576,6 +646,28 @@ def _bar_hooking(base: Scenario, space: DesignSpace, cand: _Candidate) -> _Hooki
     return _Hooking(BAR_APPROACH_A, drop, pass_clearance(sc, geo, hooking_pass(sc, geo)))
 
 
+def _magnet_hooking(base: Scenario, cand: _Candidate) -> _Hooking | None:
+    """The magnet's one hooking pass for this candidate: along the surface's normal
+    (:func:`magnet_approach_A`), the unfolded boom's eye aimed at p_A, the mission's own
+    pass (:func:`~tetherland.mission.hooking.hooking_pass`, ending ``press_depth`` beyond
+    the anchor) of the candidate's scenario. ``tether.hook_drop`` does not apply to the
+    magnet and stays the scenario's. None: the candidate is not a valid scenario, or the
+    magnet's face does not reach beyond the frame along the approach
+    (:func:`~tetherland.models.hook.magnet_reach_margin`; the mission's plan refuses it)."""
+    approach = magnet_approach_A(math.radians(base.surface.slope_deg))
+    point = DesignPoint(float(base.surface.slope_deg), cand.length, cand.attachment, cand.h_A,
+                        approach, float(base.tether.hook_drop))  # fmt: skip
+    try:
+        sc = point.apply(base)
+    except ConfigError:
+        return None
+    if magnet_reach_margin(sc) <= 0.0:
+        return None
+    geo = LandingGeometry.from_scenario(sc)
+    return _Hooking(approach, float(base.tether.hook_drop),
+                    pass_clearance(sc, geo, hooking_pass(sc, geo)))  # fmt: skip
+
+
 def _hook_score(h: _Hooking, space: DesignSpace) -> tuple[float, float]:
     return (min(h.clearance, space.target_clearance), -h.hook_drop)
 
@@ -622,6 +714,11 @@ def _plan_stage(
             f"{cand.describe()}: with the cable-offset torque the planned maneuvers keep a rotor "
             f"margin of {margin:.3f} N < control_margin = {floor:g} N",
         )
+    try:  # the mission's own checks, from the plant's start pad
+        plan_mission(sc, SceneLayout.from_scenario(sc).start_state(sc.vehicle.h_R), planner)
+    except MissionError as err:
+        why = str(err).replace(f"; {design_hint(sc)}", "")
+        return DesignLimit.MISSION_PLAN, f"{cand.describe()}: the mission's plan: {why}"
     return Design(
         point=point,
         landed_rotor_margin=cand.landed_margin,

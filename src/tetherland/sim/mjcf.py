@@ -50,6 +50,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from tetherland import GRAVITY
 from tetherland.config import CableModel, Scenario
@@ -61,6 +62,7 @@ from tetherland.models.airframe import (
 )
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import rotmat_to_quat
+from tetherland.state import RigidBodyState
 
 SURFACE_HALF_THICKNESS = 0.05
 """Half thickness of the box that carries a planar surface [m]."""
@@ -183,6 +185,23 @@ class SceneLayout:
             approach_W=approach_W,
             prop_radius=PROP_RADIUS_FRACTION * scenario.vehicle.arm_length,
         )
+
+
+    def start_state(self, h_R: float) -> RigidBodyState:
+        """At rest on the start pad, the centre of mass ``h_R`` [m] above it, level, x_B
+        along x_A (the downhill horizontal): the plant's start (``Plant.start_state``)."""
+        R = heading_rotation([0.0, 0.0, 1.0], self.geometry.R_WA[:, 0])
+        p = self.start_position + np.array([0.0, 0.0, h_R])
+        return RigidBodyState.at_rest(p, rotmat_to_quat(R))
+
+
+def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
+    """R_WB with third column ``z_B`` and x_B the projection of ``x_hint`` orthogonal to it."""
+    z = np.asarray(z_B, dtype=float)
+    z = z / np.linalg.norm(z)
+    x = np.asarray(x_hint, dtype=float) - (z @ np.asarray(x_hint, dtype=float)) * z
+    x /= np.linalg.norm(x)
+    return np.column_stack((x, np.cross(z, x), z))
 
 
 @dataclass(frozen=True)

@@ -82,15 +82,6 @@ _N_LANDER_PEAKS = 4 * len(CONTACT_PARTNERS)
 _NO_CONTACT_PEAKS = [0.0] * (_N_LANDER_PEAKS + 1) + [-1.0, -0.0]
 
 
-def heading_rotation(z_B: ArrayLike, x_hint: ArrayLike) -> FloatArray:
-    """R_WB with third column ``z_B`` and x_B the projection of ``x_hint`` orthogonal to it."""
-    z = np.asarray(z_B, dtype=float)
-    z = z / np.linalg.norm(z)
-    x = np.asarray(x_hint, dtype=float) - (z @ np.asarray(x_hint, dtype=float)) * z
-    x /= np.linalg.norm(x)
-    return np.column_stack((x, np.cross(z, x), z))
-
-
 class Plant:
     """The simulated vehicle, cable and scene of one scenario.
 
@@ -236,9 +227,7 @@ class Plant:
 
     def start_state(self) -> RigidBodyState:
         """At rest on the start pad, level, x_B along x_A (the downhill horizontal)."""
-        R = heading_rotation([0.0, 0.0, 1.0], self.layout.geometry.R_WA[:, 0])
-        p = self.layout.start_position + np.array([0.0, 0.0, self.scenario.vehicle.h_R])
-        return RigidBodyState.at_rest(p, rotmat_to_quat(R))
+        return self.layout.start_state(self.scenario.vehicle.h_R)
 
     def landed_state(self) -> RigidBodyState:
         """At rest at the landing point p*_L with z_B = z_S (condition (2)) and x_B at the
