@@ -109,7 +109,7 @@ def test_overhang93_magnet_as_built_the_rotor_floor_binds_in_one_line(capsys):
     assert f"= {m.plate_thickness + m.magnet_thickness:g} m" in result.reason
     assert f"holds the landed hover is {max(held):g} m" in result.reason
 
-    code, out, err = run(capsys, "design", "overhang93", "--set", MAGNET)
+    code, _, err = run(capsys, "design", "overhang93", "--set", MAGNET)
     lines = err.strip().splitlines()
     assert code == 1 and len(lines) == 1 and "rotor_floor binds" in lines[0]
 
@@ -135,7 +135,7 @@ def test_no_cable_longer_than_the_boom_is_one_line():
 
 @pytest.mark.slow
 def test_wall90_magnet_verified_design_lands(capsys):
-    code, out, err = run(capsys, "design", "wall90", "--set", MAGNET, "--verify", "1",
+    code, out, _ = run(capsys, "design", "wall90", "--set", MAGNET, "--verify", "1",
                          "--candidates", "1", "--workers", "1", "--json")  # fmt: skip
     assert code == 0
     doc = json.loads(out)

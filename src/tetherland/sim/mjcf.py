@@ -186,7 +186,6 @@ class SceneLayout:
             prop_radius=PROP_RADIUS_FRACTION * scenario.vehicle.arm_length,
         )
 
-
     def start_state(self, h_R: float) -> RigidBodyState:
         """At rest on the start pad, the centre of mass ``h_R`` [m] above it, level, x_B
         along x_A (the downhill horizontal): the plant's start (``Plant.start_state``)."""
