@@ -16,7 +16,13 @@ three stages, cheapest first:
    solved and verified by the planner (re-simulation: final state, rotor bounds, tension
    bound), then the rotor margin over both maneuvers with the cable-offset torque
    (:func:`~tetherland.design.margins.plan_rotor_margin`), which must keep the control
-   margin.
+   margin, then the mission's plan from the start pad
+   (:func:`~tetherland.mission.plan.plan_mission`: take-up, legs, stretch tension,
+   duration, the magnet's reach).
+
+The bar and the magnet fix the anchor height and the approach (:func:`anchor_heights`,
+:data:`BAR_APPROACH_A`, :func:`magnet_approach_A`); the magnet's cable must outreach its
+boom (:func:`cable_lengths`).
 
 Designs are ranked robust first (:func:`rank_key`): those that keep the control margin
 and ``min_clearance`` when the belief is off by the campaign's error bounds

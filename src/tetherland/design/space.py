@@ -5,7 +5,10 @@ A design fixes the cable length ``tether.length``, the attachment offset along z
 ``anchor.h_A`` and the hooking approach (``tether.approach_direction`` in F_A and
 ``tether.hook_drop``). Everything else is the scenario's. With ``mechanism.kind = "bar"``
 the anchor height is the bar's ``mechanism.standoff`` as built and the approach is
-straight down (:func:`tetherland.design.search.anchor_heights`).
+straight down (:func:`tetherland.design.search.anchor_heights`); with ``"magnet"`` it is
+``plate_thickness + magnet_thickness``, the approach is along the surface's normal
+(:func:`tetherland.design.search.magnet_approach_A`) and only cables longer than the boom
+are tried (:func:`tetherland.design.search.cable_lengths`).
 """
 
 from __future__ import annotations
@@ -44,7 +47,7 @@ class DesignSpace:
         (the default spans 3 cm below the CoM to the top of the hub).
     anchor_heights : tuple of float
         Anchor heights h_A above the surface, each in [0, 10] [m] (not for the bar, whose
-        anchor height is its standoff).
+        anchor height is its standoff, nor the magnet, whose is its plate and magnet).
     approach_elevations_deg : tuple of float
         Approach directions in the x_A-z_A plane, n_A = [-cos(e), 0, -sin(e)], each e in
         [-90, 90] [deg]: 90 lowers the hook vertically (the default approach), 0 moves
