@@ -160,7 +160,8 @@ def json_rows(keys: Sequence[str], values: np.ndarray) -> list[str]:
     for code in np.unique(codes).tolist():
         rows = np.flatnonzero(codes == code)
         kept = [j for j in range(k) if code >> j & 1]
-        template = "{{" + ", ".join(f"{json.dumps(keys[j])}: {{}}" for j in kept) + "}}"
+        names = [json.dumps(keys[j]).replace("{", "{{").replace("}", "}}") for j in kept]
+        template = "{{" + ", ".join(f"{name}: {{}}" for name in names) + "}}"
         columns = [values[rows, j].tolist() for j in kept]
         texts = list(map(template.format, *columns)) if kept else [template.format()] * len(rows)
         out[rows] = texts
