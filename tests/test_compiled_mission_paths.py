@@ -4,17 +4,27 @@ Each kernel compiled for the control loop (rotation matrix of a quaternion, the
 free-flight path's rows) is compared with the plain
 Python form beside it with exact equality: the default missions' logs must not change by
 a bit. Inputs the kernels do not take (lists, other dtypes, read-only arrays) must fall
-back to the plain forms, with the same result.
+back to the plain forms, with the same result. The vectorised attitude angles of the MCAP
+export and the figures likewise give the per-attitude bits.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from tetherland.geometry import theta_A_from_z_B, theta_A_from_z_B_many
 from tetherland.mission.paths import Path, ZVShaper, path_rows, path_rows_reference
 from tetherland.planning.spline import smoothstep9_scalar
-from tetherland.rotations import _quat_to_rotmat_into, quat_to_rotmat, quat_to_rotmat_reference
+from tetherland.report.figures import robot_angles
+from tetherland.rotations import (
+    _quat_to_rotmat_into,
+    quat_to_rotmat,
+    quat_to_rotmat_reference,
+    quat_to_rotmat_stack,
+)
 
 
 def _unit_quats(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -42,6 +52,54 @@ def test_compiled_rotation_matrix_has_the_reference_bits():
     strided = np.zeros(8)
     strided[::2] = quats[1]
     assert np.array_equal(quat_to_rotmat(strided[::2]), quat_to_rotmat_reference(quats[1]))
+
+
+def _robot_angles_per_attitude(q_WB, R_WA, phi, delta):
+    """robot_angles as it was written, one attitude at a time (the reference)."""
+    n = len(q_WB)
+    roll, theta, psi = np.empty(n), np.empty(n), np.empty(n)
+    for i in range(n):
+        R_AB = R_WA.T @ quat_to_rotmat(q_WB[i])
+        z = R_AB[:, 2]
+        th_e = math.atan2(z[0], z[2])
+        roll[i] = math.atan2(-z[1], math.hypot(z[0], z[2]))
+        c_t, s_t, c_r, s_r = math.cos(th_e), math.sin(th_e), math.cos(roll[i]), math.sin(roll[i])
+        M = np.array([[c_t, s_t * s_r, s_t * c_r], [0.0, c_r, -s_r], [-s_t, c_t * s_r, c_t * c_r]])
+        Rz = M.T @ R_AB
+        psi[i] = math.atan2(Rz[1, 0], Rz[0, 0])
+        try:
+            theta[i] = theta_A_from_z_B(z, phi[i], delta[i])
+        except ArithmeticError:
+            theta[i] = math.nan
+    return roll, theta, psi
+
+
+def test_vectorised_attitude_angles_have_the_per_attitude_bits():
+    """The stacked rotation matrices, theta_A and robot_angles (the MCAP export's and the
+    figures' angles) over many attitudes: exactly the per-attitude values, NaN where the
+    thrust axis is perpendicular to the link plane."""
+    rng = np.random.default_rng(26)
+    q = np.concatenate((_unit_quats(rng, 3000),
+                        np.array([1.0, 0.0, 0.0, 0.0]) + 1e-9 * rng.normal(size=(300, 4))))
+    R = quat_to_rotmat_stack(q)
+    assert all(np.array_equal(R[i], quat_to_rotmat_reference(q[i])) for i in range(len(q)))
+    phi, delta = rng.uniform(-1.5, 1.5, len(q)), rng.uniform(-0.6, 0.6, len(q))
+    z = R[:, :, 2].copy()
+    y_L = np.column_stack((np.cos(phi) * np.sin(delta), np.cos(delta), np.sin(phi) * np.sin(delta)))
+    z[:5] = y_L[:5]  # along y_L: no tilt defined
+    expected = []
+    for z_i, p, d in zip(z, phi, delta, strict=True):
+        try:
+            expected.append(theta_A_from_z_B(z_i, p, d))
+        except ArithmeticError:
+            expected.append(math.nan)
+    theta = theta_A_from_z_B_many(z, phi, delta)
+    assert np.array_equal(theta, expected, equal_nan=True) and np.isnan(theta[:5]).all()
+    R_WA = quat_to_rotmat_reference(_unit_quats(rng, 1)[0])
+    got = robot_angles(q, R_WA, phi, delta)
+    for a, b in zip(got, _robot_angles_per_attitude(q, R_WA, phi, delta), strict=True):
+        assert np.array_equal(a, b, equal_nan=True)
+    assert [len(a) for a in robot_angles(q[:0], R_WA, phi[:0], delta[:0])] == [0, 0, 0]
 
 
 def test_rotation_matrix_takes_what_the_kernel_does_not():

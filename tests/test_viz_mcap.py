@@ -3,6 +3,7 @@ read back with the `mcap` reader."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -15,8 +16,10 @@ from mcap_protobuf.decoder import DecoderFactory
 from tetherland.cli import main
 from tetherland.geometry import LandingGeometry
 from tetherland.sim.log import SimLog
-from tetherland.viz.channels import PER_TICK, TOPICS
+from tetherland.viz import load_run
+from tetherland.viz.channels import PER_TICK, TOPICS, json_rows
 from tetherland.viz.layout import build_layout, layout_path, layout_topics
+from tetherland.viz.mcap import write_mcap
 from tetherland.viz.scene import SLACK_TENSION, static_scene, tension_rgba
 
 
@@ -188,6 +191,67 @@ def test_export_of_the_saved_run_matches_the_mission_file(run_dir, mission_messa
                         assert x[key] == pytest.approx(y[key], abs=1e-9)
         elif topic != "/scene":
             assert not differ, topic  # the same bytes
+
+
+def records(path: Path) -> tuple[list, list]:
+    """The channel and schema records of an MCAP file, and every message as (topic,
+    log_time, publish_time, sequence, bytes), in the order written."""
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        messages = [(c.topic, m.log_time, m.publish_time, m.sequence, m.data)
+                    for _, c, m in reader.iter_messages(log_time_order=False)]  # fmt: skip
+        summary = reader.get_summary()
+    channels = sorted(
+        (c.topic, c.message_encoding, sorted(c.metadata.items()), s.name, s.encoding, s.data)
+        for c in summary.channels.values() for s in [summary.schemas[c.schema_id]]
+    )  # fmt: skip
+    return channels, messages
+
+
+def test_column_wise_messages_equal_the_row_by_row_reference(run_dir, tmp_path):
+    """The export formats the per-tick messages column-wise; the reference (``by_row``:
+    a dict and ``json.dumps`` per message, as the live view) writes the same records.
+
+    A short real run: every 20th tick of the mission (each phase, the plans' ends, the
+    cable slack and engaged), the events and the verdict as they were."""
+    run = load_run(run_dir)
+    log = run.log
+    short = dataclasses.replace(run, log=SimLog(log.columns, log.matrix[::20].copy(),
+                                                log.metadata))  # fmt: skip
+    fast, reference = tmp_path / "fast.mcap", tmp_path / "reference.mcap"
+    assert write_mcap(short, fast).ticks == write_mcap(short, reference, by_row=True).ticks
+    channels, messages = records(fast)
+    assert (channels, messages) == records(reference)
+    assert {c[0] for c in channels} == set(TOPICS)
+    per_tick = [m for m in messages if m[0] == "/tension"]
+    assert len(per_tick) == len(short.log)
+    # the reference leaves values out and in: the comparison covers both
+    tension = [json.loads(m[-1]) for m in per_tick]
+    assert any("nominal" in x for x in tension) and any("nominal" not in x for x in tension)
+    thrusts = [json.loads(m[-1]) for m in messages if m[0] == "/rotor_thrusts"]
+    assert any(x["nominal"] == {} for x in thrusts) and any(x["nominal"] for x in thrusts)
+
+
+def test_json_rows_are_json_dumps_of_the_finite_values():
+    """Every pattern of missing values, and floats whose repr is awkward (subnormal,
+    exponents, -0.0, integers): the text of ``json.dumps`` of the row's dict."""
+    rng = np.random.default_rng(16)
+    values = rng.normal(size=(400, 3)) * 10.0 ** rng.integers(-30, 30, size=(400, 3))
+    values[::7, 0] = np.nan
+    values[::5, 1] = np.inf
+    values[::3, 2] = -np.inf
+    values[::11] = np.nan
+    values[1] = [5e-324, -0.0, 1e22]
+    values[2] = [3.0, 0.1, -1.7976931348623157e308]
+    keys = ("a", "b\"quoted\"", "{c}")
+    rows = json_rows(keys, values)
+    expected = [json.dumps({k: float(v) for k, v in zip(keys, row, strict=True)
+                            if math.isfinite(v)}) for row in values]  # fmt: skip
+    assert rows == expected
+    assert "{}" in rows and len(set(map(len, map(json.loads, rows)))) == 4
+    assert json_rows(keys, np.zeros((0, 3))) == []
+    with pytest.raises(ValueError, match="3 columns for 2 keys"):
+        json_rows(keys[:2], values)
 
 
 def test_export_rejects_bad_input(tmp_path, capsys):

@@ -90,6 +90,22 @@ def theta_A_from_z_B(z_B_A: ArrayLike, phi: float, delta: float) -> float:
     return math.atan2(alpha[0], alpha[2])
 
 
+def theta_A_from_z_B_many(z_B_A: ArrayLike, phi: ArrayLike, delta: ArrayLike) -> FloatArray:
+    """:func:`theta_A_from_z_B` of n thrust axes (n, 3) and link angles (n,) [rad], NaN
+    where it raises: the same operations in the same order (the same bits), the products
+    vectorised, the functions of ``math`` per value (numpy's may differ in the last bit)."""
+    z = np.asarray(z_B_A, dtype=float).reshape(-1, 3)
+    phi, delta = np.asarray(phi, dtype=float).tolist(), np.asarray(delta, dtype=float).tolist()
+    cp, sp = np.array(list(map(math.cos, phi))), np.array(list(map(math.sin, phi)))
+    cd, sd = np.array(list(map(math.cos, delta))), np.array(list(map(math.sin, delta)))
+    y0, y1, y2 = cp * sd, cd, sp * sd  # y_L, the middle column of link_frame
+    along = y0 * z[:, 0] + y1 * z[:, 1] + y2 * z[:, 2]
+    a0, a2 = (z[:, 0] - along * y0).tolist(), (z[:, 2] - along * y2).tolist()
+    theta = np.array(list(map(math.atan2, a0, a2)))
+    theta[np.array(list(map(math.hypot, a0, a2))) < 1e-12] = math.nan
+    return theta.reshape(-1)
+
+
 def lander_point(p_R: ArrayLike, z_B: ArrayLike, h_R: float) -> FloatArray:
     """p_RL = p_R - h_R z_B: the projection of the centre of mass on the landers plane [m]."""
     return np.asarray(p_R, dtype=float) - h_R * np.asarray(z_B, dtype=float)

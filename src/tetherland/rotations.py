@@ -99,6 +99,23 @@ def quat_to_rotmat(q: ArrayLike) -> FloatArray:
     return R
 
 
+def quat_to_rotmat_stack(q: ArrayLike) -> FloatArray:
+    """Rotation matrices (n, 3, 3) of n unit quaternions (w, x, y, z) (n, 4): the operations
+    of :func:`quat_to_rotmat_reference` on columns (the same bits; a test checks it)."""
+    w, x, y, z = np.asarray(q, dtype=float).reshape(-1, 4).T
+    R = np.empty((len(w), 3, 3))
+    R[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    R[:, 0, 1] = 2 * (x * y - w * z)
+    R[:, 0, 2] = 2 * (x * z + w * y)
+    R[:, 1, 0] = 2 * (x * y + w * z)
+    R[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    R[:, 1, 2] = 2 * (y * z - w * x)
+    R[:, 2, 0] = 2 * (x * z - w * y)
+    R[:, 2, 1] = 2 * (y * z + w * x)
+    R[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return R
+
+
 def quat_to_rotmat_many(q: ArrayLike) -> FloatArray:
     """Rotation matrices (n, 3, 3) of n unit quaternions (w, x, y, z) (vectorised, scipy)."""
     from scipy.spatial.transform import Rotation

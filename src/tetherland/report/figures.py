@@ -21,11 +21,11 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from tetherland.config import Scenario
-from tetherland.geometry import FloatArray, LandingGeometry, theta_A_from_z_B
+from tetherland.geometry import FloatArray, LandingGeometry, theta_A_from_z_B_many
 from tetherland.io import atomic_write_with
 from tetherland.mission.phases import Phase
 from tetherland.models.flatness import FlatnessMap
-from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many
+from tetherland.rotations import quat_to_rotmat, quat_to_rotmat_many, quat_to_rotmat_stack
 from tetherland.sim.log import SimLog
 from tetherland.verdict.record import RunRecord
 
@@ -54,23 +54,27 @@ _PHASE_COLORS = {
 
 
 def robot_angles(q_WB: FloatArray, R_WA: FloatArray, phi: FloatArray, delta: FloatArray):
-    """(roll, theta_A, psi) of each attitude, for R_AB = R_y(theta_e) R_x(roll) R_z(psi) [rad]."""
-    n = len(q_WB)
-    roll, theta, psi = np.empty(n), np.empty(n), np.empty(n)
-    for i in range(n):
-        R_AB = R_WA.T @ quat_to_rotmat(q_WB[i])
-        z = R_AB[:, 2]
-        th_e = math.atan2(z[0], z[2])
-        roll[i] = math.atan2(-z[1], math.hypot(z[0], z[2]))
-        c_t, s_t, c_r, s_r = math.cos(th_e), math.sin(th_e), math.cos(roll[i]), math.sin(roll[i])
-        M = np.array([[c_t, s_t * s_r, s_t * c_r], [0.0, c_r, -s_r], [-s_t, c_t * s_r, c_t * c_r]])
-        Rz = M.T @ R_AB
-        psi[i] = math.atan2(Rz[1, 0], Rz[0, 0])
-        try:
-            theta[i] = theta_A_from_z_B(z, phi[i], delta[i])
-        except ArithmeticError:
-            theta[i] = math.nan
-    return roll, theta, psi
+    """(roll, theta_A, psi) of each attitude, for R_AB = R_y(theta_e) R_x(roll) R_z(psi) [rad].
+
+    Vectorised over the n attitudes where numpy gives the bits of the per-attitude
+    computation (products, the stacked 3 x 3 matmuls); the angles from ``math`` per
+    attitude (numpy's vectorised trigonometry may differ in the last bit).
+    """
+    R_AB = np.asarray(R_WA, dtype=float).T @ quat_to_rotmat_stack(q_WB)
+    z = R_AB[:, :, 2]
+    z0, z2 = z[:, 0].tolist(), z[:, 2].tolist()
+    th_e = list(map(math.atan2, z0, z2))
+    roll = list(map(math.atan2, (-z[:, 1]).tolist(), map(math.hypot, z0, z2)))
+    c_t, s_t = np.array(list(map(math.cos, th_e))), np.array(list(map(math.sin, th_e)))
+    c_r, s_r = np.array(list(map(math.cos, roll))), np.array(list(map(math.sin, roll)))
+    M = np.empty_like(R_AB)
+    M[:, 0, 0], M[:, 0, 1], M[:, 0, 2] = c_t, s_t * s_r, s_t * c_r
+    M[:, 1, 0], M[:, 1, 1], M[:, 1, 2] = 0.0, c_r, -s_r
+    M[:, 2, 0], M[:, 2, 1], M[:, 2, 2] = -s_t, c_t * s_r, c_t * c_r
+    Rz = M.transpose(0, 2, 1) @ R_AB
+    psi = list(map(math.atan2, Rz[:, 1, 0].tolist(), Rz[:, 0, 0].tolist()))
+    theta = theta_A_from_z_B_many(z, phi, delta)
+    return np.array(roll, dtype=float), theta, np.array(psi, dtype=float)
 
 
 def nominal_series(result: MissionResult, t: FloatArray) -> dict[str, FloatArray]:

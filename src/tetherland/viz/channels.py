@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import foxglove
@@ -131,6 +133,41 @@ def _rotors(f: np.ndarray) -> dict[str, float]:
     return {f"f{i + 1}": float(x) for i, x in enumerate(f) if math.isfinite(x)}
 
 
+ROTOR_KEYS = ("f1", "f2", "f3", "f4")
+TENSION_KINDS = ("actual", "estimated", "nominal")
+
+
+def json_rows(keys: Sequence[str], values: np.ndarray) -> list[str]:
+    """``json.dumps`` of each row of ``values`` as the object {key: value} of its finite
+    values (the others left out), formatted column-wise.
+
+    The rows are grouped by which of their values are finite; each group fills one format
+    string, whose ``{}`` fields print a float as ``repr`` does (as ``json.dumps`` does).
+
+    Parameters
+    ----------
+    keys : sequence of str
+        The k keys, in the order of the columns.
+    values : (n, k) array
+        Float values (any unit).
+    """
+    values = np.asarray(values, dtype=float)
+    n, k = values.shape
+    if k != len(keys):
+        raise ValueError(f"{k} columns for {len(keys)} keys")
+    codes = np.isfinite(values) @ (1 << np.arange(k))
+    out = np.empty(n, dtype=object)
+    for code in np.unique(codes).tolist():
+        rows = np.flatnonzero(codes == code)
+        kept = [j for j in range(k) if code >> j & 1]
+        names = [json.dumps(keys[j]).replace("{", "{{").replace("}", "}}") for j in kept]
+        template = "{{" + ", ".join(f"{name}: {{}}" for name in names) + "}}"
+        columns = [values[rows, j].tolist() for j in kept]
+        texts = list(map(template.format, *columns)) if kept else [template.format()] * len(rows)
+        out[rows] = texts
+    return out.tolist()
+
+
 class Publisher:
     """Creates the channels in a Foxglove context and publishes a run's messages.
 
@@ -186,25 +223,39 @@ class Publisher:
     def publish_scene(self, t: float) -> None:
         self.scene.log(self._scene(t), log_time=_ns(t))
 
-    def publish_tick(self, s: TickSeries, i: int) -> None:
-        """Every per-tick message of row ``i`` of ``s`` (and the scene when it is due)."""
-        t = float(s.t[i])
-        ns = _ns(t)
+    def _scene_if_due(self, t: float) -> None:
         if t >= self._next_scene:
             self.publish_scene(t)
             self._next_scene = t + SCENE_PERIOD
+
+    def _publish_pose(
+        self, t: float, ns: int, p_W, q_WB, est_p_W, est_q_WB, estimated: bool
+    ) -> None:
+        """The /tf message of one tick: the true body, the estimate (if ``estimated``), the
+        anchor."""
         stamp = timestamp(t)
         transforms = [
             FrameTransform(timestamp=stamp, parent_frame_id=WORLD, child_frame_id=BODY,
-                           translation=vector(s.p_W[i]), rotation=quaternion(s.q_WB[i])),
+                           translation=vector(p_W), rotation=quaternion(q_WB)),
         ]  # fmt: skip
-        if np.all(np.isfinite(s.est_q_WB[i])):
+        if estimated:
             transforms.append(FrameTransform(
                 timestamp=stamp, parent_frame_id=WORLD, child_frame_id=BODY_ESTIMATED,
-                translation=vector(s.est_p_W[i]), rotation=quaternion(s.est_q_WB[i]),
+                translation=vector(est_p_W), rotation=quaternion(est_q_WB),
             ))  # fmt: skip
         transforms.append(self._anchor)
         self.tf.log(FrameTransforms(transforms=transforms), log_time=ns)
+
+    def publish_tick(self, s: TickSeries, i: int) -> None:
+        """Every per-tick message of row ``i`` of ``s`` (and the scene when it is due).
+
+        The reference encoding, one dict and ``json.dumps`` per message (the live view);
+        :meth:`publish_ticks` writes the same bytes for a whole series."""
+        t = float(s.t[i])
+        ns = _ns(t)
+        self._scene_if_due(t)
+        self._publish_pose(t, ns, s.p_W[i], s.q_WB[i], s.est_p_W[i], s.est_q_WB[i],
+                           bool(np.all(np.isfinite(s.est_q_WB[i]))))  # fmt: skip
         actual, estimated, nominal = s.tension[i]
         self.cable.log(
             cable_update(t, self.geometry.p_A, s.attachment_W[i], bool(s.hook[i] == 1), actual,
@@ -228,6 +279,81 @@ class Publisher:
         state = {"phase": phase, "phase_name": name, "mode": int(s.mode[i]),
                  "hook": int(s.hook[i])}  # fmt: skip
         self.state.log(json.dumps(state).encode(), log_time=ns)
+
+    def publish_ticks(
+        self,
+        s: TickSeries,
+        events: Sequence[dict[str, Any]] = (),
+        *,
+        by_row: bool = False,
+        block: int = 4096,
+    ) -> None:
+        """Every row of ``s`` as :meth:`publish_tick` publishes it, and ``events`` (in time
+        order) each before the first tick at or after its time (the rest after the last).
+
+        The messages, their bytes and their order are those of :meth:`publish_tick` called
+        row by row (``by_row``: the reference), for a fraction of the cost: the JSON
+        messages are formatted column-wise (:func:`json_rows`), ``block`` rows at a time
+        (which bounds the memory).
+        """
+        k = 0
+        for start in range(0, len(s), block):
+            b = s.rows(slice(start, start + block))
+            publish = partial(self.publish_tick, b) if by_row else self._block(b)
+            for j, t in enumerate(b.t.tolist()):
+                while k < len(events) and float(events[k]["t"]) <= t:
+                    self.publish_event(events[k])
+                    k += 1
+                publish(j)
+        for event in events[k:]:
+            self.publish_event(event)
+
+    def _block(self, s: TickSeries) -> Callable[[int], None]:
+        """``publish(j)``: :meth:`publish_tick` of row ``j`` of ``s``, its JSON messages
+        formatted beforehand for all rows at once."""
+        times = s.t.tolist()
+        p, q = s.p_W.tolist(), s.q_WB.tolist()
+        est_p, est_q = s.est_p_W.tolist(), s.est_q_WB.tolist()
+        estimated = np.isfinite(s.est_q_WB).all(axis=1).tolist()
+        attachment, actual = s.attachment_W.tolist(), s.tension[:, 0].tolist()
+        engaged = (s.hook == 1).tolist()
+        p_A = self.geometry.p_A.tolist()
+        channels = [*self.angles, self.thrusts, self.tension, self.state]
+        texts = [*(json_rows(SERIES_KINDS, np.degrees(s.angles[name])) for name in ANGLE_NAMES),
+                 self._thrust_rows(s), json_rows(TENSION_KINDS, s.tension),
+                 self._state_rows(s)]  # fmt: skip
+        # the messages are encoded once here; Channel.log is the SDK's public call (its
+        # private bytes log would save about 0.2 s of the 2.5 s)
+        logs = [(channel.log, [text.encode() for text in rows])
+                for channel, rows in zip(channels, texts, strict=True)]  # fmt: skip
+
+        def publish(j: int) -> None:
+            t = times[j]
+            ns = _ns(t)
+            self._scene_if_due(t)
+            self._publish_pose(t, ns, p[j], q[j], est_p[j], est_q[j], estimated[j])
+            self.cable.log(cable_update(t, p_A, attachment[j], engaged[j], actual[j],
+                                        self.tension_scale),
+                           log_time=ns)  # fmt: skip
+            for log, messages in logs:
+                log(messages[j], log_time=ns)
+
+        return publish
+
+    @staticmethod
+    def _thrust_rows(s: TickSeries) -> list[str]:
+        rotors = [json_rows(ROTOR_KEYS, f)
+                  for f in (s.thrusts_actual, s.thrusts_nominal, s.thrusts_commanded)]  # fmt: skip
+        return list(map('{{"actual": {}, "nominal": {}, "commanded": {}}}'.format, *rotors))
+
+    def _state_rows(self, s: TickSeries) -> list[str]:
+        phases = [int(x) for x in s.phase.tolist()]
+        names = {code: json.dumps(self.phase_names.get(code) or phase_name(code))
+                 for code in set(phases)}  # fmt: skip
+        template = '{{"phase": {}, "phase_name": {}, "mode": {}, "hook": {}}}'.format
+        modes = [int(x) for x in s.mode.tolist()]
+        hooks = [int(x) for x in s.hook.tolist()]
+        return list(map(template, phases, map(names.__getitem__, phases), modes, hooks))
 
     def publish_event(self, event: dict[str, Any]) -> None:
         """A run event (``t``, ``source``, ``kind``, ``message``) as a Log message."""
@@ -258,4 +384,4 @@ class Publisher:
                         log_time=_ns(t))  # fmt: skip
 
 
-__all__ = ["PER_TICK", "SCENE_PERIOD", "SCHEMAS", "TOPICS", "Publisher", "phase_name"]
+__all__ = ["PER_TICK", "SCENE_PERIOD", "SCHEMAS", "TOPICS", "Publisher", "json_rows", "phase_name"]

@@ -24,7 +24,7 @@ from tetherland.planning.trajectory import Trajectory
 from tetherland.sim.mjcf import SceneLayout, build_mjcf
 from tetherland.viz.channels import Publisher
 from tetherland.viz.run import RunData
-from tetherland.viz.scene import static_scene, tension_scale
+from tetherland.viz.scene import planned_path_W, static_scene, tension_scale
 from tetherland.viz.series import NominalPlan, tick_series
 
 
@@ -71,9 +71,19 @@ def make_publisher(
     geo = LandingGeometry.from_scenario(scenario)
     r_att = np.asarray(scenario.vehicle.cable_attachment, dtype=float)
 
+    paths: dict[int, tuple[Trajectory, np.ndarray]] = {}
+
+    def path_W(trajectory: Trajectory) -> np.ndarray:
+        """The planned path of ``trajectory``, computed once (the scene is republished every
+        SCENE_PERIOD; a live mission's plans appear as it plans them)."""
+        known = paths.get(id(trajectory))
+        if known is None or known[0] is not trajectory:
+            known = paths[id(trajectory)] = (trajectory, planned_path_W(trajectory, r_att))
+        return known[1]
+
     def scene(t: float) -> SceneUpdate:
         named = [(p.meta.maneuver, p) for p in plans()]
-        return static_scene(model, geo, named, r_att, t)
+        return static_scene(model, geo, named, r_att, t, path_W)
 
     return Publisher(context, scenario, scene, tension_scale(scenario.vehicle.mass))
 
@@ -91,7 +101,7 @@ def _metadata(run: RunData) -> dict[str, str]:
     }
 
 
-def write_mcap(run: RunData, path: str | Path) -> McapResult:
+def write_mcap(run: RunData, path: str | Path, *, by_row: bool = False) -> McapResult:
     """Write ``run`` to ``path`` (atomically: a failed export leaves nothing behind).
 
     Parameters
@@ -100,6 +110,10 @@ def write_mcap(run: RunData, path: str | Path) -> McapResult:
         From :func:`tetherland.viz.load_run` or :func:`tetherland.viz.run_data_from_mission`.
     path : str or Path
         Output file (``.mcap``).
+    by_row : bool
+        Encode the per-tick messages row by row, one dict and ``json.dumps`` each (the
+        reference encoding of :meth:`Publisher.publish_tick`, several times slower; the
+        same messages).
     """
     path = Path(path)
     log = run.log
@@ -112,15 +126,7 @@ def write_mcap(run: RunData, path: str | Path) -> McapResult:
             writer.write_metadata("tetherland", _metadata(run))
             publisher = make_publisher(context, run.scenario, lambda: run.plans)
             publisher.phase_names = dict(run.phase_names)
-            k = 0
-            for i in range(len(series)):
-                t = float(series.t[i])
-                while k < len(events) and float(events[k]["t"]) <= t:
-                    publisher.publish_event(events[k])
-                    k += 1
-                publisher.publish_tick(series, i)
-            for event in events[k:]:
-                publisher.publish_event(event)
+            publisher.publish_ticks(series, events, by_row=by_row)
             if run.summary:
                 t_end = float(series.t[-1]) if len(series) else 0.0
                 publisher.publish_verdict(t_end, run.summary)

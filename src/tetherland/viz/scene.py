@@ -9,7 +9,7 @@ surface, pipe, ground, anchor and vehicle that the physics simulates. Frames: ``
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 import matplotlib
 import mujoco
@@ -140,6 +140,7 @@ def static_scene(
     plans: Sequence[tuple[str, Trajectory]],
     r_att_B: FloatArray,
     t: float = 0.0,
+    path_W: Callable[[Trajectory], FloatArray] | None = None,
 ) -> SceneUpdate:
     """Surface or pipe, ground, anchor, landing point, planned paths and the vehicle models.
 
@@ -155,7 +156,12 @@ def static_scene(
         Cable attachment in F_B [m].
     t : float
         Mission time of the update [s].
+    path_W : callable, optional
+        ``path_W(trajectory)``: the path drawn for a plan (default:
+        :func:`planned_path_W` with ``r_att_B``; a cache of it for a scene republished
+        often).
     """
+    path_W = path_W or (lambda trajectory: planned_path_W(trajectory, r_att_B))
     vehicle = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "vehicle")
     entities = [
         _body_entity(model, 0, "scene", WORLD, t, None),
@@ -172,7 +178,7 @@ def static_scene(
     entities.append(SceneEntity(timestamp=timestamp(t), frame_id=WORLD,
                                 id="anchor_and_landing_point", spheres=marks))  # fmt: skip
     for name, trajectory in plans:
-        path = planned_path_W(trajectory, r_att_B)
+        path = path_W(trajectory)
         line = LinePrimitive(
             type=LinePrimitiveLineType.LineStrip, thickness=0.01,
             points=[Point3(x=float(x), y=float(y), z=float(z)) for x, y, z in path],

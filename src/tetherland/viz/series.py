@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -119,6 +119,14 @@ class TickSeries:
 
     def __len__(self) -> int:
         return len(self.t)
+
+    def rows(self, rows: slice) -> TickSeries:
+        """The ticks ``rows`` of this series (views)."""
+        return TickSeries(**{
+            f.name: ({k: v[rows] for k, v in value.items()} if isinstance(value, dict)
+                     else value[rows])
+            for f in fields(self) for value in [getattr(self, f.name)]
+        })  # fmt: skip
 
 
 ANGLE_NAMES = ("phi", "delta", "theta_A", "psi")
