@@ -45,6 +45,7 @@ flown = signatures()
 print(json.dumps({
     "success": bool(result.summary["success"]),
     "warmed": len([k for k, v in warmed.items() if v]),
+    "flown": len([k for k, v in flown.items() if v]),
     "new": {k: sorted(set(v) - set(warmed.get(k, []))) for k, v in flown.items()
             if set(v) - set(warmed.get(k, []))},
 }))
@@ -59,7 +60,12 @@ def test_a_whole_mission_after_the_warm_up_compiles_nothing_more():
     )  # fmt: skip
     got = json.loads(done.stdout.strip().splitlines()[-1])
     assert got["success"]
-    assert got["warmed"] >= 40  # the loop's kernels, not an empty warm-up
+    # The flight ran compiled kernels (so "nothing new" is not vacuous), and each of them
+    # was already there after the warm-up. (How many dispatchers show signatures depends
+    # on the on-disk cache: a kernel loaded from it carries the kernels it calls inside
+    # its machine code, so those callees never get a signature of their own.)
+    assert got["flown"] > 0
+    assert got["warmed"] == got["flown"]
     assert got["new"] == {}, got["new"]
 
 
