@@ -16,7 +16,7 @@ from tetherland.config import load_scenario, with_overrides
 from tetherland.design import DesignSpace, search_designs
 from tetherland.design.search import DesignLimit
 from tetherland.geometry import LandingGeometry, effective_h_R, stretched_link_length
-from tetherland.mission.hooking import hooking_pass, pass_clearance
+from tetherland.mission.hooking import check_pass, hooking_pass, pass_clearance
 from tetherland.mission.plan import MissionError, plan_mission
 from tetherland.models.hook import magnet_reach_margin
 from tetherland.sim.mjcf import SceneLayout
@@ -162,3 +162,34 @@ def test_a_design_the_missions_plan_refuses_is_not_listed():
     for d in ok.designs:
         sc = d.point.apply(base)
         plan_mission(sc, SceneLayout.from_scenario(sc).start_state(sc.vehicle.h_R))
+
+
+def test_a_magnet_pass_too_close_to_the_wall_names_the_normal_approach_not_the_hook_drop():
+    """wall90's magnet on an 80 deg wall keeps wall90's level approach: pressing the face
+    on the plate along it brings the frame's lower edge within min_clearance of a wall that
+    leans 10 deg away at its foot. The magnet's eye sits on the boom's tip, so the hook drop
+    the point hook would get named plays no part: the line names the approach along the
+    wall's inward normal, -z_S in F_A, and that approach plans."""
+    sc = load_scenario("wall90", [MAGNET, "surface.slope_deg=80", "tether.length=0.38"])
+    start = SceneLayout.from_scenario(sc).start_state(sc.vehicle.h_R)
+    geo = LandingGeometry.from_scenario(sc)
+    assert not check_pass(sc, geo, hooking_pass(sc, geo)).ok
+    with pytest.raises(MissionError) as err:
+        plan_mission(sc, start)
+    message = str(err.value)
+    assert "\n" not in message and "hook_drop" not in message
+    n_A = _normal_A(sc)
+    e = math.radians(90.0 - 80.0)  # the normal's elevation below the level approach
+    np.testing.assert_allclose(n_A, [-math.cos(e), 0.0, -math.sin(e)], atol=1e-12)
+    written = ",".join(f"{v:.6g}" for v in n_A)
+    assert f"tether.approach_direction=[{written}]" in message
+    assert "tetherland design wall90" in message
+    normal = with_overrides(sc, [f"tether.approach_direction=[{written}]"])
+    plan_mission(normal, start)  # the named approach plans
+    # already along the normal and still too close: only the design command is named
+    strict = with_overrides(normal, ["mission.hooking.min_clearance=0.2"])
+    with pytest.raises(MissionError) as err:
+        plan_mission(strict, start)
+    message = str(err.value)
+    assert message.startswith(f"tether.approach_direction = [{written}] presses the magnet")
+    assert "approach along" not in message and "tetherland design wall90" in message

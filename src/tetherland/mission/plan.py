@@ -194,10 +194,14 @@ HOOK_DROP_STEP = 0.01
 
 def design_hint(scenario: Scenario) -> str:
     """The command that finds a design for ``scenario``'s vehicle and surface."""
+    approach = (  # the magnet's eye sits on its boom's tip: no hook drop
+        "tether.approach_direction"
+        if scenario.mechanism.kind == "magnet"
+        else "tether.approach_direction, tether.hook_drop"
+    )
     return (
         f"`tetherland design {scenario.name}` (with the same --set values) finds a cable length, "
-        "attachment, anchor height and hooking approach (tether.approach_direction, "
-        "tether.hook_drop) that work"
+        f"attachment, anchor height and hooking approach ({approach}) that work"
     )
 
 
@@ -235,6 +239,57 @@ def _check_magnet_reach(scenario: Scenario) -> None:
         )
 
 
+def normal_approach_A(slope: float) -> tuple[float, float, float]:
+    """The hooking approach along the surface's inward normal, n_A = (-cos e, 0, -sin e)
+    with the elevation e = pi/2 - slope (``slope`` [rad]), rounded as an override is
+    written (6 significant digits) [-]. The magnet's pass presses the face on the plate
+    along it."""
+    e = math.pi / 2 - slope
+    n = tuple(float(f"{v:.6g}") + 0.0 for v in (-math.cos(e), 0.0, -math.sin(e)))
+    return n[0], n[1], n[2]
+
+
+def pass_clearance_message(
+    scenario: Scenario, geo: LandingGeometry, clearance: HookingClearance
+) -> str:
+    """One line for a hooking pass that would bring the frame within
+    ``mission.hooking.min_clearance`` of the surface, naming what to change: the hook drop
+    that restores the clearance for the capture disk and the bar, the approach along the
+    surface's normal for the magnet (its eye sits on the boom's tip, so ``tether.hook_drop``
+    plays no part), and otherwise ``tetherland design``."""
+    t = scenario.tether
+    slope = math.degrees(geo.surface.slope)
+    passing = (
+        f"the frame would pass {clearance.clearance_m * 100:.1f} cm from it while hooking "
+        f"(needs >= {clearance.margin_m * 100:.0f} cm)"
+    )
+    if scenario.mechanism.kind == "magnet":
+        normal = normal_approach_A(geo.surface.slope)
+        written = ",".join(f"{v:g}" for v in normal)
+        along = np.asarray(t.approach_direction, float) / np.linalg.norm(t.approach_direction)
+        fix = (
+            f"approach along the surface's normal, --set 'tether.approach_direction=[{written}]', "
+            f"or {design_hint(scenario)}"
+            if float(along @ np.asarray(normal)) < 1.0 - 1e-6
+            else design_hint(scenario)
+        )
+        return (
+            f"tether.approach_direction = [{','.join(f'{v:g}' for v in t.approach_direction)}] "
+            f"presses the magnet on this {slope:.1f} deg surface but {passing}: {fix}"
+        )
+    drop = working_hook_drop(scenario, geo, clearance.required_hook_drop_m)
+    fix = (
+        f"set tether.hook_drop={drop:g}"
+        if drop is not None
+        else f"no hook drop fits inside tether.length = {t.length:g} m (with "
+        f"capture_radius {t.capture_radius:g} m); {design_hint(scenario)}"
+    )
+    return (
+        f"tether.hook_drop = {t.hook_drop:g} m is too short for this {slope:.1f} deg "
+        f"surface: {passing}: {fix}"
+    )
+
+
 def plan_mission(
     scenario: Scenario, start: RigidBodyState, planner: Planner | None = None
 ) -> MissionPlan:
@@ -269,20 +324,7 @@ def plan_mission(
     hook_start, hook_end = hooking.p_start_W, hooking.p_end_W
     clearance = check_pass(scenario, geo, hooking)
     if not clearance.ok:
-        t = scenario.tether
-        drop = working_hook_drop(scenario, geo, clearance.required_hook_drop_m)
-        fix = (
-            f"set tether.hook_drop={drop:g}"
-            if drop is not None
-            else f"no hook drop fits inside tether.length = {t.length:g} m (with "
-            f"capture_radius {t.capture_radius:g} m); {design_hint(scenario)}"
-        )
-        raise MissionError(
-            f"tether.hook_drop = {t.hook_drop:g} m is too short for this "
-            f"{math.degrees(geo.surface.slope):.1f} deg surface: the frame would pass "
-            f"{clearance.clearance_m * 100:.1f} cm from it while hooking (needs >= "
-            f"{clearance.margin_m * 100:.0f} cm): {fix}"
-        )
+        raise MissionError(pass_clearance_message(scenario, geo, clearance))
     length = scenario.tether.length
     phi0 = float(landing.require().output(0.0).phi[0])
     d0 = R_WA @ link_direction(phi0, 0.0)
