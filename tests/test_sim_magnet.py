@@ -373,6 +373,62 @@ def test_adhesion_holds_a_pull_below_its_force(fraction: float) -> None:
         assert moved > 0.01 and not plant.hook.engaged
 
 
+def _held_on_the_plate(turn_deg: float = 0.0) -> tuple[Plant, object]:
+    """wall90's plant, the vehicle held out from the wall, the magnet laid on the plate at
+    p_A with the EPM on and unclipped, turned ``turn_deg`` about the surface's y_S (90: on
+    its side, one side of the box on the plate), then 0.3 s of physics; returns (plant,
+    geometry)."""
+    plant = _plant("wall90", heavy=True)
+    geo = plant.layout.geometry
+    far = geo.p_A + 0.35 * geo.surface.R_WS[:, 2] + np.array([0.0, 0.0, 0.1])
+    plant.reset(RigidBodyState.at_rest(far, rotmat_to_quat(geo.R_WA)), cable_engaged=True)
+    if turn_deg:
+        m, d = plant.model, plant.data
+        a = plant.cable._qadr
+        R = d.xmat[_body(plant, "magnet")].reshape(3, 3)
+        c, s_ = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+        y = geo.surface.R_WS[:, 1]
+        K = np.array([[0.0, -y[2], y[1]], [y[2], 0.0, -y[0]], [-y[1], y[0], 0.0]])
+        R = (np.eye(3) + s_ * K + (1.0 - c) * K @ K) @ R
+        z_S = geo.surface.R_WS[:, 2]
+        a_half = plant.scenario.mechanism.magnet_radius
+        plate = geo.p_A - plant.scenario.mechanism.magnet_thickness * z_S  # the plate's face
+        d.qpos[a : a + 3] = plate + a_half * z_S  # one side of the box on the plate
+        d.qpos[a + 3 : a + 7] = rotmat_to_quat(R)
+        mujoco.mj_forward(m, d)
+    q = plant.data.qpos[3:7].copy()
+    _drive(plant, q, [far, far], 1.0, 0.3)
+    return plant, geo
+
+
+@pytest.mark.xfail(strict=True, reason="open (issue 22): MuJoCo 4.0.1 makes the face-plate "
+                   "pair's contacts active at dist < margin (2 mm), not margin - gap: the "
+                   "held face rests 1.9 mm off the plate, held across the gap at full force")
+def test_a_held_magnet_face_rests_on_the_plate() -> None:
+    """Laid flat on the plate with the EPM on, the face touches it: its centre within
+    0.1 mm of the plate's face (the contact's sink under 150 N is 0.02 mm, docs)."""
+    plant, geo = _held_on_the_plate()
+    m = plant.scenario.mechanism
+    face = plant.data.site_xpos[mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SITE,
+                                                  "magnet_face")]  # fmt: skip
+    plate = geo.p_A - m.magnet_thickness * geo.surface.R_WS[:, 2]
+    assert plant.hook.engaged
+    assert abs(float((face - plate) @ geo.surface.R_WS[:, 2])) < 1e-4
+
+
+@pytest.mark.xfail(strict=True, reason="open (issue 22): every side of the magnet's box is "
+                   "its face (one geom, one adhesion): a magnet tipped on its side sticks "
+                   "by it with the full magnet_force; campaign draw wall90 base-00012 at "
+                   "tether.length=0.38 tipped at the EPM's switch-on and walked 4.8 cm down")
+def test_a_magnet_on_its_side_does_not_stick() -> None:
+    """Turned 90 deg (one side of the box on the plate), the energised magnet holds
+    nothing: an EPM pulls through its pole face only. It slides or falls at least half
+    as far as free fall would in 0.3 s."""
+    plant, geo = _held_on_the_plate(turn_deg=90.0)
+    drop = float(geo.p_A[2] - plant.hook_point_W[2])
+    assert drop > 0.5 * 0.5 * GRAVITY * 0.3**2
+
+
 def test_magnet_on_the_wall_outside_the_plate_does_not_stick() -> None:
     """Energised against the wall beside the plate, the magnet has no adhesion (MuJoCo's
     adhesion acts on the contacts of the body ``magnet`` only, whose one geom touches the
