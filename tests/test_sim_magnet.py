@@ -401,9 +401,9 @@ def _held_on_the_plate(turn_deg: float = 0.0) -> tuple[Plant, object]:
     return plant, geo
 
 
-@pytest.mark.xfail(strict=True, reason="open (issue 22): MuJoCo 4.0.1 makes the face-plate "
-                   "pair's contacts active at dist < margin (2 mm), not margin - gap: the "
-                   "held face rests 1.9 mm off the plate, held across the gap at full force")
+@pytest.mark.xfail(strict=True, reason="open (issue 22): MuJoCo 4.0.1 finds contacts within "
+                   "margin + gap and makes them active below the margin (2 mm here): the "
+                   "held face rests 2 mm off the plate, held across the gap at full force")
 def test_a_held_magnet_face_rests_on_the_plate() -> None:
     """Laid flat on the plate with the EPM on, the face touches it: its centre within
     0.1 mm of the plate's face (the contact's sink under 150 N is 0.02 mm, docs)."""

@@ -749,8 +749,9 @@ def add_magnet(scene: SceneXml) -> None:
     # MuJoCo's adhesion acts on them; with no margin a face rocking flat on the plate lost
     # every contact for a step, and with it the whole holding force, and fell 3.5 cm. The
     # gap was meant to keep them from pushing until the face touches, but MuJoCo 4.0.1
-    # makes them active below the margin whatever the gap: the face rests MAGNET_GAP off
-    # the plate (open, issue 22: tests/test_sim_magnet.py's strict xfails)
+    # finds contacts within margin + gap and makes them active below the margin: the face
+    # rests MAGNET_GAP off the plate (open, issue 22: tests/test_sim_magnet.py's strict
+    # xfail; margin 0 with this gap would let it touch, docs/mechanism.md)
     _sub(contact, "pair", name="magnet_plate", geom1="magnet_face", geom2="plate", condim="3",
          margin=f"{MAGNET_GAP:.12g}", gap=f"{MAGNET_GAP:.12g}",
          friction=f"{m.magnet_friction:.12g} {m.magnet_friction:.12g} 0.005 0.0001 0.0001",
