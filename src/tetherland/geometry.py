@@ -43,6 +43,14 @@ def link_direction(phi: float, delta: float) -> FloatArray:
     return np.array([cd * cp, -sd, cd * sp])
 
 
+def approach_at_elevation_A(elevation: float) -> tuple[float, float, float]:
+    """The hooking approach n_A = (-cos e, 0, -sin e) in F_A, toward the surface, ``e``
+    [rad] below the level approach (pi/2 - slope: along the surface's inward normal),
+    rounded as an override is written (6 significant digits, no negative zero) [-]."""
+    n = [float(f"{v:.6g}") + 0.0 for v in (-math.cos(elevation), 0.0, -math.sin(elevation))]
+    return n[0], n[1], n[2]
+
+
 def link_frame(phi: float, delta: float) -> FloatArray:
     """R_AL = [x_L y_L z_L] in F_A: x_L = d_A, d(d_A)/dphi = cos(delta) z_L,
     d(d_A)/ddelta = -y_L (docs/theory.md section 3)."""

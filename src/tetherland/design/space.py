@@ -21,6 +21,7 @@ import numpy as np
 
 from tetherland.config import Scenario, with_overrides
 from tetherland.errors import ConfigError
+from tetherland.geometry import approach_at_elevation_A
 
 
 def _check(name: str, values: Sequence[float], lo: float, hi: float, unit: str) -> None:
@@ -107,15 +108,10 @@ class DesignSpace:
             elevations.append(math.pi / 2 - slope)
         out: list[tuple[float, float, float]] = []
         for e in elevations:
-            n = _rounded((-math.cos(e), 0.0, -math.sin(e)))
+            n = approach_at_elevation_A(e)
             if not any(np.allclose(n, m, atol=1e-6) for m in out):
                 out.append(n)
         return tuple(out)
-
-
-def _rounded(values: Sequence[float]) -> tuple[float, ...]:
-    """Values as written in an override (6 significant digits, no negative zero)."""
-    return tuple(float(f"{v:.6g}") + 0.0 for v in values)
 
 
 def _fmt(v: float) -> str:

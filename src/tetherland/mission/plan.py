@@ -18,7 +18,12 @@ from tetherland import GRAVITY
 from tetherland.analysis.clearance import HookingClearance, level_vehicle_distance
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
-from tetherland.geometry import FloatArray, LandingGeometry, link_direction
+from tetherland.geometry import (
+    FloatArray,
+    LandingGeometry,
+    approach_at_elevation_A,
+    link_direction,
+)
 from tetherland.mission.hooking import (
     bar_seating_path,
     check_pass,
@@ -239,16 +244,6 @@ def _check_magnet_reach(scenario: Scenario) -> None:
         )
 
 
-def normal_approach_A(slope: float) -> tuple[float, float, float]:
-    """The hooking approach along the surface's inward normal, n_A = (-cos e, 0, -sin e)
-    with the elevation e = pi/2 - slope (``slope`` [rad]), rounded as an override is
-    written (6 significant digits) [-]. The magnet's pass presses the face on the plate
-    along it."""
-    e = math.pi / 2 - slope
-    n = tuple(float(f"{v:.6g}") + 0.0 for v in (-math.cos(e), 0.0, -math.sin(e)))
-    return n[0], n[1], n[2]
-
-
 def pass_clearance_message(
     scenario: Scenario, geo: LandingGeometry, clearance: HookingClearance
 ) -> str:
@@ -264,7 +259,7 @@ def pass_clearance_message(
         f"(needs >= {clearance.margin_m * 100:.0f} cm)"
     )
     if scenario.mechanism.kind == "magnet":
-        normal = normal_approach_A(geo.surface.slope)
+        normal = approach_at_elevation_A(math.pi / 2 - geo.surface.slope)  # the normal
         written = ",".join(f"{v:g}" for v in normal)
         along = np.asarray(t.approach_direction, float) / np.linalg.norm(t.approach_direction)
         fix = (
