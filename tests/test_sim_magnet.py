@@ -15,10 +15,11 @@ from prescribed import drive
 from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
+from tetherland.geometry import LandingGeometry
 from tetherland.mission.hooking import hooking_pass, magnet_drop_point, magnet_pull_out_path
 from tetherland.mission.plan import MissionError, plan_mission
 from tetherland.models.hook import magnet_boom, magnet_fold, magnet_reach_margin
-from tetherland.rotations import rotmat_to_quat
+from tetherland.rotations import exp_so3, rotmat_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
@@ -373,7 +374,7 @@ def test_adhesion_holds_a_pull_below_its_force(fraction: float) -> None:
         assert moved > 0.01 and not plant.hook.engaged
 
 
-def _held_on_the_plate(turn_deg: float = 0.0) -> tuple[Plant, object]:
+def _held_on_the_plate(turn_deg: float = 0.0) -> tuple[Plant, LandingGeometry]:
     """wall90's plant, the vehicle held out from the wall, the magnet laid on the plate at
     p_A with the EPM on and unclipped, turned ``turn_deg`` about the surface's y_S (90: on
     its side, one side of the box on the plate), then 0.3 s of physics; returns (plant,
@@ -386,10 +387,7 @@ def _held_on_the_plate(turn_deg: float = 0.0) -> tuple[Plant, object]:
         m, d = plant.model, plant.data
         a = plant.cable._qadr
         R = d.xmat[_body(plant, "magnet")].reshape(3, 3)
-        c, s_ = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
-        y = geo.surface.R_WS[:, 1]
-        K = np.array([[0.0, -y[2], y[1]], [y[2], 0.0, -y[0]], [-y[1], y[0], 0.0]])
-        R = (np.eye(3) + s_ * K + (1.0 - c) * K @ K) @ R
+        R = exp_so3(math.radians(turn_deg) * geo.surface.R_WS[:, 1]) @ R
         z_S = geo.surface.R_WS[:, 2]
         a_half = plant.scenario.mechanism.magnet_radius
         plate = geo.p_A - plant.scenario.mechanism.magnet_thickness * z_S  # the plate's face
