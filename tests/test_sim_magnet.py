@@ -352,7 +352,8 @@ def test_too_deep_a_pass_folds_the_boom(name: str) -> None:
 @pytest.mark.parametrize("fraction", [0.9, 1.1])
 def test_adhesion_holds_a_pull_below_its_force(fraction: float) -> None:
     """Force balance on the held magnet (gravity off): a pull along the surface's normal
-    below magnet_force leaves it on the plate, above it pulls it off past the gap."""
+    below magnet_force leaves it on the plate, above it pulls it off (the EPM's pull falls
+    as the face leaves the plate)."""
     plant = _plant("wall90", heavy=True)
     s = plant.scenario
     plant.model.opt.gravity[:] = 0.0
@@ -365,7 +366,9 @@ def test_adhesion_holds_a_pull_below_its_force(fraction: float) -> None:
     assert plant.hook.engaged
     eye = plant.hook_point_W.copy()
     F = fraction * s.mechanism.magnet_force
-    plant.data.xfrc_applied[_body(plant, "magnet"), 0:3] = F * geo.surface.R_WS[:, 2]
+    # (at the magnet's free joint: the plant writes the body's xfrc_applied, the EPM's pull)
+    v = plant.model.jnt_dofadr[plant.model.body_jntadr[_body(plant, "magnet")]]
+    plant.data.qfrc_applied[v : v + 3] = F * geo.surface.R_WS[:, 2]
     _drive(plant, q, [far, far], 1.0, 0.3)
     moved = float((plant.hook_point_W - eye) @ geo.surface.R_WS[:, 2])
     if fraction < 1.0:
@@ -399,9 +402,6 @@ def _held_on_the_plate(turn_deg: float = 0.0) -> tuple[Plant, LandingGeometry]:
     return plant, geo
 
 
-@pytest.mark.xfail(strict=True, reason="open (issue 22): MuJoCo 4.0.1 finds contacts within "
-                   "margin + gap and makes them active below the margin (2 mm here): the "
-                   "held face rests 2 mm off the plate, held across the gap at full force")
 def test_a_held_magnet_face_rests_on_the_plate() -> None:
     """Laid flat on the plate with the EPM on, the face touches it: its centre within
     0.1 mm of the plate's face (the contact's sink under 150 N is 0.02 mm, docs)."""
@@ -414,10 +414,6 @@ def test_a_held_magnet_face_rests_on_the_plate() -> None:
     assert abs(float((face - plate) @ geo.surface.R_WS[:, 2])) < 1e-4
 
 
-@pytest.mark.xfail(strict=True, reason="open (issue 22): every side of the magnet's box is "
-                   "its face (one geom, one adhesion): a magnet tipped on its side sticks "
-                   "by it with the full magnet_force; campaign draw wall90 base-00012 at "
-                   "tether.length=0.38 tipped at the EPM's switch-on and walked 4.8 cm down")
 def test_a_magnet_on_its_side_does_not_stick() -> None:
     """Turned 90 deg (one side of the box on the plate), the energised magnet holds
     nothing: an EPM pulls through its pole face only. It slides or falls at least half
@@ -428,9 +424,9 @@ def test_a_magnet_on_its_side_does_not_stick() -> None:
 
 
 def test_magnet_on_the_wall_outside_the_plate_does_not_stick() -> None:
-    """Energised against the wall beside the plate, the magnet has no adhesion (MuJoCo's
-    adhesion acts on the contacts of the body ``magnet`` only, whose one geom touches the
-    plate alone; the wall touches the shell): it falls as in free fall while it slides."""
+    """Energised against the wall beside the plate, the magnet holds nothing (the EPM pulls
+    only where its face lies over the plate, :mod:`tetherland.sim.epm`; the wall touches
+    the shell): it falls as in free fall while it slides."""
     plant = _plant("wall90", heavy=True)
     s = plant.scenario
     geo = plant.layout.geometry

@@ -75,10 +75,11 @@ def warm_estimation_and_control() -> None:
 
 def warm_plant_and_mission() -> None:
     """The plant's rotor step, aerodynamics and log row (the point hook's and the bar's
-    plant, whose hanging line has its drag), the landing plan's verification, the
+    plant, whose hanging line has its drag), the magnet's EPM pull, the landing plan's verification, the
     supervisor's paths and the fault rules' cable torque."""
     from tetherland.mission import MissionSupervisor, plan_mission
     from tetherland.mission.faults import cable_torque_xy_of
+    from tetherland.sim.epm import cell_offsets, epm_pull_into
     from tetherland.sim.plant import ROTOR_STATE_WIDTH, Plant
 
     sc = load_scenario("slope50")
@@ -88,6 +89,9 @@ def warm_plant_and_mission() -> None:
         plant.command(hover)
         plant.step(2)
         plant.rotor_state_into(np.empty(ROTOR_STATE_WIDTH))
+    # the EPM's pull (the magnet's plant calls it only while the EPM is on)
+    epm_pull_into(np.zeros(3), np.eye(3).ravel(), np.zeros(3), cell_offsets(0.02), np.zeros(3),
+                  np.eye(3).ravel(), 0.1, 1.0, 1e-3, np.empty(6))  # fmt: skip
     start = Plant(sc).start_state()
     plan = plan_mission(sc, start)  # verifies its trajectories with the compiled RK4
     supervisor = MissionSupervisor(sc, plan)

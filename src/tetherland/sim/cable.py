@@ -34,10 +34,12 @@ from tetherland.config import CableModel, Scenario
 from tetherland.geometry import FloatArray
 from tetherland.models.hook import bar_near_distance
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim.epm import cell_offsets, epm_pull_into
 from tetherland.sim.line_drag import line_drag_into, link_drag_factor
 from tetherland.sim.mjcf import (
     CABLE_GROUP_HIDDEN,
     CABLE_GROUP_VISIBLE,
+    EPM_RANGE,
     SENSOR_SLICES,
     chain_armature,
     chain_spec,
@@ -180,13 +182,19 @@ class ElasticCable:
                 self._ctrl[0] = f if f > 0.0 else 0.0
             else:
                 self._ctrl[0] = 0.0
+        self._actuate()
         mujoco.mj_step2(m, d)  # actuation, acceleration, constraints, integration
+
+    def _actuate(self) -> None:
+        """Apply the mechanism's own forces from the positions at t_k (none here)."""
+        return None
 
     def forward(self) -> None:
         m, d = self._model, self._data
         mujoco.mj_fwdPosition(m, d)
         mujoco.mj_fwdVelocity(m, d)
         self._ctrl[0] = self.force(self._len[0], self._vel[0]) if self._engaged else 0.0
+        self._actuate()
         mujoco.mj_forward(m, d)
 
     def set_engaged(self, engaged: bool) -> None:
@@ -800,9 +808,23 @@ class MagnetCable(ElasticCable):
         mech = scenario.mechanism
         obj = mujoco.mjtObj
         self._eq = mujoco.mj_name2id(model, obj.mjOBJ_EQUALITY, "clip")
-        self._epm = int(mujoco.mj_name2id(model, obj.mjOBJ_ACTUATOR, "epm"))
         body = mujoco.mj_name2id(model, obj.mjOBJ_BODY, "magnet")
         self._body = body
+        # the EPM's pull (tetherland.sim.epm): the face's cells against the plate's top
+        plate = mujoco.mj_name2id(model, obj.mjOBJ_GEOM, "plate")
+        R_WP = np.empty(9)
+        mujoco.mju_quat2Mat(R_WP, model.geom_quat[plate])  # a world geom: F_W
+        top = model.geom_pos[plate] + model.geom_size[plate][2] * R_WP.reshape(3, 3)[:, 2]
+        face = mujoco.mj_name2id(model, obj.mjOBJ_SITE, "magnet_face")
+        self._pull_args = (data.site_xpos[face], data.xmat[body], data.xipos[body],
+                           cell_offsets(mech.magnet_radius), top, R_WP,
+                           float(model.geom_size[plate][0]), mech.magnet_force, EPM_RANGE,
+                           data.xfrc_applied[body])  # fmt: skip
+        self._xfrc = data.xfrc_applied[body]
+        self.epm_pull = 0.0
+        """The EPM's pull on the magnet along the plate's normal at the last step [N]."""
+        self._on = False
+        """Whether the EPM is on (its switching time passed) [-]."""
         j = model.body_jntadr[body]
         self._qadr, self._vadr = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
         hinge = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, "boom_hinge")
@@ -844,7 +866,7 @@ class MagnetCable(ElasticCable):
     @property
     def epm_on(self) -> bool:
         """Whether the EPM is switched on [-]."""
-        return bool(self._data.ctrl[self._epm] > 0.5)
+        return self._on
 
     def set_epm(self, on: bool) -> None:
         """The robot's command: the EPM on (its holding force on the magnet's contacts with
@@ -856,7 +878,7 @@ class MagnetCable(ElasticCable):
         self._command = on
         self._pending = self._switch_steps[on]
         if self._pending == 0:
-            self._data.ctrl[self._epm] = 1.0 if on else 0.0
+            self._on = on
 
     @property
     def latch_open(self) -> bool:
@@ -884,7 +906,7 @@ class MagnetCable(ElasticCable):
     def _set_now(self, on: bool) -> None:
         self._command = bool(on)
         self._pending = 0
-        self._data.ctrl[self._epm] = 1.0 if on else 0.0
+        self._on = bool(on)
 
     def set_anchor(self, p_A: FloatArray, z_S: FloatArray) -> None:
         """The anchor (the eye of the held magnet) and the surface normal there [m, -]."""
@@ -904,7 +926,7 @@ class MagnetCable(ElasticCable):
         if self._pending:
             self._pending -= 1
             if not self._pending:
-                d.ctrl[self._epm] = 1.0 if self._command else 0.0
+                self._on = self._command
         if self._latch_pending:
             self._latch_pending -= 1
             if not self._latch_pending and self.clipped:
@@ -917,13 +939,20 @@ class MagnetCable(ElasticCable):
             if pull > self.clip_force:
                 self._unclip()
         s = d.sensordata
-        if s[self._contact] > 0.0 and d.ctrl[self._epm] > 0.5:
+        if s[self._contact] > 0.0 and self._on:
             self._touching += 1
         else:
             self._touching = 0
         was = self.caught
         self.caught = self._touching >= self._catch_steps if not was else self._touching > 0
         self.changed = was != self.caught
+
+    def _actuate(self) -> None:
+        if self._on:
+            self.epm_pull = epm_pull_into(*self._pull_args)
+        elif self.epm_pull:
+            self._xfrc[:] = 0.0
+            self.epm_pull = 0.0
 
     @property
     def plate_force(self) -> float:

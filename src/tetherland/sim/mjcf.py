@@ -615,11 +615,10 @@ def add_anchoring_cable(scene: SceneXml) -> None:
 MAGNET_SHELL_BIT = 16
 """Contact bit of the magnet's shell: the ground and the surface get it in their
 conaffinity (:func:`add_magnet`); the plate does not."""
-MAGNET_GAP = 0.002
-"""Largest gap between the magnet's face and the plate across which the energised EPM
-still pulls (its force falls steeply with the gap; here it is all or nothing). Under
-MuJoCo 4.0.1 the face-plate contacts also push from this distance on, so a held face
-rests this far off the plate (docs/mechanism.md, "The magnet's contact") [m]."""
+EPM_RANGE = 0.001
+"""Gap between the magnet's face and the plate at which the EPM's pull has fallen to
+zero, linearly from its full force on contact (an EPM loses most of its force within a
+millimetre of air; :mod:`tetherland.sim.epm`) [m]."""
 BOOM_MASS = 0.01
 """Mass of the folding boom (a 4 mm carbon tube and its hinge) [kg]."""
 BOOM_RADIUS = 0.004
@@ -714,9 +713,8 @@ def add_magnet(scene: SceneXml) -> None:
     Two geoms of one shape: ``magnet_face`` on the body ``magnet`` touches only the plate
     (an explicit contact pair, stiff: :func:`magnet_contact`), ``magnet_shell`` on the
     jointless child body ``magnet_shell`` touches the ground and the surface (contact bit
-    :data:`MAGNET_SHELL_BIT`), not the plate or the vehicle. MuJoCo's adhesion actuator
-    ``epm`` on the body ``magnet`` (:func:`add_actuators`) acts on the contacts of that
-    body's own geoms only: the plate's, never the wall's."""
+    :data:`MAGNET_SHELL_BIT`), not the plate or the vehicle. The EPM's pull is the plant's
+    force on the face (:mod:`tetherland.sim.epm`): the plate's, never the wall's."""
     from tetherland.models.hook import magnet_boom
 
     sc = scene.scenario
@@ -745,15 +743,11 @@ def add_magnet(scene: SceneXml) -> None:
     _sub(body, "site", name="magnet_eye", pos=_fmt((0.0, 0.0, -h)), size="0.005", group="4")
     _sub(body, "site", name="magnet_face", pos=_fmt((0.0, 0.0, h)), size="0.005", group="4")
     contact = scene.section("contact")
-    # the EPM pulls across a gap (MAGNET_GAP): contacts within it are found (margin) and
-    # MuJoCo's adhesion acts on them; with no margin a face rocking flat on the plate lost
-    # every contact for a step, and with it the whole holding force, and fell 3.5 cm. The
-    # gap was meant to keep them from pushing until the face touches, but MuJoCo 4.0.1
-    # finds contacts within margin + gap and makes them active below the margin: the face
-    # rests MAGNET_GAP off the plate (open, issue 22: tests/test_sim_magnet.py's strict
-    # xfail; margin 0 with this gap would let it touch, docs/mechanism.md)
+    # the face touches the plate (no margin: MuJoCo 4 finds a pair's contacts within
+    # margin + gap and makes them push below the margin); the EPM's pull is not MuJoCo's
+    # adhesion on these contacts but the plant's force on the face (tetherland.sim.epm),
+    # which falls with each part's gap and acts through the face only
     _sub(contact, "pair", name="magnet_plate", geom1="magnet_face", geom2="plate", condim="3",
-         margin=f"{MAGNET_GAP:.12g}", gap=f"{MAGNET_GAP:.12g}",
          friction=f"{m.magnet_friction:.12g} {m.magnet_friction:.12g} 0.005 0.0001 0.0001",
          **magnet_contact(sc))  # fmt: skip
     equality = scene.section("equality")
@@ -1098,10 +1092,6 @@ def add_actuators(scene: SceneXml) -> None:
     if scene.scenario.tether.cable_model == CableModel.ELASTIC and not bar:
         # ctrl = cable tension f_L >= 0 [N], set by the plant each step; gear -1 shortens.
         _sub(act, "general", name="cable", tendon="cable", gear="-1", ctrllimited="false")
-    m = scene.scenario.mechanism
-    if m.kind == "magnet":  # ctrl 1: the EPM on, its holding force on its contacts
-        _sub(act, "adhesion", name="epm", body="magnet", ctrlrange="0 1",
-             gain=f"{m.magnet_force:.12g}")  # fmt: skip
 
 
 def add_sensors(scene: SceneXml) -> None:
