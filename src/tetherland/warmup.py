@@ -75,8 +75,8 @@ def warm_estimation_and_control() -> None:
 
 def warm_plant_and_mission() -> None:
     """The plant's rotor step, aerodynamics and log row (the point hook's and the bar's
-    plant, whose hanging line has its drag), the magnet's EPM pull, the landing plan's verification, the
-    supervisor's paths and the fault rules' cable torque."""
+    plant, whose hanging line has its drag), the magnet's EPM pull, the landing plan's
+    verification, the supervisor's paths and the fault rules' cable torque."""
     from tetherland.mission import MissionSupervisor, plan_mission
     from tetherland.mission.faults import cable_torque_xy_of
     from tetherland.sim.epm import cell_offsets, epm_pull_into
