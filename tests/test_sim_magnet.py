@@ -1,5 +1,5 @@
 """The magnet mechanism (docs/mechanism.md): an electro-permanent magnet on a folding boom,
-held by a steel plate through the contact and MuJoCo's adhesion; expected values derived
+held on a steel plate by the EPM's pull through its face; expected values derived
 here from the configuration."""
 
 from __future__ import annotations
@@ -266,7 +266,8 @@ def test_the_latch_lets_the_held_magnet_out_of_its_clip() -> None:
     _drive(plant, q, [path[-1], pull], 0.05, 1.0)
     assert plant.hook.engaged and plant.tension > 8.0
     assert float(np.linalg.norm(plant.hook_point_W - eye)) < 0.002  # held where it was
-    # the magnet at rest: plate contact + adhesion + cable + weight = 0, no clip force
+    # the magnet at rest: plate contact + the EPM's pull (flat: all of magnet_force) +
+    # cable + weight = 0, no clip force
     T = plant.tension
     d = plant.attachment_point() - plant.hook_point_W
     d /= np.linalg.norm(d)
@@ -350,7 +351,7 @@ def test_too_deep_a_pass_folds_the_boom(name: str) -> None:
 
 
 @pytest.mark.parametrize("fraction", [0.9, 1.1])
-def test_adhesion_holds_a_pull_below_its_force(fraction: float) -> None:
+def test_the_epm_holds_a_pull_below_its_force(fraction: float) -> None:
     """Force balance on the held magnet (gravity off): a pull along the surface's normal
     below magnet_force leaves it on the plate, above it pulls it off (the EPM's pull falls
     as the face leaves the plate)."""

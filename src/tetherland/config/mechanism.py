@@ -27,7 +27,7 @@ class MechanismConfig(Section):
 
     ``kind = "magnet"``: for walls and overhangs, an electro-permanent magnet (EPM) body
     clipped to the tip of a folding boom on the vehicle is pressed on a steel plate at the
-    anchor, switched on by the robot (adhesion through the contact only), let out of its
+    anchor, switched on by the robot (its pull through its face on the plate only), let out of its
     clip by the latch the robot opens, and tied to the vehicle by the elastic cable;
     switched off, it lets go and hangs on the cable. The anchor height ``anchor.h_A`` is
     the cable's eye on the held magnet, ``plate_thickness + magnet_thickness`` (0 is
@@ -132,11 +132,11 @@ class MechanismConfig(Section):
     magnet_thickness: float = Field(0.015, ge=0.003, le=0.1)
     """Thickness of the magnet along its axis, face to the cable's eye on its back [m]."""
     magnet_force: float = Field(150.0, gt=0, le=2000)
-    """Holding force of the energised magnet on the plate, the gain of MuJoCo's adhesion
-    actuator on the magnet body. An OpenGrab EPM v3 holds 200 N at least, 300 N
-    typically, on thick mild steel (Zubax's data sheet); a plate thinner than its flux
-    path saturates and holds less (assumed in proportion to the thickness below 1 cm):
-    150 N for the default 5 mm plate [N]."""
+    """Holding force of the energised magnet with its face flat on the plate (the plant's
+    pull on the face falls with each part's gap, :mod:`tetherland.sim.epm`). An OpenGrab
+    EPM v3 holds 200 N at least, 300 N typically, on thick mild steel (Zubax's data
+    sheet); a plate thinner than its flux path saturates and holds less (assumed in
+    proportion to the thickness below 1 cm): 150 N for the default 5 mm plate [N]."""
     epm_on_time: float = Field(0.75, ge=0, le=10)
     """Time the EPM takes to switch on after the command (three charge and discharge
     cycles; OpenGrab EPM v3: 0.75 s): the plant's holding force comes on then [s]."""

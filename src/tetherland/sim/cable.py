@@ -797,7 +797,9 @@ class MagnetCable(ElasticCable):
     - :attr:`caught` (the plant's truth for the log and the judge, never the robot's):
       set once the magnet's face has touched the plate with the EPM on for
       ``mechanism.catch_time``, cleared at once when the EPM is off or the face leaves the
-      plate. Only the contact and MuJoCo's adhesion decide what the bodies do.
+      plate. Only the contact and the EPM's pull decide what the bodies do;
+    - the EPM's pull (:mod:`tetherland.sim.epm`), while on, is written into the magnet's
+      ``xfrc_applied`` before each step's acceleration (the plant owns that row).
     """
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, scenario: Scenario) -> None:
