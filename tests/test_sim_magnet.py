@@ -23,6 +23,16 @@ from tetherland.rotations import exp_so3, rotmat_to_quat
 from tetherland.sim.plant import Plant
 from tetherland.state import RigidBodyState
 
+OVERHANG93_MAGNET = [
+    "tether.length=0.36",
+    "mechanism.boom_length=0.30",
+    "mechanism.boom_angle_deg=20",
+    "mechanism.plate_thickness=0.003",
+    "mechanism.magnet_thickness=0.01",
+]
+"""overhang93's settings for the magnet (docs/mechanism.md): a shorter cable and boom and a
+thinner magnet and plate, for a landed hover above the rotor floor."""
+
 
 def _plant(name: str, *extra: str, heavy: bool = False) -> Plant:
     """The plant; ``heavy``: the vehicle 1e4 times heavier, a fixed base for prescribed
@@ -415,6 +425,88 @@ def test_a_held_magnet_face_rests_on_the_plate() -> None:
     assert abs(float((face - plate) @ geo.surface.R_WS[:, 2])) < 1e-4
 
 
+def _switched_on_from_off(name: str, *extra: str, tilt_deg: float = 0.0):
+    """``name``'s plant (gravity off, the vehicle held out from the wall), the magnet
+    unclipped on the plate at p_A, turned ``tilt_deg`` about one edge of its face (the far
+    edge lifted), the EPM off; then the command on. Returns (plant, magnet, q_WB, the far
+    edge's lift) [-, -, -, m]."""
+    plant = _plant(name, *extra, heavy=True)
+    m, d = plant.model, plant.data
+    m.opt.gravity[:] = 0.0
+    geo = plant.layout.geometry
+    far = geo.p_A + 0.35 * geo.surface.R_WS[:, 2] + np.array([0.0, 0.0, 0.1])
+    plant.reset(RigidBodyState.at_rest(far, rotmat_to_quat(geo.R_WA)), cable_engaged=True)
+    mag = plant.cable
+    mech = plant.scenario.mechanism
+    a, half = mech.magnet_radius, 0.5 * mech.magnet_thickness
+    R = d.xmat[_body(plant, "magnet")].reshape(3, 3).copy()
+    centre = d.xpos[_body(plant, "magnet")].copy()
+    edge = centre + half * R[:, 2] - a * R[:, 0]  # the face's edge at local x = -a
+    turn = exp_so3(math.radians(tilt_deg) * R[:, 1])
+    if float((turn @ (2.0 * a * R[:, 0]))  @ geo.surface.R_WS[:, 2]) < 0.0:
+        turn = turn.T  # the other way: the far edge lifts off the plate
+    q0 = mag._qadr
+    d.qpos[q0 : q0 + 3] = edge + turn @ (centre - edge)
+    d.qpos[q0 + 3 : q0 + 7] = rotmat_to_quat(turn @ R)
+    mag._set_now(False)
+    plant.forward()
+    lift = float((turn @ (2.0 * a * R[:, 0])) @ geo.surface.R_WS[:, 2])
+    mag.set_epm(True)
+    return plant, mag, plant.data.qpos[3:7].copy(), lift
+
+
+def test_the_epm_pull_builds_up_over_its_switch_on_time() -> None:
+    """Flat on the plate, every cell touching: in the (k+1)-th physics step after the
+    command the pull is magnet_force k / n, n = epm_on_time / dt (it is written before
+    the step's acceleration, from the level at the end of the step before), and the EPM
+    counts as on at the end of the n-th."""
+    plant, mag, q, _ = _switched_on_from_off("wall90")
+    mech = plant.scenario.mechanism
+    n = round(mech.epm_on_time / plant.dt)
+    seen = []
+    _drive(plant, q, [plant.data.qpos[0:3].copy()] * 2, 1.0, (n + 5) * plant.dt,
+           lambda: seen.append((mag.epm_pull, mag.epm_on)))  # fmt: skip
+    for k in (1, n // 4, n // 2, n - 2):  # seen[k]: the end of step k + 1
+        assert seen[k][0] == pytest.approx(mech.magnet_force * k / n, rel=1e-9)
+        assert not seen[k][1]
+    assert seen[n - 1][1] and seen[n][0] == pytest.approx(mech.magnet_force)
+
+
+def _switch_on_on_an_edge(name: str, extra: list[str],
+                          tilt_deg: float) -> tuple[float, float, bool]:  # fmt: skip
+    """:func:`_switched_on_from_off` tilted ``tilt_deg``, flown through the switch-on and
+    0.2 s more: (deepest contact of the magnet [m], its face's final tilt from the plate
+    [deg], whether it is held and the EPM on)."""
+    plant, mag, q, lift = _switched_on_from_off(name, *extra, tilt_deg=tilt_deg)
+    a = plant.scenario.mechanism.magnet_radius
+    assert lift == pytest.approx(2.0 * a * math.sin(math.radians(tilt_deg)), rel=1e-6)
+    deepest = [0.0]
+    _drive(plant, q, [plant.data.qpos[0:3].copy()] * 2, 1.0,
+           plant.scenario.mechanism.epm_on_time + 0.2,
+           lambda: deepest.__setitem__(0, max(deepest[0], _magnet_depth(plant))))  # fmt: skip
+    R = plant.data.xmat[_body(plant, "magnet")].reshape(3, 3)
+    n_S = plant.layout.geometry.surface.R_WS[:, 2]
+    tilt = math.degrees(math.acos(min(1.0, -float(R[:, 2] @ n_S))))
+    return deepest[0], tilt, bool(mag.epm_on and plant.hook.engaged)
+
+
+@pytest.mark.parametrize("tilt_deg", [1.0, 3.0, 5.0])
+@pytest.mark.parametrize(("name", "extra"), [("wall90", []),
+                                           ("overhang93", OVERHANG93_MAGNET)])  # fmt: skip
+def test_switched_on_on_one_edge_the_face_turns_flat_without_a_slam(
+        name: str, extra: list[str], tilt_deg: float) -> None:  # fmt: skip
+    """The magnet on one edge of its face, tilted 1, 3 or 5 deg (how a pass can end:
+    overhang93 campaign draw 2492938996 stopped its pass with the face 0.8 deg off): the
+    pull builds up over epm_on_time, the face turns flat while it is still small, and no
+    part of the magnet goes 1 mm into the plate (overhang93's is 3 mm thick). Pulled at
+    once with all of it (the switch-on as a step), the far edge met the plate at 3.7 m/s
+    and the magnet ended 7-8 mm deep, stuck after the EPM went off."""
+    deepest, tilt, held = _switch_on_on_an_edge(name, extra, tilt_deg)
+    assert deepest < 1e-3
+    assert tilt < 0.05  # flat
+    assert held
+
+
 def test_a_magnet_on_its_side_does_not_stick() -> None:
     """Turned 90 deg (one side of the box on the plate), the energised magnet holds
     nothing: an EPM pulls through its pole face only. It slides or falls at least half
@@ -477,17 +569,6 @@ def test_released_magnet_swings_with_its_pendulum_period() -> None:
     period = float(np.mean(np.diff(crossings)))
     L = s.tether.length + 0.5 * m.magnet_thickness
     assert period == pytest.approx(2 * math.pi * math.sqrt(L / GRAVITY), rel=0.03)
-
-
-OVERHANG93_MAGNET = [
-    "tether.length=0.36",
-    "mechanism.boom_length=0.30",
-    "mechanism.boom_angle_deg=20",
-    "mechanism.plate_thickness=0.003",
-    "mechanism.magnet_thickness=0.01",
-]
-"""overhang93's settings for the magnet (docs/mechanism.md): a shorter cable and boom and a
-thinner magnet and plate, for a landed hover above the rotor floor."""
 
 
 @pytest.mark.slow

@@ -137,9 +137,11 @@ class MechanismConfig(Section):
     EPM v3 holds 200 N at least, 300 N typically, on thick mild steel (Zubax's data
     sheet); a plate thinner than its flux path saturates and holds less (assumed in
     proportion to the thickness below 1 cm): 150 N for the default 5 mm plate [N]."""
-    epm_on_time: float = Field(0.75, ge=0, le=10)
+    epm_on_time: float = Field(0.75, ge=0.1, le=10)
     """Time the EPM takes to switch on after the command (three charge and discharge
-    cycles; OpenGrab EPM v3: 0.75 s): the plant's holding force comes on then [s]."""
+    cycles; OpenGrab EPM v3: 0.75 s): the plant's pull builds up linearly over it, so a
+    face pressed on one edge turns flat while the pull is small (switched on within a few
+    physics steps, a face tilted 1 deg slammed flat and went through a 3 mm plate) [s]."""
     epm_off_time: float = Field(1.2, ge=0, le=10)
     """Time the EPM takes to switch off after the command (a decaying degauss; OpenGrab
     EPM v3: 1.2 s): the plant's holding force goes off then [s]."""

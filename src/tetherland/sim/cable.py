@@ -820,13 +820,17 @@ class MagnetCable(ElasticCable):
         face = mujoco.mj_name2id(model, obj.mjOBJ_SITE, "magnet_face")
         self._pull_args = (data.site_xpos[face], data.xmat[body], data.xipos[body],
                            cell_offsets(mech.magnet_radius), top, R_WP,
-                           float(model.geom_size[plate][0]), mech.magnet_force, EPM_RANGE,
-                           data.xfrc_applied[body])  # fmt: skip
+                           float(model.geom_size[plate][0]))  # fmt: skip
+        self._force = mech.magnet_force
         self._xfrc = data.xfrc_applied[body]
         self.epm_pull = 0.0
         """The EPM's pull on the magnet along the plate's normal at the last step [N]."""
         self._on = False
         """Whether the EPM is on (its switching time passed) [-]."""
+        self._level = 0.0
+        """The EPM's pull as a fraction of ``magnet_force``: it builds up linearly over
+        ``epm_on_time`` after the command (the charge pulses magnetise it step by step),
+        and stays until ``epm_off_time`` after the command off [-]."""
         j = model.body_jntadr[body]
         self._qadr, self._vadr = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
         hinge = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, "boom_hinge")
@@ -867,13 +871,14 @@ class MagnetCable(ElasticCable):
 
     @property
     def epm_on(self) -> bool:
-        """Whether the EPM is switched on [-]."""
+        """Whether the EPM is switched on (its switch-on time over: the whole force) [-]."""
         return self._on
 
     def set_epm(self, on: bool) -> None:
-        """The robot's command: the EPM on (its holding force on the magnet's contacts with
-        the plate) or off, in effect ``mechanism.epm_on_time`` or ``epm_off_time`` later
-        (a command repeated meanwhile changes nothing)."""
+        """The robot's command: the EPM on (its pull on the face builds up linearly from the
+        command to its whole force ``mechanism.epm_on_time`` later) or off (the pull stays
+        until ``epm_off_time`` later, then none); a command repeated meanwhile changes
+        nothing."""
         on = bool(on)
         if on == self._command:
             return
@@ -881,6 +886,7 @@ class MagnetCable(ElasticCable):
         self._pending = self._switch_steps[on]
         if self._pending == 0:
             self._on = on
+            self._level = 1.0 if on else 0.0
 
     @property
     def latch_open(self) -> bool:
@@ -909,6 +915,7 @@ class MagnetCable(ElasticCable):
         self._command = bool(on)
         self._pending = 0
         self._on = bool(on)
+        self._level = 1.0 if on else 0.0
 
     def set_anchor(self, p_A: FloatArray, z_S: FloatArray) -> None:
         """The anchor (the eye of the held magnet) and the surface normal there [m, -]."""
@@ -927,8 +934,11 @@ class MagnetCable(ElasticCable):
         d = self._data
         if self._pending:
             self._pending -= 1
+            if self._command:  # building up: linear in the time since the command
+                self._level = max(self._level, 1.0 - self._pending / self._switch_steps[1])
             if not self._pending:
                 self._on = self._command
+                self._level = 1.0 if self._command else 0.0
         if self._latch_pending:
             self._latch_pending -= 1
             if not self._latch_pending and self.clipped:
@@ -950,8 +960,9 @@ class MagnetCable(ElasticCable):
         self.changed = was != self.caught
 
     def _actuate(self) -> None:
-        if self._on:
-            self.epm_pull = epm_pull_into(*self._pull_args)
+        if self._level > 0.0:
+            self.epm_pull = epm_pull_into(*self._pull_args, self._level * self._force,
+                                          EPM_RANGE, self._xfrc)  # fmt: skip
         elif self.epm_pull:
             self._xfrc[:] = 0.0
             self.epm_pull = 0.0
