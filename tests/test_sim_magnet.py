@@ -16,7 +16,12 @@ from tetherland import GRAVITY
 from tetherland.config import load_scenario
 from tetherland.errors import ConfigError
 from tetherland.geometry import LandingGeometry
-from tetherland.mission.hooking import hooking_pass, magnet_drop_point, magnet_pull_out_path
+from tetherland.mission.hooking import (
+    hooking_pass,
+    magnet_drop_path,
+    magnet_drop_point,
+    magnet_pull_out_path,
+)
 from tetherland.mission.plan import MissionError, plan_mission
 from tetherland.models.hook import magnet_boom, magnet_fold, magnet_reach_margin
 from tetherland.rotations import exp_so3, rotmat_to_quat
@@ -635,3 +640,37 @@ def test_the_point_hooks_drop_does_not_bind_the_magnet() -> None:
     with pytest.raises(ConfigError, match=r"boom_length = 0\.32 m must be < tether\.length"):
         load_scenario("overhang93", ["mechanism.kind=magnet", "tether.length=0.32",
                                      "mechanism.boom_length=0.32"])  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "extra"), [("wall90", []),
+                                           ("overhang93", OVERHANG93_MAGNET)])  # fmt: skip
+def test_the_drop_path_leaves_the_surface_level_before_it_climbs(
+        name: str, extra: list[str]) -> None:  # fmt: skip
+    """From slack points below, at and above p_A, close to the surface: the first leg is
+    level (the slack point's height, within the drop point's climb of p_A's) and ends at
+    the drop point's horizontal position, the second climbs straight up to the drop point
+    (:func:`magnet_drop_point`), and both ends lie within 95 % of the cable from p_A; so
+    on an overhang, whose surface comes nearer with height, the empty boom is as far out
+    as it will be before the vehicle climbs."""
+    s = load_scenario(name, ["mechanism.kind=magnet", *extra])
+    geo = plan_mission(s, Plant(s).start_state()).geometry
+    p_A, L = geo.p_A, s.tether.length
+    n_S = geo.surface.R_WS[:, 2]  # the surface's normal, out to the free side
+    out_W = np.array([n_S[0], n_S[1], 0.0]) / math.hypot(n_S[0], n_S[1])
+    assert float((Plant(s).start_state().p_W - p_A) @ out_W) > 0.0  # the vehicle's side
+    for dz in (-0.3, -0.05, 0.0, 0.05, 0.3):
+        slack = p_A + 0.2 * out_W + np.array([0.0, 0.0, dz])
+        first, drop = magnet_drop_path(s, geo, slack)
+        assert np.allclose(drop, magnet_drop_point(s, geo, slack))
+        climb = drop[2] - p_A[2]
+        assert climb > 0.0
+        assert first[2] == pytest.approx(min(max(slack[2], p_A[2] - climb), p_A[2] + climb))
+        assert np.allclose(first[0:2], drop[0:2])  # then straight up
+        for p in (first, drop):
+            assert float(np.linalg.norm(p - p_A)) <= 0.95 * L + 1e-12
+        # the first leg is level where the slack point is within the climb of p_A
+        if abs(dz) <= climb:
+            assert first[2] == pytest.approx(slack[2])
+        # out from the surface: the drop point's horizontal distance is the slack point's
+        # or more along the way out
+        assert float((first - p_A) @ out_W) >= float((slack - p_A) @ out_W)

@@ -246,6 +246,24 @@ def magnet_drop_point(scenario: Scenario, geometry: LandingGeometry,
     return p_A + out * e + np.array([0.0, 0.0, up])
 
 
+def magnet_drop_path(scenario: Scenario, geometry: LandingGeometry,
+                     p_att_W: FloatArray) -> list[FloatArray]:  # fmt: skip
+    """Attachment points from the slack point ``p_att_W`` to the drop point
+    (:func:`magnet_drop_point`), F_W [m]: first straight out from the surface, level, to
+    the drop point's horizontal distance from p_A (at a height within the drop point's
+    climb of p_A's, so that the cable stays within 95 % of its length), then to the drop
+    point. Where the slack point is close to the surface the empty boom's tip is too, and
+    on an overhang a straight climb to the drop point brings the surface nearer: flown
+    straight, overhang93 campaign draw 2255857163 dragged the boom's tip over the wall and
+    the plate for 0.9 s, and the rotor fault monitor took its torque for a lost rotor."""
+    drop = magnet_drop_point(scenario, geometry, p_att_W)
+    p_A = geometry.p_A
+    climb = float(drop[2] - p_A[2])  # the drop point's height above p_A (>= 0)
+    z = min(max(float(p_att_W[2]), p_A[2] - climb), p_A[2] + climb)
+    out = np.array([drop[0], drop[1], z])
+    return [out, drop]
+
+
 def check_pass(
     scenario: Scenario, geometry: LandingGeometry, hooking: HookingPass
 ) -> HookingClearance:

@@ -62,7 +62,7 @@ from tetherland.mission.hooking import (
     bar_climb_path,
     bar_swing_path,
     lift_off_band,
-    magnet_drop_point,
+    magnet_drop_path,
     magnet_pull_out_path,
     shortest_leg,
     swing_shaper,
@@ -1061,17 +1061,18 @@ class MissionSupervisor:
         return self._free(t, est)
 
     def _drop_magnet(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
-        """Magnet mechanism, the cable slack: climb, the EPM still on, to the drop point
-        (:func:`~tetherland.mission.hooking.magnet_drop_point`: as far out from the
-        surface as the slack point, the cable almost taut above the magnet), so that the
-        magnet, let go, falls a few centimetres before the cable swings it (switched off
-        at the slack point, 0.25 m under it, it fell 0.6 m and the snatch tipped the
-        vehicle: the rotor fault monitor stopped the flight). :meth:`_unhook` then
-        switches it off."""
+        """Magnet mechanism, the cable slack: out from the surface, then up, the EPM still
+        on, to the drop point (:func:`~tetherland.mission.hooking.magnet_drop_path`: the
+        empty boom's tip clear of the surface, the cable almost taut above the magnet), so
+        that the magnet, let go, falls a few centimetres before the cable swings it
+        (switched off at the slack point, 0.25 m under it, it fell 0.6 m and the snatch
+        tipped the vehicle: the rotor fault monitor stopped the flight). :meth:`_unhook`
+        then switches it off."""
         cfg = self.cfg
-        drop = magnet_drop_point(self.scenario, self.geo, slack + self.wp.attachment_W)
-        self._path = self._new_path(t, slack, cfg.hooking.speed).to(
-            drop - self.wp.attachment_W, pause=cfg.settle_time)
+        att = self.wp.attachment_W
+        out, drop = magnet_drop_path(self.scenario, self.geo, slack + att)
+        self._path = self._new_path(t, slack, cfg.hooking.speed).to(out - att).to(
+            drop - att, pause=cfg.settle_time)
         self._enter(Phase.UNHOOK, t, "cable slack: to the drop point, the magnet still held")
         return self._free(t, est)
 
