@@ -644,33 +644,43 @@ def test_the_point_hooks_drop_does_not_bind_the_magnet() -> None:
 
 @pytest.mark.parametrize(("name", "extra"), [("wall90", []),
                                            ("overhang93", OVERHANG93_MAGNET)])  # fmt: skip
-def test_the_drop_path_leaves_the_surface_level_before_it_climbs(
+def test_the_drop_path_keeps_the_vehicle_out_on_the_cables_sphere(
         name: str, extra: list[str]) -> None:  # fmt: skip
-    """From slack points below, at and above p_A, close to the surface: the first leg is
-    level (the slack point's height, within the drop point's climb of p_A's) and ends at
-    the drop point's horizontal position, the second climbs straight up to the drop point
-    (:func:`magnet_drop_point`), and both ends lie within 95 % of the cable from p_A; so
-    on an overhang, whose surface comes nearer with height, the empty boom is as far out
-    as it will be before the vehicle climbs."""
+    """From slack points out from the surface, below, at and above p_A (inside the cable's
+    reach): the path goes straight away from p_A to r = 0.95 l, then along that sphere, in
+    the vertical plane through p_A and the slack point, turning at most 10 deg per leg,
+    monotonic in height, to the drop point (:func:`magnet_drop_point`, on the sphere); at
+    every waypoint's height it is at least as far out as the straight chord from the slack
+    point to the drop point (flown straight on overhang93, the empty boom dragged over the
+    wall and the plate)."""
     s = load_scenario(name, ["mechanism.kind=magnet", *extra])
     geo = plan_mission(s, Plant(s).start_state()).geometry
-    p_A, L = geo.p_A, s.tether.length
+    p_A, r = geo.p_A, 0.95 * s.tether.length
     n_S = geo.surface.R_WS[:, 2]  # the surface's normal, out to the free side
     out_W = np.array([n_S[0], n_S[1], 0.0]) / math.hypot(n_S[0], n_S[1])
     assert float((Plant(s).start_state().p_W - p_A) @ out_W) > 0.0  # the vehicle's side
-    for dz in (-0.3, -0.05, 0.0, 0.05, 0.3):
-        slack = p_A + 0.2 * out_W + np.array([0.0, 0.0, dz])
-        first, drop = magnet_drop_path(s, geo, slack)
+    side = np.cross([0.0, 0.0, 1.0], out_W)
+    for dz in (-0.25, -0.1, 0.0, 0.1):
+        slack = p_A + 0.22 * out_W + 0.03 * side + np.array([0.0, 0.0, dz])
+        path = magnet_drop_path(s, geo, slack)
+        drop = path[-1]
         assert np.allclose(drop, magnet_drop_point(s, geo, slack))
-        climb = drop[2] - p_A[2]
-        assert climb > 0.0
-        assert first[2] == pytest.approx(min(max(slack[2], p_A[2] - climb), p_A[2] + climb))
-        assert np.allclose(first[0:2], drop[0:2])  # then straight up
-        for p in (first, drop):
-            assert float(np.linalg.norm(p - p_A)) <= 0.95 * L + 1e-12
-        # the first leg is level where the slack point is within the climb of p_A
-        if abs(dz) <= climb:
-            assert first[2] == pytest.approx(slack[2])
-        # out from the surface: the drop point's horizontal distance is the slack point's
-        # or more along the way out
-        assert float((first - p_A) @ out_W) >= float((slack - p_A) @ out_W)
+        d = slack - p_A
+        assert np.linalg.norm(d) < r
+        # radially out to the sphere first
+        assert np.allclose(path[0], p_A + r * d / np.linalg.norm(d))
+        e = np.array([d[0], d[1], 0.0]) / math.hypot(d[0], d[1])
+        normal = np.cross([0.0, 0.0, 1.0], e)  # of the vertical plane through p_A, slack
+        prev = path[0]
+        for p in path:
+            assert float(np.linalg.norm(p - p_A)) == pytest.approx(r, abs=1e-9)
+            assert float((p - p_A) @ normal) == pytest.approx(0.0, abs=1e-12)
+            u, v = (prev - p_A) / r, (p - p_A) / r
+            assert math.degrees(math.acos(min(1.0, float(u @ v)))) <= 10.0 + 1e-9
+            assert (p[2] - prev[2]) * (drop[2] - path[0][2]) >= -1e-12  # monotonic
+            # the chord from the slack point to the drop point at p's height
+            f = (p[2] - slack[2]) / (drop[2] - slack[2])
+            if 0.0 <= f <= 1.0:
+                chord = slack + f * (drop - slack)
+                assert float((p - p_A) @ e) >= float((chord - p_A) @ e) - 1e-12
+            prev = p

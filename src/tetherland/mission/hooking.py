@@ -246,22 +246,41 @@ def magnet_drop_point(scenario: Scenario, geometry: LandingGeometry,
     return p_A + out * e + np.array([0.0, 0.0, up])
 
 
+DROP_ARC_STEP_DEG = 10.0
+"""Largest turn about p_A between the waypoints of the arc to the drop point [deg]."""
+
+
 def magnet_drop_path(scenario: Scenario, geometry: LandingGeometry,
                      p_att_W: FloatArray) -> list[FloatArray]:  # fmt: skip
     """Attachment points from the slack point ``p_att_W`` to the drop point
-    (:func:`magnet_drop_point`), F_W [m]: first straight out from the surface, level, to
-    the drop point's horizontal distance from p_A (at a height within the drop point's
-    climb of p_A's, so that the cable stays within 95 % of its length), then to the drop
-    point. Where the slack point is close to the surface the empty boom's tip is too, and
-    on an overhang a straight climb to the drop point brings the surface nearer: flown
-    straight, overhang93 campaign draw 2255857163 dragged the boom's tip over the wall and
-    the plate for 0.9 s, and the rotor fault monitor took its torque for a lost rotor."""
+    (:func:`magnet_drop_point`), F_W [m]: straight away from p_A until the cable is at
+    95 % of its length (if it is not), then up along that sphere about p_A, in the
+    vertical plane through p_A and the slack point, to the drop point, a waypoint at least
+    every :data:`DROP_ARC_STEP_DEG`. Of all paths that keep the cable from going taut this
+    keeps the vehicle, and its empty boom, farthest out at each height. Flown straight,
+    the chord passed nearer the surface: on an overhang, whose surface comes nearer with
+    height, the boom's tip dragged over the wall and the plate for 0.9 s (overhang93
+    campaign draw 2255857163) and the rotor fault monitor took its torque for a lost
+    rotor."""
     drop = magnet_drop_point(scenario, geometry, p_att_W)
     p_A = geometry.p_A
-    climb = float(drop[2] - p_A[2])  # the drop point's height above p_A (>= 0)
-    z = min(max(float(p_att_W[2]), p_A[2] - climb), p_A[2] + climb)
-    out = np.array([drop[0], drop[1], z])
-    return [out, drop]
+    r = 0.95 * scenario.tether.length
+    d = np.asarray(p_att_W, dtype=float) - p_A
+    h = math.hypot(d[0], d[1])
+    e = np.array([d[0], d[1], 0.0]) / max(h, 1e-9)  # as magnet_drop_point's
+    z = np.array([0.0, 0.0, 1.0])
+    points = []
+    dist = float(np.linalg.norm(d))
+    if dist < r:
+        points.append(p_A + d * (r / max(dist, 1e-9)))  # radially out to the sphere
+    start = math.atan2(float(d[2]), h)
+    end = math.atan2(float(drop[2] - p_A[2]), float((drop - p_A) @ e))
+    n = max(1, math.ceil(abs(end - start) / math.radians(DROP_ARC_STEP_DEG)))
+    for k in range(1, n):
+        a = start + (end - start) * k / n
+        points.append(p_A + r * (math.cos(a) * e + math.sin(a) * z))
+    points.append(drop)
+    return points
 
 
 def check_pass(

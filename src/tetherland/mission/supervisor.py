@@ -1061,18 +1061,21 @@ class MissionSupervisor:
         return self._free(t, est)
 
     def _drop_magnet(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
-        """Magnet mechanism, the cable slack: out from the surface, then up, the EPM still
+        """Magnet mechanism, the cable slack: away from p_A, then up about it, the EPM still
         on, to the drop point (:func:`~tetherland.mission.hooking.magnet_drop_path`: the
-        empty boom's tip clear of the surface, the cable almost taut above the magnet), so
+        empty boom's tip as far from the surface as the cable lets it, the cable almost
+        taut above the magnet), so
         that the magnet, let go, falls a few centimetres before the cable swings it
         (switched off at the slack point, 0.25 m under it, it fell 0.6 m and the snatch
         tipped the vehicle: the rotor fault monitor stopped the flight). :meth:`_unhook`
         then switches it off."""
         cfg = self.cfg
         att = self.wp.attachment_W
-        out, drop = magnet_drop_path(self.scenario, self.geo, slack + att)
-        self._path = self._new_path(t, slack, cfg.hooking.speed).to(out - att).to(
-            drop - att, pause=cfg.settle_time)
+        *way, drop = magnet_drop_path(self.scenario, self.geo, slack + att)
+        self._path = self._new_path(t, slack, cfg.hooking.speed)
+        for p in way:
+            self._path.to(p - att)
+        self._path.to(drop - att, pause=cfg.settle_time)
         self._enter(Phase.UNHOOK, t, "cable slack: to the drop point, the magnet still held")
         return self._free(t, est)
 
