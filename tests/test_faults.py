@@ -114,6 +114,46 @@ def test_belief_below_the_surface_is_refused(slope50):
         faulty_belief(slope50, f)
 
 
+@pytest.mark.parametrize(("name", "sets"), [("slope50", ["mechanism.kind=bar"]),
+                                          ("wall90", ["mechanism.kind=magnet"])])  # fmt: skip
+def test_anchor_faults_with_a_mechanism_in_contact_give_beliefs_it_can_hold(name, sets):
+    """The anchor fault on the bar and the magnet, whose anchor height is their hardware's
+    (anchor.h_A must equal the bar's standoff, the magnet's plate plus magnet): 20 drawn
+    errors each make a valid belief. The bar's believed standoff is the believed height
+    (h_A + e . z_S, e . z_S >= 0 drawn); the magnet's error lies along the surface (the
+    plate believed elsewhere on the wall, its thickness and h_A unchanged). Both faults
+    used to fail as a configuration error in the campaign (5 of 5 anchor runs on wall90)."""
+    truth = load_scenario(name, sets)
+    geo = LandingGeometry.from_scenario(truth)
+    z_S, kind = geo.surface.z_S, truth.mechanism.kind
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        f = sample_fault("anchor", (1.0, 2.0), truth, rng)
+        e = np.asarray(f.anchor_belief_error)
+        assert ANCHOR_ERROR[0] <= np.linalg.norm(e) <= ANCHOR_ERROR[1] + 1e-12
+        belief = faulty_belief(truth, f)
+        geo_b = LandingGeometry.from_scenario(belief)
+        np.testing.assert_allclose(geo_b.p_A - geo.p_A, e, atol=1e-12)
+        h_A = truth.anchor.h_A + float(z_S @ e)
+        assert belief.anchor.h_A == pytest.approx(h_A, abs=1e-12)
+        if kind == "bar":
+            assert belief.mechanism.standoff == pytest.approx(h_A, abs=1e-12)
+        else:
+            assert float(z_S @ e) == pytest.approx(0.0, abs=1e-12)
+            assert belief.mechanism.plate_thickness == pytest.approx(
+                truth.mechanism.plate_thickness, abs=1e-12)
+
+
+def test_a_magnet_anchor_fault_off_the_surface_names_the_field():
+    """A magnet's anchor believed 10 cm out from the wall would need a 10 cm plate (the
+    field allows 5 cm at most): refused with one line naming the field."""
+    truth = load_scenario("wall90", ["mechanism.kind=magnet"])
+    z_S = LandingGeometry.from_scenario(truth).surface.z_S
+    with pytest.raises(ConfigError, match="plate_thickness") as err:
+        faulty_belief(truth, FaultsConfig(anchor_belief_error=tuple(0.1 * z_S)))
+    assert "\n" not in str(err.value).strip()
+
+
 # ---------------------------------------------------------------------- sensors and plant
 def test_mocap_outage_drops_exactly_the_window(slope50):
     cfg = slope50.sensors.mocap.model_copy(update={"dropout_rate": 0.0})

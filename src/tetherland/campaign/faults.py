@@ -80,6 +80,8 @@ def sample_fault(
 
     ``belief`` is the scenario the anchor error is added to: its surface normal bounds the
     error's normal component (the believed anchor stays on or above the believed surface).
+    With the magnet the error lies along the surface: the robot believes its plate
+    elsewhere on the wall (a plate believed 5-15 cm thick is no plate).
     """
     t = float(rng.uniform(*t_range))
     if kind == FaultKind.ROTOR.value:
@@ -98,6 +100,9 @@ def sample_fault(
         u /= np.linalg.norm(u)
         if u @ z_S < 0.0:  # keep the believed anchor on or above the surface
             u -= 2.0 * (u @ z_S) * z_S
+        if belief.mechanism.kind == "magnet":  # the plate elsewhere on the surface
+            u -= (u @ z_S) * z_S
+            u /= np.linalg.norm(u)
         e = float(rng.uniform(*ANCHOR_ERROR)) * u
         return FaultsConfig(anchor_belief_error=tuple(float(x) for x in e))
     if kind == FaultKind.JAM.value:

@@ -20,11 +20,6 @@ from tetherland.geometry import LandingGeometry
 from tetherland.randomness import RandomSource
 from tetherland.surface import normal_from_slope, surface_frame
 
-BAR_STANDOFF_MARGIN = 1e-3
-"""Least believed clearance of the bar beyond ``bar_radius + 2 hook_radius`` [m]."""
-MAGNET_PLATE_MIN = 1e-3
-"""Thinnest believed plate of the magnet mechanism (the field's lower bound) [m]."""
-
 
 @dataclass(frozen=True)
 class Gust:
@@ -219,20 +214,9 @@ def apply_perturbation(truth: Scenario, p: Perturbation) -> tuple[Scenario, Scen
     p_A = geo.p_A + geo.surface.x_S * e_x + geo.surface.y_S * e_y
     # the believed anchor at its believed height above the believed surface
     h_A = max(truth.anchor.h_A + e_h, 0.0)
-    if truth.mechanism.kind == "bar":
-        # the anchor is the bar's axis: the believed bar stands at the believed height, and
-        # never nearer the surface than its own geometry allows (the field's lower bound)
-        m = truth.mechanism
-        h_A = max(h_A, m.bar_radius + 2.0 * m.hook_radius + BAR_STANDOFF_MARGIN)
-        belief["mechanism"]["standoff"] = h_A
-    elif truth.mechanism.kind == "magnet":
-        # the anchor is the eye on the magnet held on the plate: the plate's height is
-        # what the robot does not know (its own magnet's thickness it does)
-        m = truth.mechanism
-        plate = h_A - m.magnet_thickness
-        if plate < MAGNET_PLATE_MIN:  # the thinnest plate, exactly (h_A - t rounds below it)
-            plate, h_A = MAGNET_PLATE_MIN, MAGNET_PLATE_MIN + m.magnet_thickness
-        belief["mechanism"]["plate_thickness"] = plate
+    # the bar's standoff or the magnet's plate is what gives the believed height
+    h_A, fields = truth.mechanism.anchor_height_fields(h_A)
+    belief["mechanism"].update(fields)
     p_A = p_A - (z_S @ (p_A - origin) - h_A) * z_S
     belief["anchor"] = {"position": tuple(p_A), "landing_point": None, "h_A": h_A}
     return scenario_from_dict(plant, truth.name), scenario_from_dict(belief, truth.name)

@@ -9,6 +9,11 @@ from pydantic import Field, model_validator
 
 from tetherland.config.base import Section
 
+BAR_STANDOFF_MARGIN = 1e-3
+"""Least believed clearance of the bar beyond ``bar_radius + 2 hook_radius`` [m]."""
+MAGNET_PLATE_MIN = 1e-3
+"""Thinnest believed plate of the magnet mechanism (the field's lower bound) [m]."""
+
 
 class MechanismConfig(Section):
     """How the vehicle's cable engages the anchor (docs/mechanism.md).
@@ -195,6 +200,25 @@ class MechanismConfig(Section):
     """The plant records the magnet as caught (log column ``hook``) once it has touched
     the plate energised for this long, and as released as soon as it is off or does not
     touch the plate; the robot never reads it [s]."""
+
+    def anchor_height_fields(self, h_A: float) -> tuple[float, dict[str, float]]:
+        """A believed anchor height ``h_A`` above the surface as this mechanism can have it,
+        and the mechanism fields that give it [m]: the bar's axis is the anchor, so its
+        ``standoff`` is h_A (at least ``bar_radius + 2 hook_radius`` +
+        :data:`BAR_STANDOFF_MARGIN`); the magnet's anchor is the cable's eye on the magnet
+        held on the plate, so the robot, which knows its own magnet, believes the plate
+        ``h_A - magnet_thickness`` thick (at least :data:`MAGNET_PLATE_MIN`); the point
+        hook's anchor height is free. (A thicker plate than the field's range allows is
+        left to the field's own error.)"""
+        if self.kind == "bar":
+            h = max(h_A, self.bar_radius + 2.0 * self.hook_radius + BAR_STANDOFF_MARGIN)
+            return h, {"standoff": h}
+        if self.kind == "magnet":
+            plate = h_A - self.magnet_thickness
+            if plate < MAGNET_PLATE_MIN:  # the thinnest plate, exactly
+                plate, h_A = MAGNET_PLATE_MIN, MAGNET_PLATE_MIN + self.magnet_thickness
+            return h_A, {"plate_thickness": plate}
+        return h_A, {}
 
     @model_validator(mode="after")
     def _magnet_parts(self) -> MechanismConfig:

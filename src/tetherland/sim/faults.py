@@ -72,7 +72,9 @@ class FaultInjector:
 def faulty_belief(belief: Scenario, faults: FaultsConfig) -> Scenario:
     """The belief the robot flies on: ``belief`` without ``[faults]`` and with the anchor
     displaced by ``faults.anchor_belief_error`` (its height h_A above the believed surface
-    follows the displacement's normal component).
+    follows the displacement's normal component: with the bar as its believed standoff,
+    with the magnet as its believed plate's thickness,
+    :meth:`~tetherland.config.MechanismConfig.anchor_height_fields`).
 
     Raises
     ------
@@ -92,6 +94,15 @@ def faulty_belief(belief: Scenario, faults: FaultsConfig) -> Scenario:
                 f"anchor {-h_A:.3g} m below the surface (its normal component must be >= "
                 f"-anchor.h_A = {-belief.anchor.h_A:g} m)"
             )
+        # the bar's believed standoff or the magnet's believed plate gives that height
+        held, fields = belief.mechanism.anchor_height_fields(h_A)
+        if abs(held - h_A) > 1e-9:
+            raise ConfigError(
+                f"faults.anchor_belief_error = {faults.anchor_belief_error} m puts the believed "
+                f"anchor {h_A:.3g} m above the surface, where mechanism.kind = "
+                f'"{belief.mechanism.kind}" cannot hold it (at least {held:.3g} m)'
+            )
+        data["mechanism"].update(fields)
         data["anchor"] = {"position": tuple(float(x) for x in p_A), "landing_point": None,
                           "h_A": h_A}  # fmt: skip
     return scenario_from_dict(data, belief.name)
