@@ -124,3 +124,25 @@ def test_lead_compensated_command_tracks_a_thrust_ramp():
             assert max(errors[-100:]) < 2e-3
         else:
             assert max(errors[-100:]) > 0.05  # about rate * tau_m = 0.12 N behind
+
+
+@pytest.mark.parametrize("tau", [(0.0, 0.05), (0.03, -0.02), (0.0, 3.0)])
+def test_below_the_floor_the_roll_pitch_torque_is_kept(tau):
+    """A thrust below 4 f_min with a roll/pitch torque (a vehicle tilted 90 deg, its wanted
+    thrust along z_B near zero, turning level): the rotors are raised above f_min by the
+    differential Gamma^-1 [0, tau] needs, which sums to zero, so the torque is delivered
+    whole (scaled down together only where the spread exceeds f_max - f_min) and the total
+    thrust is 4 f_min - 4 min(s d) >= 4 f_min; the lowest rotor sits at f_min. Clipped to
+    the floor with zero torque, the safe hover after a fault on a wall never levelled."""
+    w = np.array([0.3, *tau, 0.02])
+    alloc = LAYOUT.allocate(w)
+    assert alloc.saturation is Saturation.THRUST
+    d = LAYOUT.allocation_inverse[:, 1:3] @ np.asarray(tau)
+    assert d.sum() == pytest.approx(0.0, abs=1e-12)
+    spread = d.max() - d.min()
+    s = min(1.0, (F_MAX - F_MIN) / spread)
+    np.testing.assert_allclose(alloc.wrench[1:3], s * np.asarray(tau), atol=1e-12)
+    assert alloc.wrench[3] == pytest.approx(0.0, abs=1e-12)  # no yaw
+    assert alloc.wrench[0] == pytest.approx(4 * F_MIN - 4 * s * d.min(), abs=1e-12)
+    assert alloc.thrusts.min() == pytest.approx(F_MIN, abs=1e-12)
+    assert alloc.thrusts.max() <= F_MAX + 1e-12

@@ -154,7 +154,12 @@ class RotorLayout:
         yaw torque is scaled by the s in [0, 1] closest to 1 that fits; if no such s
         exists, the yaw torque is dropped and the roll/pitch torques are scaled down
         together (their direction is kept) at exact total thrust; if the total thrust
-        alone does not fit, it is clipped to [4 f_min, 4 f_max] with zero torque.
+        alone does not fit: above 4 f_max it is clipped to it with zero torque, below
+        4 f_min the roll/pitch torque is kept (scaled down together only to fit under
+        f_max) on rotors raised above f_min by the differential it needs, so the total
+        thrust is above the one asked for (a vehicle tilted 90 deg, whose wanted thrust
+        along z_B is near zero, must still turn: with zero torque at the floor the safe
+        hover after a fault on a wall never levelled and fell, docs/walls.md).
         """
         w = np.asarray(wrench, dtype=float).reshape(4)
         Gi = self.allocation_inverse
@@ -175,8 +180,16 @@ class RotorLayout:
             return self._result(
                 base + min(1.0, s[1]) * (Gi[:, 1:3] @ w[1:3]), Saturation.ROLL_PITCH
             )
-        # 3. clip the total thrust, no torque.
+        # 3. the total thrust does not fit: above the ceiling, clip it, no torque; below
+        # the floor, keep the roll/pitch torque (scaled to fit under f_max) on rotors raised
+        # above f_min by the differential it needs (torque before thrust at the bottom: the
+        # roll and pitch columns of Gamma^-1 sum to zero, so the raise adds thrust only)
         n = len(self.spins)
+        if w[0] < n * lo:
+            d = Gi[:, 1:3] @ w[1:3]
+            spread = float(d.max() - d.min())
+            s = 1.0 if spread <= hi - lo else (hi - lo) / spread
+            return self._result(lo + s * (d - d.min()), Saturation.THRUST)
         f_R = min(max(w[0], n * lo), n * hi)
         return self._result(Gi[:, 0] * f_R, Saturation.THRUST)
 

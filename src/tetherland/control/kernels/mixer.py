@@ -144,7 +144,16 @@ def mix_into(
             ok, s0, s1 = _feasible(base, d, lo, hi)
             if ok and s0 <= 1.0 and s1 >= 0.0:
                 level = 2.0
-            else:  # 3. clip the total thrust, no torque
+            elif w[0] < 4.0 * lo:  # 3. below the floor: the roll/pitch torque first, on
+                # rotors raised above f_min by its differential (as RotorLayout.allocate)
+                level = 3.0
+                d_lo, d_hi = math.inf, -math.inf
+                for i in range(4):
+                    d_lo, d_hi = min(d_lo, d[i]), max(d_hi, d[i])
+                s1 = 1.0 if d_hi - d_lo <= hi - lo else (hi - lo) / (d_hi - d_lo)
+                for i in range(4):
+                    base[i] = lo - s1 * d_lo
+            else:  # 3. above the ceiling: clip the total thrust, no torque
                 level = 3.0
                 f_c = min(max(w[0], 4.0 * lo), 4.0 * hi)
                 for i in range(4):
