@@ -825,8 +825,6 @@ class MagnetCable(ElasticCable):
         self._xfrc = data.xfrc_applied[body]
         self.epm_pull = 0.0
         """The EPM's pull on the magnet along the plate's normal at the last step [N]."""
-        self._on = False
-        """Whether the EPM is on (its switching time passed) [-]."""
         self._level = 0.0
         """The EPM's pull as a fraction of ``magnet_force``: it builds up linearly over
         ``epm_on_time`` after the command (the charge pulses magnetise it step by step),
@@ -872,7 +870,7 @@ class MagnetCable(ElasticCable):
     @property
     def epm_on(self) -> bool:
         """Whether the EPM is switched on (its switch-on time over: the whole force) [-]."""
-        return self._on
+        return self._level >= 1.0
 
     def set_epm(self, on: bool) -> None:
         """The robot's command: the EPM on (its pull on the face builds up linearly from the
@@ -885,7 +883,6 @@ class MagnetCable(ElasticCable):
         self._command = on
         self._pending = self._switch_steps[on]
         if self._pending == 0:
-            self._on = on
             self._level = 1.0 if on else 0.0
 
     @property
@@ -914,7 +911,6 @@ class MagnetCable(ElasticCable):
     def _set_now(self, on: bool) -> None:
         self._command = bool(on)
         self._pending = 0
-        self._on = bool(on)
         self._level = 1.0 if on else 0.0
 
     def set_anchor(self, p_A: FloatArray, z_S: FloatArray) -> None:
@@ -937,7 +933,6 @@ class MagnetCable(ElasticCable):
             if self._command:  # building up: linear in the time since the command
                 self._level = max(self._level, 1.0 - self._pending / self._switch_steps[1])
             if not self._pending:
-                self._on = self._command
                 self._level = 1.0 if self._command else 0.0
         if self._latch_pending:
             self._latch_pending -= 1
@@ -951,7 +946,7 @@ class MagnetCable(ElasticCable):
             if pull > self.clip_force:
                 self._unclip()
         s = d.sensordata
-        if s[self._contact] > 0.0 and self._on:
+        if s[self._contact] > 0.0 and self._level >= 1.0:
             self._touching += 1
         else:
             self._touching = 0
