@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from tetherland.campaign.executors import make_executor
+from tetherland.campaign.perturb import Perturbation, apply_perturbation
 from tetherland.config import load_scenario
 from tetherland.design import (
     BeliefBounds,
@@ -24,8 +25,11 @@ from tetherland.design import (
     search_designs,
     verify_designs,
 )
-from tetherland.design.robust import scenario_pass, true_surfaces
+from tetherland.design.robust import believed_hover_margin, scenario_pass, true_surfaces
+from tetherland.design.search import is_robust, rank_key
+from tetherland.geometry import effective_h_R, stretched_link_length
 from tetherland.mission.hooking import pass_clearance
+from tetherland.planning.maneuver import Maneuver, ManeuverSpec, precheck
 from tetherland.surface import Surface, surface_frame_from_slope
 
 WALL_VEHICLE = ["vehicle.mass=0.5", "vehicle.arm_length=0.15", "vehicle.f_min=0.05",
@@ -113,7 +117,8 @@ def test_a_gust_on_a_wall_shrinks_the_clearance_by_exactly_the_gust_deviation():
 
 def _synthetic(length: float, margin: float, clearance: float, verified=None) -> Design:
     point = DesignPoint(90.0, length, (0.0, 0.0, 0.0), 0.0, (-1.0, 0.0, 0.0), 0.2)
-    return Design(point, margin, margin, clearance, None, None, margin, clearance, verified)  # type: ignore[arg-type]
+    return Design(point, margin, margin, clearance, None, None, margin, clearance,  # type: ignore[arg-type]
+                  believed_hover_margin=1.0, verified=verified)  # fmt: skip
 
 
 def test_verified_designs_rank_by_the_wilson_lower_bound_then_by_robust_margins():
@@ -179,3 +184,51 @@ def test_the_wall_vehicle_first_verified_design_lands_9_of_10_perturbed_runs(wal
     first = ranked[0]
     assert first.verified is not None and first.verified.runs == 10
     assert first.verified.successes >= 9
+
+
+def _landed_per_rotor(sc) -> float:
+    """The landed inclined hover's thrust per rotor with the cable at the centre of mass
+    and no ground effect, f_R / 4 = m g (cos(beta) + tan(gamma) sin(beta)) / 4 with
+    sin(gamma) = (h_att - h_A)/(l + s) (docs/theory.md section 13) [N]."""
+    v = sc.vehicle
+    beta = math.radians(sc.surface.slope_deg)
+    h = effective_h_R(sc) - sc.anchor.h_A
+    link = stretched_link_length(h, sc.tether.length, beta, v.mass,
+                                 sc.tether.effective_axial_stiffness)  # fmt: skip
+    gamma = math.asin(h / link)
+    return v.mass * 9.81 * (math.cos(beta) + math.tan(gamma) * math.sin(beta)) / 4.0
+
+
+def test_the_believed_hover_margin_is_the_landed_hover_at_the_worst_belief_corner():
+    """wall90's magnet on its 0.38 m cable (the cable at the centre of mass, no believed
+    ground effect): the landed hover binds, least at the belief that is lighter, steeper
+    and believes the anchor higher (every one lowers f_R = m g (cos(beta) + tan(gamma)
+    sin(beta))); there its rotors are below f_min + control_margin, and the plan's own
+    precheck refuses that belief, while the nominal belief plans."""
+    sc = load_scenario("wall90", ["mechanism.kind=magnet", "tether.length=0.38",
+                                  "planner.model_ground_effect=false"])  # fmt: skip
+    bounds = BeliefBounds.from_scenario(sc)
+    worst = apply_perturbation(sc, Perturbation(
+        mass_factor=1.0 - bounds.mass_rel, slope_error_deg=bounds.slope_error_deg,
+        anchor_error_S=(0.0, 0.0, bounds.anchor_error)))[1]  # fmt: skip
+    f_lo = sc.vehicle.f_min + sc.vehicle.control_margin
+    expected = _landed_per_rotor(worst) - f_lo
+    assert believed_hover_margin(sc, bounds) == pytest.approx(expected, abs=1e-9)
+    assert expected < 0.0 < _landed_per_rotor(sc) - f_lo
+    assert believed_hover_margin(sc, BeliefBounds()) == pytest.approx(
+        _landed_per_rotor(sc) - f_lo, abs=1e-9
+    )
+    assert precheck(ManeuverSpec.from_scenario(worst, Maneuver.LANDING))
+    assert not precheck(ManeuverSpec.from_scenario(sc, Maneuver.LANDING))
+
+
+def test_a_design_the_robot_refuses_on_part_of_its_beliefs_is_not_robust():
+    sc = load_scenario(
+        "wall90", ["vehicle.control_margin=0.2", "mission.hooking.min_clearance=0.02"]
+    )
+    good = _synthetic(0.36, 0.35, 0.05)
+    refused = replace(_synthetic(0.38, 0.50, 0.05), believed_hover_margin=-0.01)
+    assert is_robust(good, sc) and not is_robust(refused, sc)
+    # the larger thrust margin does not lift it over the design the robot always plans
+    ranked = sorted([refused, good], key=lambda d: rank_key(d, sc, DesignSpace()))
+    assert [d.point.length for d in ranked] == [0.36, 0.38]

@@ -75,7 +75,8 @@ def _table(result: DesignResult) -> Table:
     table = Table(title=f"Designs for {result.slope_deg:g} deg, best first")
     verified = any(d.verified is not None for d in result.designs)
     columns = ["#", "l [m]", "r_att z [m]", "h_A [m]", "approach elev. [deg]", "hook drop [m]",
-               "rotor margin [N] robust (nominal)", "clearance [cm] robust (nominal)"]  # fmt: skip
+               "rotor margin [N] robust (nominal)", "believed hovers [N]",
+               "clearance [cm] robust (nominal)"]  # fmt: skip
     for name in columns + (["verified (95 % low)"] if verified else []):
         table.add_column(name, justify="right")
     for k, d in enumerate(result.designs, 1):
@@ -86,6 +87,7 @@ def _table(result: DesignResult) -> Table:
         row = [
             str(k), f"{p.length:g}", f"{p.attachment[2]:g}", f"{p.h_A:g}", f"{elevation:.0f}",
             f"{p.hook_drop:g}", f"{d.robust_rotor_margin:.3f} ({d.min_rotor_margin:.3f})",
+            f"{d.believed_hover_margin:+.3f}",
             f"{100 * d.robust_clearance:.1f} ({100 * d.min_clearance:.1f})",
         ]  # fmt: skip
         if verified:
@@ -113,7 +115,10 @@ def design(
     Candidates pass the landed-hover analysis, the hooking clearance and the planner
     (landing and takeoff OCPs solved and verified); they are ranked by the rotor margin
     over both plans, cable-offset torque included, then by clearance while hooking, both
-    with the belief off by the [perturbation] bounds (robust first). --verify N flies N
+    with the belief off by the [perturbation] bounds (robust first; a design whose
+    boundary hovers, computed from such a belief, leave the rotors below the control
+    margin ("believed hovers" < 0) is one the robot refuses to fly on part of the
+    beliefs, and is not robust). --verify N flies N
     perturbed missions of each of the --candidates best and ranks them by the lower bound
     of their success rate's 95 % interval, then by those margins. The
     overrides of a design reproduce it with any other command (--set). Exits with 1 and

@@ -17,6 +17,11 @@ surface is the true one. This module bounds what is left of the design's margins
   the largest gust (with the believed mass and thrust coefficient at their corners).
 * :func:`robust_rotor_margin`: the rotor margin when the commanded thrusts scale with the
   believed mass and thrust coefficient (:meth:`BeliefBounds.thrust_scale`).
+* :func:`believed_hover_margin`: the rotor margin of the maneuvers' boundary hovers (the
+  taut start hover and the landed inclined hover) as the robot computes them from its
+  belief, at the corners of the mass, slope and anchor-height errors: the robot plans only
+  when they keep the control margin (the plan's precheck), so a design whose landed hover
+  sits just above the rotor floor is refused by the robot on part of its beliefs.
 
 The errors are small, so each margin is extreme at a corner of the error box (to first
 order the distances are linear in the errors); the corners are what is evaluated.
@@ -35,8 +40,10 @@ from scipy.linalg import expm
 from tetherland.analysis.clearance import level_vehicle_distance
 from tetherland.campaign.perturb import Perturbation, apply_perturbation
 from tetherland.config import Scenario
+from tetherland.errors import SingularityError
 from tetherland.geometry import LandingGeometry
 from tetherland.mission.hooking import PIPE_SAMPLES, HookingPass, hooking_pass
+from tetherland.planning.maneuver import Maneuver, ManeuverSpec
 from tetherland.surface import Surface, surface_frame_from_slope
 
 
@@ -106,6 +113,50 @@ def robust_rotor_margin(f_low: float, f_high: float, f_min: float, f_max: float,
     """
     s_lo, s_hi = bounds.thrust_scale()
     return float(min(s_lo * f_low - f_min, f_max - s_hi * f_high))
+
+
+def believed_hover_margin(scenario: Scenario, bounds: BeliefBounds) -> float:
+    """Least rotor margin of the landing's boundary hovers over the belief corners [N].
+
+    For every corner of the believed mass (1 +- ``mass_rel``), slope (+- ``slope_error_deg``),
+    anchor height (+- ``anchor_error``) and, on a pipe, radius (+- ``pipe_radius_error``),
+    built as a campaign builds its belief
+    (:func:`~tetherland.campaign.perturb.apply_perturbation`), the rotor commands of the
+    taut start hover and the landed inclined hover of the landing plan
+    (:class:`~tetherland.planning.maneuver.ManeuverSpec`, the believed ground effect and
+    the cable-offset torque included; the takeoff flies the same two hovers) and their
+    margin min(f_i - (f_min + control_margin), f_max - control_margin - f_i). The plan's
+    precheck (:func:`~tetherland.planning.maneuver.precheck`) refuses a belief whose margin
+    is below 0: the robot does not fly. (The surface's offset along its normal and the
+    anchor's error along the surface move the belief without changing these hovers.)
+    ``-inf`` when a corner's hover does not exist.
+    """
+
+    def corners(half: float) -> tuple[float, ...]:
+        return (0.0,) if half == 0 else (-half, half)
+
+    radii = corners(bounds.pipe_radius_error) if scenario.surface.kind == "pipe" else (0.0,)
+    least = math.inf
+    for dm, ds, dh, dr in itertools.product(
+        corners(bounds.mass_rel), corners(bounds.slope_error_deg), corners(bounds.anchor_error),
+        radii,
+    ):  # fmt: skip
+        p = Perturbation(mass_factor=1.0 + dm, slope_error_deg=ds, anchor_error_S=(0.0, 0.0, dh),
+                         pipe_radius_error=dr)  # fmt: skip
+        belief = apply_perturbation(scenario, p)[1]
+        spec = ManeuverSpec.from_scenario(belief, Maneuver.LANDING)
+        for which in ("start", "final"):
+            try:
+                f_R, f_L = spec.hover(which)
+                phi, theta = spec.outputs(which)
+                thrusts = spec.hover_rotor_thrusts(which)[None, :]
+            except SingularityError:
+                return -math.inf
+            if f_R <= 0.0 or f_L < 0.0:
+                return -math.inf
+            command = spec.rotor_commands(thrusts, phi, theta)[0]
+            least = min(least, float(command.min()) - spec.f_lo, spec.f_hi - float(command.max()))
+    return least
 
 
 def gust_deviation(scenario: Scenario, bounds: BeliefBounds, dt: float = 1e-3) -> float:

@@ -55,7 +55,12 @@ from tetherland.analysis import (
 from tetherland.config import Scenario, with_overrides
 from tetherland.design.fixes import Fix, fast_space, find_fixes, fixes_message
 from tetherland.design.margins import plan_thrust_range, rotor_margin
-from tetherland.design.robust import BeliefBounds, robust_pass_clearance, robust_rotor_margin
+from tetherland.design.robust import (
+    BeliefBounds,
+    believed_hover_margin,
+    robust_pass_clearance,
+    robust_rotor_margin,
+)
 from tetherland.design.space import DesignPoint, DesignSpace
 from tetherland.design.verification import Verification
 from tetherland.errors import ConfigError
@@ -122,6 +127,11 @@ class Design:
         Clearance of the hooking pass from the true surface when the believed surface,
         anchor and mass are off by the error bounds
         (:func:`~tetherland.design.robust.robust_pass_clearance`) [m].
+    believed_hover_margin : float
+        Rotor margin beyond the control margin of the landing's boundary hovers as the
+        robot computes them from a belief off by the error bounds
+        (:func:`~tetherland.design.robust.believed_hover_margin`): below 0 the robot
+        refuses to plan on part of the campaign's beliefs [N].
     verified : Verification or None
         Perturbed missions flown with the design (``design --verify``; None: not flown).
     """
@@ -134,6 +144,7 @@ class Design:
     takeoff: PlanResult
     robust_rotor_margin: float
     robust_clearance: float
+    believed_hover_margin: float
     verified: Verification | None = None
 
     @property
@@ -149,6 +160,7 @@ class Design:
             "landed_rotor_margin_N": self.landed_rotor_margin,
             "robust_rotor_margin_N": self.robust_rotor_margin,
             "robust_clearance_m": self.robust_clearance,
+            "believed_hover_margin_N": self.believed_hover_margin,
             "verified": None if self.verified is None else self.verified.to_dict(),
         }
 
@@ -680,20 +692,26 @@ def _hook_score(h: _Hooking, space: DesignSpace) -> tuple[float, float]:
 
 def is_robust(design: Design, scenario: Scenario) -> bool:
     """Does ``design`` keep the control margin and ``mission.hooking.min_clearance`` when the
-    belief is off by the error bounds?"""
+    belief is off by the error bounds, and does the robot plan on every such belief?"""
     return (
         design.robust_rotor_margin >= scenario.vehicle.control_margin - _TOL
         and design.robust_clearance >= scenario.mission.hooking.min_clearance - _TOL
+        and design.believed_hover_margin >= -_TOL
     )
 
 
 def rank_key(design: Design, scenario: Scenario, space: DesignSpace) -> tuple[float, ...]:
     """Sort key of a design, best first: robust ones (:func:`is_robust`) first, then the larger
-    robust rotor margin, then the larger robust clearance counted up to
+    of the rotor margins left under the belief's errors (the commanded thrusts' beyond the
+    control margin, the believed hovers'), then the larger robust clearance counted up to
     ``space.target_clearance``."""
+    rotor = min(
+        design.robust_rotor_margin - scenario.vehicle.control_margin,
+        design.believed_hover_margin,
+    )
     return (
         0.0 if is_robust(design, scenario) else 1.0,
-        -design.robust_rotor_margin,
+        -rotor,
         -min(design.robust_clearance, space.target_clearance),
     )
 
@@ -734,6 +752,7 @@ def _plan_stage(
         takeoff=plans[1],
         robust_rotor_margin=robust_rotor_margin(f_low, f_high, v.f_min, v.f_max, bounds),
         robust_clearance=robust_pass_clearance(sc, bounds),
+        believed_hover_margin=believed_hover_margin(sc, bounds),
     )
 
 
