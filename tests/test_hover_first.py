@@ -56,6 +56,10 @@ def test_the_threshold_is_m_g_equal_to_four_times_f_max_minus_the_margin():
     # just below the threshold the hover no longer binds (something else may)
     assert analyze(below).tethered.binding is not Infeasibility.CANNOT_HOVER
     assert f"{4 * (f_max - margin) / g:.3g} kg" in too_heavy.message
+    # a vehicle that hovers is not told it cannot (analyze --json prints the message)
+    per_rotor = m_star * (1 - 1e-6) * g / 4
+    assert ok.message.startswith("the vehicle hovers") and f"{per_rotor:.3f}" in ok.message
+    assert "cannot" not in ok.message
 
 
 def test_rotors_that_cannot_throttle_down_to_the_weight_cannot_hover():

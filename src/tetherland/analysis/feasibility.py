@@ -254,7 +254,14 @@ def free_hover(limits: VehicleLimits, g: float = GRAVITY) -> Check:
     lo, hi = limits.f_min + limits.margin, limits.f_max - limits.margin
     weight = limits.mass * g
     margin = min(float(thrusts.min()) - lo, hi - float(thrusts.max()))
-    if hi - float(thrusts.max()) <= float(thrusts.min()) - lo:
+    if margin >= -_TOL:
+        lo_f, hi_f = f"{thrusts.min():.3f}", f"{thrusts.max():.3f}"
+        message = (
+            f"the vehicle hovers: m g = {weight:.2f} N needs "
+            f"{lo_f if lo_f == hi_f else f'{lo_f}-{hi_f}'} N per rotor, inside [f_min + "
+            f"control_margin, f_max - control_margin] = [{lo:.3f}, {hi:.3f}] N"
+        )
+    elif hi - float(thrusts.max()) <= float(thrusts.min()) - lo:
         message = (
             f"the vehicle cannot hover: m g = {weight:.2f} N needs {thrusts.max():.3f} N per "
             f"rotor, above f_max - control_margin = {hi:.3f} N (thrust-to-weight ratio "
