@@ -8,6 +8,11 @@ frame Y to frame X.
 
 from importlib.metadata import PackageNotFoundError, version
 
+from tetherland import kernel_cache
+
+# before numba is imported: compiled kernels cached by their sources (kernel_cache's doc)
+kernel_cache.configure()
+
 try:
     __version__ = version("tetherland")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
