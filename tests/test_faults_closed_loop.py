@@ -140,13 +140,16 @@ def test_hook_jam_is_detected_on_the_return_and_the_vehicle_hovers_hooked():
 
 
 
-def fault_campaign_job(run_id: str, runs: int = 20):
-    """The job of the fault campaign (slope50, ``runs`` per kind, seed 15) named ``run_id``."""
+def fault_campaign_job(run_id: str, runs: int = 20, scenario: str = "slope50",
+                       overrides: tuple[str, ...] = ()):  # fmt: skip
+    """The job of the fault campaign (``scenario`` with ``overrides``, ``runs`` per kind,
+    seed 15) named ``run_id``."""
     from tetherland.campaign.faults import FAULT_KINDS
     from tetherland.campaign.jobs import Job
     from tetherland.campaign.spec import CampaignSpec
 
-    spec = CampaignSpec(scenario=load_scenario("slope50").model_dump(mode="json"), runs=runs,
+    sc = load_scenario(scenario, list(overrides))
+    spec = CampaignSpec(scenario=sc.model_dump(mode="json"), runs=runs,
                         faults=FAULT_KINDS, seed=15)  # fmt: skip
     (run,) = [r for r in spec.expand() if r.run_id == run_id]
     return Job(scenario=spec.scenario, run=run)
@@ -278,3 +281,35 @@ def test_weak_rotor_after_the_hooking_pass_is_the_rotor_and_climbs_away_from_the
     moved = float((log["est_p_W"][-1] - log["est_p_W"][i_f]) @ z_S)
     tol = load_scenario("slope50").mission.flight.waypoint_tolerance
     assert moved > cfg.away_distance - tol
+
+
+def test_weak_rotor_in_the_tethered_takeoff_from_a_wall_steps_away_from_it():
+    """Fault-campaign run rotor-00009 of wall90 with the magnet (0.38 m cable, seed 15):
+    rotor 3 weak in the tethered takeoff, the vehicle pitching from the wall toward level
+    a few centimetres from it. Hovering at the pull point where the fault was found, its
+    weak corner sagging, it put a propeller on the wall (19.7 N). A weak rotor in the
+    tethered landing and takeoff now steps the reference away along z_S as in free flight
+    near the surface: it hovers off the wall on the taut cable."""
+    from tetherland.campaign.jobs import run_job
+    from tetherland.geometry import LandingGeometry
+
+    overrides = ("mechanism.kind=magnet", "tether.length=0.38")
+    job = fault_campaign_job("rotor-00009", scenario="wall90", overrides=overrides)
+    record, result = run_job(job)
+    assert record["status"] == "ok", record["error"]
+    assert record["fault"]["phase"] == "tethered_takeoff"
+    verdict = record["verdict"]
+    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
+    assert not verdict["crashed"] and verdict["crash"] is None
+    assert verdict["abort_reason"].startswith("fault: rotor thrust lost")
+    log = result.log
+    (t_f,) = [e["t"] for e in log.metadata["events"] if e.get("kind") == "fault"]
+    # the reference stepped at once: away_distance farther from the wall along z_S than
+    # the pull point, which is where the estimate was (plus the cable's pull, along d)
+    sc = load_scenario("wall90", list(overrides))
+    z_S = LandingGeometry.from_scenario(sc).surface.z_S
+    i_f = int(np.searchsorted(log["t"], t_f))
+    stepped = float((log["ref_p_W"][i_f] - log["est_p_W"][i_f]) @ z_S)
+    assert stepped > sc.mission.detection.away_distance
+    # and the vehicle ended farther from the wall than where the fault found it
+    assert float((log["p_W"][-1] - log["p_W"][i_f]) @ z_S) > 0.0

@@ -119,6 +119,14 @@ _NEAR_SURFACE = frozenset({_P.APPROACH, _P.RETRY, _P.HOOKING, _P.STRETCH, _P.REL
 """Free-flight phases around the slope: a fault's safe state moves away from the surface
 first when the landers are within ``away_distance`` of it
 (:meth:`MissionSupervisor.near_surface`)."""
+_ROTOR_NEAR_SURFACE = _NEAR_SURFACE | {_P.TETHERED_LANDING, _P.TETHERED_TAKEOFF}
+"""Phases in which a weak rotor's safe state steps away from the surface first when the
+landers are within ``away_distance`` of it: those of :data:`_NEAR_SURFACE` and the
+tethered landing and takeoff. On a wall the vehicle pitching toward level a few
+centimetres from it, its weak corner sagging, put a propeller on the wall while it
+hovered at the pull point where the fault found it (wall90 with the magnet, fault
+campaign seed 15, run rotor-00009); stepped away along z_S it hovers off the wall on
+the taut cable."""
 
 
 _ENDED = frozenset({_P.SAFE_HOVER, _P.ABORTED, _P.DONE})
@@ -484,15 +492,16 @@ class MissionSupervisor:
             return np.zeros(3)
         return max(est.tension or 0.0, 0.0) / (self.mass * n) * d
 
-    def near_surface(self, est: StateEstimate) -> bool:
-        """In free flight around the slope (:data:`_NEAR_SURFACE`; not the tethered
-        phases, where the cable holds the vehicle, nor the pad's) with
+    def near_surface(self, est: StateEstimate, phases: frozenset[Phase] = _NEAR_SURFACE) -> bool:
+        """In one of ``phases`` (default :data:`_NEAR_SURFACE`, free flight around the
+        slope; not the tethered phases, where the cable holds the vehicle, nor the pad's;
+        a weak rotor's check adds the tethered ones, :data:`_ROTOR_NEAR_SURFACE`) with
         the estimated landers closer to the believed surface than
         ``mission.detection.away_distance``: a fault's safe state first moves away from
         the surface along z_S (a weak rotor sinks and tilts the vehicle by centimetres
         before its fault is confirmed, the end of the hooking pass keeps the landers
         0.1-0.2 m from the slope)."""
-        if self.phase not in _NEAR_SURFACE:
+        if self.phase not in phases:
             return False
         clearance = self._contact_rule.geometry.clearance(est.body.p_W, est.body.R_WB)
         return clearance < self.cfg.detection.away_distance
@@ -533,7 +542,7 @@ class MissionSupervisor:
         near = self.near_surface(est)
         if found.kind == FaultKind.JAM:  # still hooked: hover inside the cable's reach
             self.abort(t, est, found.reason, hover_at=self.wp.hook_start)
-        elif found.kind == FaultKind.ROTOR and near:
+        elif found.kind == FaultKind.ROTOR and self.near_surface(est, _ROTOR_NEAR_SURFACE):
             # a weak rotor sinks and tilts the vehicle towards the surface: away at once
             # (a step of the reference along z_S), its lost thrust fed forward, then hover
             self._thrust_loss = self.phase
