@@ -285,9 +285,9 @@ def test_weak_rotor_after_the_hooking_pass_is_the_rotor_and_climbs_away_from_the
 
 def test_weak_rotor_in_the_tethered_takeoff_from_a_wall_steps_away_from_it():
     """Fault-campaign run rotor-00009 of wall90 with the magnet (0.38 m cable, seed 15):
-    the rotor of prop2 at 79 % in the tethered takeoff, the vehicle pitching from the wall toward level
-    a few centimetres from it. Hovering at the pull point where the fault was found, its
-    weak corner sagging, it put a propeller on the wall (19.7 N). A weak rotor in the
+    the rotor of prop2 at 79 % in the tethered takeoff, the vehicle pitching from the wall
+    toward level a few centimetres from it. Hovering at the pull point where the fault was
+    found, its weak corner sagging, it put prop2 on the wall (19.7 N). A weak rotor in the
     tethered landing and takeoff now steps the reference away along z_S as in free flight
     near the surface: it hovers off the wall on the taut cable."""
     from tetherland.campaign.jobs import run_job
