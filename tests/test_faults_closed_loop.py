@@ -313,3 +313,27 @@ def test_weak_rotor_in_the_tethered_takeoff_from_a_wall_steps_away_from_it():
     assert stepped > sc.mission.detection.away_distance
     # and the vehicle ended farther from the wall than where the fault found it
     assert float((log["p_W"][-1] - log["p_W"][i_f]) @ z_S) > 0.0
+
+
+def test_a_rotor_weakened_on_the_wall_is_found_early_in_the_tethered_takeoff():
+    """Fault-campaign run rotor-00007 of wall90 with the magnet (0.38 m cable, seed 15):
+    the rotor of prop1 drops to 58 % in the spin-up, while landed. The torque rule used to
+    start 1.5 s into the tethered takeoff; found then (after its low-pass and dwell, 1.84 s
+    in), prop1 touched the wall 32 ms later. It starts ``tethered_airborne_delay`` (0.5 s)
+    in now: found before the takeoff's first 1.5 s are over, a safe stop off the wall."""
+    from tetherland.campaign.jobs import run_job
+
+    overrides = ("mechanism.kind=magnet", "tether.length=0.38")
+    job = fault_campaign_job("rotor-00007", scenario="wall90", overrides=overrides)
+    record, result = run_job(job)
+    assert record["status"] == "ok", record["error"]
+    assert record["fault"]["phase"] == "spin_up"
+    verdict = record["verdict"]
+    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
+    assert not verdict["crashed"] and verdict["crash"] is None
+    assert verdict["abort_reason"].startswith("fault: rotor thrust lost")
+    det = load_scenario("wall90", list(overrides)).mission.detection
+    (takeoff,) = [p for p in verdict["phases"] if p["name"] == "tethered_takeoff"]
+    (t_f,) = [e["t"] for e in result.log.metadata["events"] if e.get("kind") == "fault"]
+    # after the rule's start, and before the old 1.5 s start could have found it
+    assert takeoff["start"] + det.tethered_airborne_delay <= t_f < takeoff["start"] + 1.5

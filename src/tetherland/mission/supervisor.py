@@ -572,7 +572,7 @@ class MissionSupervisor:
             return
         det = self.cfg.detection
         airborne = t >= self._airborne_after and not (
-            phase == _P_TETHERED_TAKEOFF and t < self._phase_start + det.airborne_delay
+            phase == _P_TETHERED_TAKEOFF and t < self._phase_start + det.tethered_airborne_delay
         )
         planned = None
         if phase in _PLANNED_TENSION:
