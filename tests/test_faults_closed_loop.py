@@ -139,7 +139,6 @@ def test_hook_jam_is_detected_on_the_return_and_the_vehicle_hovers_hooked():
     assert max(p["end"] for p in r.summary["phases"] if p["name"] == "unhook") < event["t"]
 
 
-
 def fault_campaign_job(run_id: str, runs: int = 20, scenario: str = "slope50",
                        overrides: tuple[str, ...] = ()):  # fmt: skip
     """The job of the fault campaign (``scenario`` with ``overrides``, ``runs`` per kind,
@@ -283,6 +282,28 @@ def test_weak_rotor_after_the_hooking_pass_is_the_rotor_and_climbs_away_from_the
     assert moved > cfg.away_distance - tol
 
 
+WALL_MAGNET = ("mechanism.kind=magnet", "tether.length=0.38")
+"""wall90 with the magnet on the cable `design` chooses: the wall fault pilot's scenario."""
+
+
+def _wall_rotor_safe_stop(run_id: str, fault_phase: str):
+    """Fly ``run_id`` of the wall fault pilot (wall90 with the magnet, seed 15) and check
+    that its weak rotor, drawn in ``fault_phase``, ends in a safe stop with no part of the
+    vehicle touching anything; returns (verdict, log, time of the fault's detection)."""
+    from tetherland.campaign.jobs import run_job
+
+    job = fault_campaign_job(run_id, scenario="wall90", overrides=WALL_MAGNET)
+    record, result = run_job(job)
+    assert record["status"] == "ok", record["error"]
+    assert record["fault"]["phase"] == fault_phase
+    verdict = record["verdict"]
+    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
+    assert not verdict["crashed"] and verdict["crash"] is None
+    assert verdict["abort_reason"].startswith("fault: rotor thrust lost")
+    (t_f,) = [e["t"] for e in result.log.metadata["events"] if e.get("kind") == "fault"]
+    return verdict, result.log, t_f
+
+
 def test_weak_rotor_in_the_tethered_takeoff_from_a_wall_steps_away_from_it():
     """Fault-campaign run rotor-00009 of wall90 with the magnet (0.38 m cable, seed 15):
     the rotor of prop2 at 79 % in the tethered takeoff, the vehicle pitching from the wall
@@ -290,23 +311,12 @@ def test_weak_rotor_in_the_tethered_takeoff_from_a_wall_steps_away_from_it():
     found, its weak corner sagging, it put prop2 on the wall (19.7 N). A weak rotor in the
     tethered landing and takeoff now steps the reference away along z_S as in free flight
     near the surface: it hovers off the wall on the taut cable."""
-    from tetherland.campaign.jobs import run_job
     from tetherland.geometry import LandingGeometry
 
-    overrides = ("mechanism.kind=magnet", "tether.length=0.38")
-    job = fault_campaign_job("rotor-00009", scenario="wall90", overrides=overrides)
-    record, result = run_job(job)
-    assert record["status"] == "ok", record["error"]
-    assert record["fault"]["phase"] == "tethered_takeoff"
-    verdict = record["verdict"]
-    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
-    assert not verdict["crashed"] and verdict["crash"] is None
-    assert verdict["abort_reason"].startswith("fault: rotor thrust lost")
-    log = result.log
-    (t_f,) = [e["t"] for e in log.metadata["events"] if e.get("kind") == "fault"]
+    _, log, t_f = _wall_rotor_safe_stop("rotor-00009", "tethered_takeoff")
     # the reference stepped at once: away_distance farther from the wall along z_S than
     # the pull point, which is where the estimate was (plus the cable's pull, along d)
-    sc = load_scenario("wall90", list(overrides))
+    sc = load_scenario("wall90", list(WALL_MAGNET))
     z_S = LandingGeometry.from_scenario(sc).surface.z_S
     i_f = int(np.searchsorted(log["t"], t_f))
     stepped = float((log["ref_p_W"][i_f] - log["est_p_W"][i_f]) @ z_S)
@@ -321,19 +331,8 @@ def test_a_rotor_weakened_on_the_wall_is_found_early_in_the_tethered_takeoff():
     start 1.5 s into the tethered takeoff; found then (after its low-pass and dwell, 1.84 s
     in), prop1 touched the wall 32 ms later. It starts ``tethered_airborne_delay`` (0.5 s)
     in now: found before the takeoff's first 1.5 s are over, a safe stop off the wall."""
-    from tetherland.campaign.jobs import run_job
-
-    overrides = ("mechanism.kind=magnet", "tether.length=0.38")
-    job = fault_campaign_job("rotor-00007", scenario="wall90", overrides=overrides)
-    record, result = run_job(job)
-    assert record["status"] == "ok", record["error"]
-    assert record["fault"]["phase"] == "spin_up"
-    verdict = record["verdict"]
-    assert verdict["outcome"] == Outcome.SAFE_STOP.value, verdict["reason"]
-    assert not verdict["crashed"] and verdict["crash"] is None
-    assert verdict["abort_reason"].startswith("fault: rotor thrust lost")
-    det = load_scenario("wall90", list(overrides)).mission.detection
+    verdict, _, t_f = _wall_rotor_safe_stop("rotor-00007", "spin_up")
+    det = load_scenario("wall90", list(WALL_MAGNET)).mission.detection
     (takeoff,) = [p for p in verdict["phases"] if p["name"] == "tethered_takeoff"]
-    (t_f,) = [e["t"] for e in result.log.metadata["events"] if e.get("kind") == "fault"]
     # after the rule's start, and before the old 1.5 s start could have found it
     assert takeoff["start"] + det.tethered_airborne_delay <= t_f < takeoff["start"] + 1.5
