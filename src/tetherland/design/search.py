@@ -702,9 +702,9 @@ def is_robust(design: Design, scenario: Scenario) -> bool:
 
 def rank_key(design: Design, scenario: Scenario, space: DesignSpace) -> tuple[float, ...]:
     """Sort key of a design, best first: robust ones (:func:`is_robust`) first, then the larger
-    of the rotor margins left under the belief's errors (the commanded thrusts' beyond the
-    control margin, the believed hovers'), then the larger robust clearance counted up to
-    ``space.target_clearance``."""
+    least rotor margin under the belief's errors (the smaller of the commanded thrusts'
+    margin beyond the control margin and the believed hovers' margin), then the larger
+    robust clearance counted up to ``space.target_clearance``."""
     rotor = min(
         design.robust_rotor_margin - scenario.vehicle.control_margin,
         design.believed_hover_margin,
