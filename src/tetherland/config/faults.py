@@ -130,13 +130,12 @@ class FaultDetectionConfig(Section):
     motion-capture check this long into the mission [s]."""
     tethered_airborne_delay: float = Field(0.5, ge=0, le=60)
     """The torque check starts this long into a tethered takeoff, the landers off the
-    surface [s]. In healthy takeoffs the low-passed torque stays below a third of
+    surface. In healthy takeoffs the low-passed torque stays below a third of
     ``rotor_torque`` from the start (at most 0.032 N m: nominal slope50, pipe60, steep70,
     wall90, overhang93 and 25 perturbed draws each of slope50 and of wall90 with the
-    magnet); a rotor weakened
-    while landed tilts the vehicle toward a wall within 1.5 s (wall90 with the magnet,
-    fault run rotor-00007: found after 1.5 s its propeller touched the wall 32 ms later;
-    found after 0.5 s it is a safe stop)."""
+    magnet); a rotor weakened while landed tilts the vehicle toward a wall within 1.5 s
+    (wall90 with the magnet, fault run rotor-00007: found after 1.5 s its propeller
+    touched the wall 32 ms later; found after 0.5 s it is a safe stop) [s]."""
     anchor_length_error: float = Field(0.04, gt=0, le=1)
     """Anchor belief error: the taut cable's estimated length (believed anchor to the
     estimated attachment point, less the stretch) differs from the cable length by more
