@@ -12,6 +12,7 @@ import pytest
 
 from tetherland import GRAVITY
 from tetherland.cli import main
+from tetherland.cli.design import _table
 from tetherland.config import load_scenario, with_overrides
 from tetherland.design import DesignSpace, search_designs
 from tetherland.design.search import DesignLimit
@@ -162,6 +163,11 @@ def test_a_design_the_missions_plan_refuses_is_not_listed():
     for d in ok.designs:
         sc = d.point.apply(base)
         plan_mission(sc, SceneLayout.from_scenario(sc).start_state(sc.vehicle.h_R))
+    # the table: the magnet has no hook drop (the boom holds the eye), whatever the
+    # scenario's tether.hook_drop; the same designs under a point hook would show it
+    for kind, expected in (("magnet", ["n/a"]), ("disk", [f"{base.tether.hook_drop:g}"])):
+        drops = {c.header: list(c.cells) for c in _table(ok, kind).columns}["hook drop [m]"]
+        assert drops == expected * len(ok.designs), kind
 
 
 def test_a_magnet_pass_too_close_to_the_wall_names_the_normal_approach_not_the_hook_drop():

@@ -71,7 +71,10 @@ _FILES = {"map": "feasibility_map.png", "map_data": "feasibility_map.json",
 """What ``--out`` holds, by role."""
 
 
-def _table(result: DesignResult) -> Table:
+def _table(result: DesignResult, mechanism: str = "disk") -> Table:
+    """The designs as a table, best first. ``mechanism`` is the scenario's
+    ``mechanism.kind``: the magnet has no hook drop (its boom holds the eye), so that column
+    reads "n/a" for it."""
     table = Table(title=f"Designs for {result.slope_deg:g} deg, best first")
     verified = any(d.verified is not None for d in result.designs)
     columns = ["#", "l [m]", "r_att z [m]", "h_A [m]", "approach elev. [deg]", "hook drop [m]",
@@ -86,7 +89,8 @@ def _table(result: DesignResult) -> Table:
         elevation = round(math.degrees(math.atan2(-z, math.hypot(x, y))))  # int: no "-0"
         row = [
             str(k), f"{p.length:g}", f"{p.attachment[2]:g}", f"{p.h_A:g}", f"{elevation:.0f}",
-            f"{p.hook_drop:g}", f"{d.robust_rotor_margin:.3f} ({d.min_rotor_margin:.3f})",
+            "n/a" if mechanism == "magnet" else f"{p.hook_drop:g}",
+            f"{d.robust_rotor_margin:.3f} ({d.min_rotor_margin:.3f})",
             f"{d.believed_hover_margin:+.3f}",
             f"{100 * d.robust_clearance:.1f} ({100 * d.min_clearance:.1f})",
         ]  # fmt: skip
@@ -177,7 +181,7 @@ def design(
             f"{result.slope_deg:g} deg"
         )
         if result.feasible:
-            console.print(_table(result))
+            console.print(_table(result, sc.mechanism.kind))
             chosen = result.chosen
             assert chosen is not None
             console.print(
