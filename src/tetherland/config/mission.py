@@ -277,7 +277,15 @@ class MissionConfig(Section):
     abort_time: float | None = Field(None, ge=0, le=3600)
     """Operator abort at this mission time (None: no abort) [s]."""
     safe_hover_time: float = Field(2.0, gt=0, le=60)
-    """Time the safe hover is held after an abort before the run ends [s]."""
+    """Time the safe hover is held after an abort; the run ends after it once the vehicle
+    is still (``safe_hover_settle_speed``) [s]."""
+    safe_hover_settle_speed: float = Field(0.1, gt=0, le=5)
+    """After ``safe_hover_time`` the safe hover is held until the estimated speed has stayed
+    below this for ``settle_time`` (a vehicle recovering from a lost cable or a fault is
+    not yet in its safe state while it still moves) [m/s]."""
+    safe_hover_max_time: float = Field(10.0, ge=0, le=600)
+    """Longest time the safe hover is held beyond ``safe_hover_time`` waiting for the
+    vehicle to be still; the run then ends as it is [s]."""
     done_hold_time: float = Field(0.5, ge=0, le=10)
     """Simulated time with the motors off on the pad before the run ends [s]."""
     time_limit: float = Field(180.0, gt=0, le=3600)

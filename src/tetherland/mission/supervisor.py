@@ -242,6 +242,9 @@ class MissionSupervisor:
         self._airborne_after = cfg.settle_time + cfg.detection.airborne_delay
         """Time from which the rotor rule may run (off the pad) [s]."""
         self._safe_land = False
+        self._moving_at = 0.0
+        """Last time the estimated speed exceeded ``safe_hover_settle_speed`` in a safe
+        hover (from the abort) [s]."""
         self._terminate_at: float | None = None
         self._final_mode = ControlMode.MOTORS_OFF
         self._taut = ThresholdDwell(cfg.stretch.tension_threshold, cfg.stretch.tension_dwell)
@@ -450,6 +453,7 @@ class MissionSupervisor:
             return
         self.abort_reason = reason
         self._event(t, "abort", reason)
+        self._moving_at = t
         if self.phase == Phase.MOTORS_OFF and not away:
             self._enter(Phase.ABORTED, t, f"abort while landed, motors stay off: {reason}")
             self.safe_state = "motors_off"
@@ -1200,7 +1204,15 @@ class MissionSupervisor:
                 self.safe_state = "landed"
                 self._terminate_at = t + self.cfg.done_hold_time
                 return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
-            self._enter(Phase.ABORTED, t, "safe hover held: run ended")
+            cfg = self.cfg
+            v = est.body.v_W
+            if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] > cfg.safe_hover_settle_speed**2:
+                self._moving_at = t
+            still = t - self._moving_at >= cfg.settle_time
+            if not still and t < self._path.t_end + cfg.safe_hover_max_time:
+                return self._free(t, est)  # held on until the vehicle is still
+            self._enter(Phase.ABORTED, t, "safe hover held: run ended" if still
+                        else "safe hover held, the vehicle not still: run ended")  # fmt: skip
             self.safe_state = "hover"
             self._final_mode = ControlMode.FREE_FLIGHT
             self._terminate_at = t
