@@ -36,8 +36,9 @@ from tetherland.control.kernels import hierarchical as kernel
 from tetherland.control.kernels.mixer import OUT_SATURATION
 from tetherland.control.mixer import Mixer, command_from
 from tetherland.errors import SingularityError
-from tetherland.geometry import LandingGeometry
+from tetherland.geometry import LandingGeometry, link_frame
 from tetherland.interfaces import Command, Reference, StateEstimate
+from tetherland.rotations import quat_to_rotmat
 from tetherland.state import LinkState
 
 _ZERO3 = np.zeros(3)
@@ -99,6 +100,45 @@ class HierarchicalController:
         self._state[:] = kernel.hierarchical_state(self.mass, self.g)
         self._state[kernel.STATE_THRUST] = last_thrust
         self._lateral_free = False
+
+    def hand_over(self, estimate: StateEstimate, reference: Reference, thrust: float) -> None:
+        """Take over from the free-flight law that commanded ``thrust`` [N] along the
+        estimated z_B: the link integral starts where this law's first command continues
+        the last one across the link (its z_L and y_L components; along the link the
+        cable takes the difference).
+
+        With an empty integral the model error the free-flight law held (its position
+        integral: a believed mass or thrust coefficient a few per cent off) is dropped and
+        integrated again while the vehicle swings towards the surface: the link lags the
+        plan, then the integral carries it past it, and it reaches the surface early and
+        fast (wall90 with the magnet: 2 deg ahead at 4.5 cm/s, then a bounce). Solving
+        u_z = m l (cos(delta) v_phi - ...) + m g cos(phi) and u_y = ... - m l v_delta for
+        the integral terms k_i int(e) that make (u_y, u_z) the last command's components,
+        clamped as the integral is."""
+        self.reset()
+        link, Y = estimate.link, reference.output
+        if link is None or Y is None or not math.isfinite(thrust) or self.k_i <= 0.0:
+            return
+        F_W = thrust * quat_to_rotmat(estimate.body.q_WB)[:, 2]
+        F_L = link_frame(link.phi, link.delta).T @ (self.R_WA.T @ F_W)
+        rows = np.zeros((3, 4))
+        rows[: min(3, Y.shape[0])] = Y[:3]
+        m, l, g = self.mass, self.length, self.g
+        v_phi = rows[2, 0] + self.k_d * (rows[1, 0] - link.phi_dot) + self.k_p * (
+            rows[0, 0] - link.phi)  # fmt: skip
+        v_delta = rows[2, 1] + self.k_d * (rows[1, 1] - link.delta_dot) + self.k_p * (
+            rows[0, 1] - link.delta)  # fmt: skip
+        cp, sp = math.cos(link.phi), math.sin(link.phi)
+        cd, sd = math.cos(link.delta), math.sin(link.delta)
+        u_z = m * l * (cd * v_phi - 2.0 * sd * link.phi_dot * link.delta_dot) + m * g * cp
+        u_y = m * g * sp * sd - m * l * (
+            v_delta + 0.5 * math.sin(2.0 * link.delta) * link.phi_dot**2)  # fmt: skip
+        bound = self.integral_max / self.k_i
+        integral = self._state[kernel.STATE_INTEGRAL]
+        i_phi = (F_L[2] - u_z) / (m * l * cd * self.k_i)
+        i_delta = -(F_L[1] - u_y) / (m * l * self.k_i)
+        integral[0] = min(max(i_phi, -bound), bound)
+        integral[1] = min(max(i_delta, -bound), bound)
 
     def _delta_free(self, Y: np.ndarray, link: LinkState) -> np.ndarray:
         """``Y`` with the delta rows that leave the link azimuth to gravity

@@ -7,7 +7,8 @@ controller dispatches on ``Reference.mode`` (and scales the command by
 ``Reference.thrust_shed`` off the collective thrust, the preload before it), resets the controller
 it switches to (the DFL thrust extension starts at the last commanded thrust; from
 tethered flight the free-flight position integral starts at the force the tethered law was
-commanding) and records the command jump of every switch.
+commanding, and from free flight the hierarchical law's link integral at the force the
+free-flight law was commanding) and records the command jump of every switch.
 """
 
 from __future__ import annotations
@@ -146,6 +147,13 @@ class SwitchingController:
                     # the thrust is zero, where A is singular: start from the plan's nominal
                     flying = self.mode != ControlMode.MOTORS_OFF and self.last is not None
                     self.tethered.reset(self.last.thrust if flying else None)
+                elif (
+                    self.mode == ControlMode.FREE_FLIGHT and self.last is not None
+                    and hasattr(self.tethered, "hand_over")
+                ):  # fmt: skip
+                    # from flight: continue the commanded force (the model error the
+                    # free-flight integral held is kept, as at the release)
+                    self.tethered.hand_over(estimate, reference, self.last.thrust or 0.0)
                 elif hasattr(self.tethered, "reset"):
                     self.tethered.reset()
         if mode == ControlMode.MOTORS_OFF:
