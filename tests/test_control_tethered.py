@@ -255,13 +255,14 @@ def _tethered_force_W(ctrl: HierarchicalController, est) -> np.ndarray:
 
 @pytest.mark.parametrize("hand_over", [True, False])
 def test_free_flight_to_tethered_continues_the_commanded_force(scenario, plans, hand_over):
-    """Free flight -> tethered (the stretch's end): the link integral starts where the
-    first tethered command continues the last free-flight force across the link (its y_L
-    and z_L components; along x_L the cable takes the rest). The free-flight integral here
-    holds a model error B (a believed mass 4 % heavy and a sideways push); a plain reset
-    starts at the plan's nominal force f_n z_B (the law reproduces its own plan at the
-    start, the cable at the centre of mass), so it drops (F_last . z_B - f_n) z_B across
-    the link, to be integrated again on the way down."""
+    """Free flight -> tethered (the stretch's end), ``integral_hand_over`` on: the link
+    integral starts where the first tethered command continues the last free-flight
+    force across the link (its y_L and z_L components; along x_L the cable takes the
+    rest). The free-flight integral here holds a model error B (a believed mass 4 % heavy
+    and a sideways push); off (the default), a plain reset starts at the plan's nominal
+    force f_n z_B (the law reproduces its own plan at the start, the cable at the centre
+    of mass), so it drops (F_last . z_B - f_n) z_B across the link, to be integrated
+    again on the way down."""
     from tetherland.geometry import link_frame
 
     traj = plans["landing"]
@@ -269,15 +270,14 @@ def test_free_flight_to_tethered_continues_the_commanded_force(scenario, plans, 
     est = estimate_of(start_state(traj), 0.0, geo, geo.link_length)
     m = scenario.vehicle.mass
     B = m * GRAVITY * np.array([0.0, 0.03, -0.04])
-    ctrl = SwitchingController(scenario)
+    flag = f"controller.tethered.integral_hand_over={str(hand_over).lower()}"
+    ctrl = SwitchingController(load_scenario("slope50", [*CENTRED, flag]))
     ctrl.free_flight.position.seed_integral(B)
     hold = Reference(t=0.0, p_W=np.array([est.body.p_W, np.zeros(3), np.zeros(3)]))
     last = ctrl.update(0.0, est, hold)
     F_last = last.thrust * quat_to_rotmat(est.body.q_WB)[:, 2]
     tethered = ctrl.tethered
     assert isinstance(tethered, HierarchicalController)
-    if not hand_over:
-        tethered.hand_over = lambda *args: tethered.reset()  # the law before the hand-over
     ctrl.update(0.002, est, TrajectoryTrack(traj, 0.002, 500.0).reference(0.002))
     F_d = _tethered_force_W(tethered, est)
     L_W = geo.R_WA @ link_frame(est.link.phi, est.link.delta)  # columns x_L, y_L, z_L

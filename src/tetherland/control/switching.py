@@ -7,8 +7,9 @@ controller dispatches on ``Reference.mode`` (and scales the command by
 ``Reference.thrust_shed`` off the collective thrust, the preload before it), resets the controller
 it switches to (the DFL thrust extension starts at the last commanded thrust; from
 tethered flight the free-flight position integral starts at the force the tethered law was
-commanding, and from free flight the hierarchical law's link integral at the force the
-free-flight law was commanding) and records the command jump of every switch.
+commanding, and with ``controller.tethered.integral_hand_over`` from free flight the
+hierarchical law's link integral at the force the free-flight law was commanding) and
+records the command jump of every switch.
 """
 
 from __future__ import annotations
@@ -127,6 +128,7 @@ class SwitchingController:
         self.free_flight = FreeFlightController(scenario)
         self.tethered = make_tethered_controller(scenario, tethered)
         self._c_f = scenario.vehicle.thrust_coefficient
+        self._hand_over = scenario.controller.tethered.integral_hand_over
         self._layout = RotorLayout.from_config(scenario.vehicle)
         self.mode: ControlMode | None = None
         self.last: Command | None = None
@@ -148,8 +150,8 @@ class SwitchingController:
                     flying = self.mode != ControlMode.MOTORS_OFF and self.last is not None
                     self.tethered.reset(self.last.thrust if flying else None)
                 elif (
-                    self.mode == ControlMode.FREE_FLIGHT and self.last is not None
-                    and hasattr(self.tethered, "hand_over")
+                    self._hand_over and self.mode == ControlMode.FREE_FLIGHT
+                    and self.last is not None and hasattr(self.tethered, "hand_over")
                 ):  # fmt: skip
                     # from flight: continue the commanded force (the model error the
                     # free-flight integral held is kept, as at the release)
