@@ -128,11 +128,9 @@ class HierarchicalController:
             rows[0, 0] - link.phi)  # fmt: skip
         v_delta = rows[2, 1] + self.k_d * (rows[1, 1] - link.delta_dot) + self.k_p * (
             rows[0, 1] - link.delta)  # fmt: skip
-        cp, sp = math.cos(link.phi), math.sin(link.phi)
-        cd, sd = math.cos(link.delta), math.sin(link.delta)
-        u_z = m * l * (cd * v_phi - 2.0 * sd * link.phi_dot * link.delta_dot) + m * g * cp
-        u_y = m * g * sp * sd - m * l * (
-            v_delta + 0.5 * math.sin(2.0 * link.delta) * link.phi_dot**2)  # fmt: skip
+        u_y, u_z = kernel.link_force_components(
+            m, l, g, link.phi, link.delta, link.phi_dot, link.delta_dot, v_phi, v_delta)
+        cd = math.cos(link.delta)
         bound = self.integral_max / self.k_i
         integral = self._state[kernel.STATE_INTEGRAL]
         i_phi = (F_L[2] - u_z) / (m * l * cd * self.k_i)

@@ -118,6 +118,19 @@ def hierarchical_state(mass: float, g: float) -> FloatArray:
     return s
 
 
+def link_force_components(
+    m: float, l: float, g: float, phi: float, delta: float, dphi: float, ddelta: float,
+    v_phi: float, v_delta: float,
+) -> tuple[float, float]:
+    """(u_y, u_z) of the hierarchical law for the link accelerations (v_phi, v_delta), in
+    F_L [N] (docs/theory.md 7.5, the inversion of the taut-link dynamics of section 4.2);
+    plain, shared by :func:`hierarchical_reference` and the hand-over from free flight."""
+    cp, sp, cd, sd = math.cos(phi), math.sin(phi), math.cos(delta), math.sin(delta)
+    u_z = m * l * (cd * v_phi - 2.0 * sd * dphi * ddelta) + m * g * cp
+    u_y = m * g * sp * sd - m * l * (v_delta + 0.5 * math.sin(2.0 * delta) * dphi * dphi)
+    return u_y, u_z
+
+
 def hierarchical_reference(
     t: float,
     link: FloatArray,
@@ -153,9 +166,8 @@ def hierarchical_reference(
     state[STATE_T_LAST] = t
     v_phi = yd2[0] + k_d * (yd1[0] - dphi) + k_p * (yd[0] - phi) + k_i * integral[0]
     v_delta = yd2[1] + k_d * (yd1[1] - ddelta) + k_p * (yd[1] - delta) + k_i * integral[1]
-    cp, sp, cd, sd = math.cos(phi), math.sin(phi), math.cos(delta), math.sin(delta)
-    u_z = m * l * (cd * v_phi - 2.0 * sd * dphi * ddelta) + m * g * cp
-    u_y = m * g * sp * sd - m * l * (v_delta + 0.5 * math.sin(2.0 * delta) * dphi * dphi)
+    cd = math.cos(delta)
+    u_y, u_z = link_force_components(m, l, g, phi, delta, dphi, ddelta, v_phi, v_delta)
     cos_sum = math.cos(phi + yd[2])
     margin = min(abs(cd) / 0.1, u_z / (U_Z_MIN_FRACTION * m * g), abs(cos_sum) / COS_SUM_MIN)
     R = quat_to_rotmat(q_WB)
