@@ -64,10 +64,11 @@ def test_a_still_vehicle_ends_the_safe_hover_after_its_hold(slope50_plan):
     assert why == "safe hover held: run ended"
 
 
-@pytest.mark.parametrize("moving_for", [0.5, 3.0])
+@pytest.mark.parametrize("moving_for", [-0.2, 0.5, 3.0])
 def test_a_moving_vehicle_holds_the_safe_hover_until_still(slope50_plan, moving_for: float):
-    """Moving at 3x the settle speed until ``moving_for`` s past the hold, then still: the
-    run ends ``settle_time`` after the last moving tick, not at the hold's end."""
+    """Moving at 3x the settle speed until ``moving_for`` s past the hold's end (before it:
+    < 0), then still: the run ends ``settle_time`` after the last moving tick, not at the
+    hold's end."""
     s, plan = slope50_plan
     m = s.mission
     t_still = _hold_end(s) + moving_for

@@ -1198,6 +1198,9 @@ class MissionSupervisor:
         return self._free(t, est)
 
     def _safe_hover(self, t: float, est: StateEstimate) -> Reference:
+        v = est.body.v_W
+        if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] > self.cfg.safe_hover_settle_speed**2:
+            self._moving_at = t
         if t >= self._path.t_end:
             if self._safe_land:
                 self._enter(Phase.ABORTED, t, "safe landing on the start pad: motors off")
@@ -1205,9 +1208,6 @@ class MissionSupervisor:
                 self._terminate_at = t + self.cfg.done_hold_time
                 return Reference(t=t, mode=ControlMode.MOTORS_OFF, phase=int(self.phase))
             cfg = self.cfg
-            v = est.body.v_W
-            if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] > cfg.safe_hover_settle_speed**2:
-                self._moving_at = t
             still = t - self._moving_at >= cfg.settle_time
             if not still and t < self._path.t_end + cfg.safe_hover_max_time:
                 return self._free(t, est)  # held on until the vehicle is still
