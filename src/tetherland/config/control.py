@@ -75,11 +75,11 @@ class TetheredGains(Section):
     frame at 0.3 rad/s within 0.15 s at 70 deg [-]."""
     offset_compensation: bool = True
     """Cancel the torque of the cable attachment offset with the estimated tension (6.6.5)."""
-    integral_hand_over: bool = False
+    integral_hand_over: bool = True
     """Hierarchical law: when tethered control starts from free flight, start the link
     integral where the first command continues the last free-flight force across the link
-    (the model error the free-flight integral held is kept; docs/theory.md 7.5). Off by
-    default until its campaigns are flown."""
+    (the model error the free-flight integral held is kept; docs/theory.md 7.5); off: the
+    integral starts empty."""
 
 
 class ControllerConfig(Section):
