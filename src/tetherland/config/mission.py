@@ -194,8 +194,11 @@ class TouchdownConfig(Section):
     until the contact was confirmed 1.2-2.4 s later, and a 0.4-0.5 N gust slid the vehicle
     11-15 mm (condition (5), docs/results.md). Pressed, the landers take the load and
     the contact rule's link lag grows at once, so the contact is confirmed within about
-    (``contact.link_lag_deg`` / ``descent_rate_deg_s`` + ``contact.dwell``). Off on walls
-    (``wall90``, ``overhang93``, not flown with it)."""
+    (``contact.link_lag_deg`` / ``descent_rate_deg_s`` + ``contact.dwell``). On walls too:
+    a vehicle whose link ran 2-4 deg ahead of the plan touched early, and the lagging
+    reference then pulled it off the wall while the preload shed thrust; it came back a
+    second later, and the wandering in between slid it 11-16 mm (condition (5), seven
+    failures of the wall campaigns, docs/walls.md)."""
     spin_down_time: float = Field(1.0, ge=0, le=10)
     """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
     zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or
