@@ -343,3 +343,37 @@ def test_a_wall_landing_waits_out_a_swing_along_the_wall():
     sideways = abs(float(log["v_W"][k_L] @ y_S))
     assert sideways < 2.0 * td.hold_lateral_speed
     assert landing["slip_m"] < truth.verdict.rest_slip
+
+
+@pytest.mark.slow
+def test_the_press_descent_keeps_an_early_touch_on_the_wall():
+    """wall90 draw tethered-base-00039 of the 100-run wall campaign (seed 2026): the link
+    ran ahead of the slowed plan and a lander touched the wall with the reference still
+    above the link. Without the press descent (walls had it off) the lagging reference
+    pulled the vehicle off the wall while the preload shed thrust, it came back, and
+    from the first touch to the spin-up it slid 10.9 mm (condition (5)); the same
+    mechanism failed six more draws of the wall campaigns. Now, as on slopes, from the
+    landers' stop t_p the elevation reference stays at or below the guarded descent
+    phi_p - r (t - t_p) from the estimated link there, and the mission succeeds with
+    conditions (1)-(5)."""
+    record, result = run_job(_wall_draw(39, runs=100))
+    assert record["status"] == "ok", record.get("error")
+    verdict = result.verdict.summary
+    assert verdict["success"], verdict["reason"]
+    landing = verdict["landing"]
+    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    log, truth, belief = result.log, result.plant_scenario, result.belief_scenario
+    td, rule = belief.mission.touchdown, belief.mission.contact
+    assert truth.surface.slope_deg == 90.0 and td.press_descent
+    (press,) = [e["t"] for e in log.events if e.get("message", "").startswith("landers stopped")]
+    (t_L,) = [e["t"] for e in log.events if e.get("kind") == "touchdown"]
+    t = log["t"]
+    dt = float(t[1] - t[0])
+    phi_p = log["est_link"][int(np.searchsorted(t, press)), 0]
+    rate = math.radians(td.descent_rate_deg_s)
+    after = (t > press) & (t < t_L)
+    assert after.sum() > 100  # the early touch: the plan was still running
+    cap = phi_p - rate * (t[after] - press)
+    stall = math.radians(rule.stall_rate_deg_s)
+    assert np.all(log["ref_output"][after, 0] <= cap + 2.0 * dt * (rate + stall))
+    assert landing["slip_m"] < truth.verdict.rest_slip
