@@ -208,3 +208,33 @@ def test_the_help_lists_every_command_built_from_its_module():
     assert list(group.commands) == list(COMMANDS)
     for name in COMMANDS:
         assert group.commands[name].name == name
+
+
+def test_the_root_help_lists_the_commands_as_they_describe_themselves_without_loading_them():
+    """``tetherland --help`` lists each command with the first sentence of its own help
+    (:data:`tetherland.cli.SUMMARIES`), shortened as click shortens it, and imports none of
+    the commands' modules (each loads the simulator or the solvers: 2-3 s)."""
+    import typer.core
+    from typer._click import Context, HelpFormatter
+
+    from tetherland.cli import COMMANDS, SUMMARIES, _command
+
+    code = (
+        "import sys\nfrom tetherland.cli import main\nmain(['--help'])\n"
+        "print(sorted(m for m in sys.modules if m.startswith('tetherland.cli.')))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    *help_lines, loaded = out.stdout.splitlines()
+    assert loaded == "[]"
+    group = _command()
+    assert list(SUMMARIES) == list(COMMANDS)
+    for name in COMMANDS:  # the summary is the command's own short help, whole
+        assert group.commands[name].get_short_help_str(10_000) == SUMMARIES[name]
+    # the listing equals the one typer writes from the built commands
+    ctx = Context(group, info_name="tetherland")
+    expected = HelpFormatter()
+    typer.core.TyperGroup.format_commands(group, ctx, expected)
+    listed = expected.getvalue().splitlines()
+    assert len(listed) == len(COMMANDS) + 1 and listed[0] == "Commands:"
+    start = help_lines.index("Commands:")
+    assert help_lines[start : start + len(listed)] == listed

@@ -29,8 +29,73 @@ from tetherland.errors import InfeasibleError, TetherlandError
 INTERRUPTED = 130
 """Exit code after Ctrl-C or SIGTERM (128 + SIGINT)."""
 
+COMMANDS: dict[str, tuple[str, str]] = {
+    "scenarios": ("tetherland.cli.scenarios", "scenarios"),
+    "show": ("tetherland.cli.scenarios", "show"),
+    "analyze": ("tetherland.cli.analyze", "analyze"),
+    "design": ("tetherland.cli.design", "design"),
+    "mission": ("tetherland.cli.mission", "mission"),
+    "judge": ("tetherland.cli.judge", "judge"),
+    "export": ("tetherland.cli.export", "export"),
+    "plan": ("tetherland.cli.plan", "plan"),
+    "replay": ("tetherland.cli.replay", "replay"),
+    "campaign": ("tetherland.cli.campaign", "campaign_app"),
+}
+"""The subcommands, in the order of ``tetherland --help``: name -> (module, function or
+Typer app). A command's module is imported when the command runs: ``tetherland show``
+does not load the simulator, the solvers and matplotlib, and neither does a campaign's
+spawned worker, which runs the console script again as its ``__main__`` (3 s of imports
+per process before)."""
+
+SUMMARIES: dict[str, str] = {
+    "scenarios": "List the built-in scenarios (or print one with --show).",
+    "show": "Print a scenario with its overrides applied, every value resolved, as TOML.",
+    "analyze": "Analyse landing on the scenario's surface with and without a tether (Table 6.1).",
+    "design": "Search the cable length, attachment offset along z_B, anchor height and "
+    "hooking approach with which the scenario's vehicle can land on and take off from the "
+    "slope.",
+    "mission": "Fly the full mission closed loop (MuJoCo, sensors, UKF, planner, "
+    "controllers, supervisor).",
+    "judge": "Judge a saved run again from its log.npz and run.json (any landing method).",
+    "export": "Convert a saved run: --mcap writes run.mcap for Foxglove or Rerun.",
+    "plan": "Plan the tethered landing or takeoff (OCP 6.21 or spline) and write "
+    "trajectory.csv, trajectory.png and plan.json into the output directory (an earlier "
+    "plan there is replaced as a whole only with --overwrite).",
+    "replay": "Fly run RUN_ID of a campaign again, exactly as the campaign did (its "
+    "scenario and sweep value, seed, perturbation, wind and fault), write its run "
+    "directory, and explain it: when, in which phase and why it failed.",
+    "campaign": "Randomised runs in parallel (campaign SCENARIO), or the report of one "
+    "(campaign report DIR).",
+}
+"""Each subcommand's short help (the first sentence of its own help), so that
+``tetherland --help`` lists the commands without importing their modules (2-3 s: every
+command's module loads the simulator or the solvers). A test keeps them equal to the
+commands' own."""
+
+
+class _RootGroup(typer.core.TyperGroup):
+    """The root command: its help lists :data:`SUMMARIES`, not the built commands."""
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        """The subcommands' names, in :data:`COMMANDS`' order (typer's own lists the
+        items, which builds every command)."""
+        return list(self.commands)
+
+    def format_commands(self, ctx: Any, formatter: Any) -> None:
+        """The "Commands" section of ``tetherland --help``, as click writes it (each
+        summary shortened to the width left beside the longest name)."""
+        from typer._click.utils import make_default_short_help
+
+        names = list(self.list_commands(ctx))
+        limit = formatter.width - 6 - max(len(name) for name in names)
+        rows = [(name, make_default_short_help(SUMMARIES[name], limit)) for name in names]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
 app = typer.Typer(
     name="tetherland",
+    cls=_RootGroup,
     help="Tethered landing and takeoff of aerial robots on steep slopes and pipes.",
     no_args_is_help=True,
     add_completion=False,
@@ -52,25 +117,6 @@ def _root(
     ),
 ) -> None:
     """Tethered landing and takeoff of aerial robots on steep slopes and pipes."""
-
-
-COMMANDS: dict[str, tuple[str, str]] = {
-    "scenarios": ("tetherland.cli.scenarios", "scenarios"),
-    "show": ("tetherland.cli.scenarios", "show"),
-    "analyze": ("tetherland.cli.analyze", "analyze"),
-    "design": ("tetherland.cli.design", "design"),
-    "mission": ("tetherland.cli.mission", "mission"),
-    "judge": ("tetherland.cli.judge", "judge"),
-    "export": ("tetherland.cli.export", "export"),
-    "plan": ("tetherland.cli.plan", "plan"),
-    "replay": ("tetherland.cli.replay", "replay"),
-    "campaign": ("tetherland.cli.campaign", "campaign_app"),
-}
-"""The subcommands, in the order of ``tetherland --help``: name -> (module, function or
-Typer app). A command's module is imported when the command runs (or the help lists it):
-``tetherland show`` does not load the simulator, the solvers and matplotlib, and neither
-does a campaign's spawned worker, which runs the console script again as its ``__main__``
-(3 s of imports per process before)."""
 
 
 def _subcommand(name: str) -> typer.core.TyperCommand | typer.core.TyperGroup:
