@@ -214,8 +214,8 @@ def test_the_root_help_lists_the_commands_as_they_describe_themselves_without_lo
     """``tetherland --help`` lists each command with the first sentence of its own help
     (:data:`tetherland.cli.SUMMARIES`), shortened as click shortens it, and imports none of
     the commands' modules (each loads the simulator or the solvers: 2-3 s)."""
+    import typer
     import typer.core
-    from typer._click import Context, HelpFormatter
 
     from tetherland.cli import COMMANDS, SUMMARIES, _command
 
@@ -231,8 +231,8 @@ def test_the_root_help_lists_the_commands_as_they_describe_themselves_without_lo
     for name in COMMANDS:  # the summary is the command's own short help, whole
         assert group.commands[name].get_short_help_str(10_000) == SUMMARIES[name]
     # the listing equals the one typer writes from the built commands
-    ctx = Context(group, info_name="tetherland")
-    expected = HelpFormatter()
+    ctx = typer.Context(group, info_name="tetherland")
+    expected = ctx.make_formatter()
     typer.core.TyperGroup.format_commands(group, ctx, expected)
     listed = expected.getvalue().splitlines()
     assert len(listed) == len(COMMANDS) + 1 and listed[0] == "Commands:"

@@ -84,11 +84,12 @@ class _RootGroup(typer.core.TyperGroup):
     def format_commands(self, ctx: Any, formatter: Any) -> None:
         """The "Commands" section of ``tetherland --help``, as click writes it (each
         summary shortened to the width left beside the longest name)."""
-        from typer._click.utils import make_default_short_help
-
         names = list(self.list_commands(ctx))
         limit = formatter.width - 6 - max(len(name) for name in names)
-        rows = [(name, make_default_short_help(SUMMARIES[name], limit)) for name in names]
+        rows = [
+            (name, typer.core.TyperCommand(name, help=SUMMARIES[name]).get_short_help_str(limit))
+            for name in names
+        ]
         with formatter.section("Commands"):
             formatter.write_dl(rows)
 
