@@ -352,7 +352,7 @@ def test_the_press_descent_keeps_an_early_touch_on_the_wall():
     above the link. Without the press descent (walls had it off) the lagging reference
     pulled the vehicle off the wall while the preload shed thrust, it came back, and
     from the first touch to the spin-up it slid 10.9 mm (condition (5)); the same
-    mechanism failed six more draws of the wall campaigns. Now, as on slopes, from the
+    mechanism failed ten more draws of the wall campaigns. Now, as on slopes, from the
     landers' stop t_p the elevation reference stays at or below the guarded descent
     phi_p - r (t - t_p) from the estimated link there, and the mission succeeds with
     conditions (1)-(5)."""

@@ -197,8 +197,8 @@ class TouchdownConfig(Section):
     (``contact.link_lag_deg`` / ``descent_rate_deg_s`` + ``contact.dwell``). On walls too:
     a vehicle whose link ran 2-4 deg ahead of the plan touched early, and the lagging
     reference then pulled it off the wall while the preload shed thrust; it came back a
-    second later, and the wandering in between slid it 11-16 mm (condition (5), seven
-    failures of the wall campaigns, docs/walls.md)."""
+    second later, and the wandering in between slid it 11-22 mm (condition (5), eleven
+    failures of the six wall campaigns, docs/walls.md)."""
     spin_down_time: float = Field(1.0, ge=0, le=10)
     """Spin-down: from the confirmed contact (t_L) every rotor thrust is ramped linearly to
     zero over this time (``Reference.thrust_scale``), and the motors go off at its end (or
