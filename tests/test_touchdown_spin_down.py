@@ -309,6 +309,18 @@ def _wall_draw(index: int, *, runs: int = 20) -> Job:
     return Job(scenario=spec.scenario, run=run)
 
 
+def _lands_on_the_wall(index: int, *, runs: int = 20):
+    """Fly :func:`_wall_draw` as the campaign's workers do, check that it lands with
+    conditions (1)-(5) and return (the verdict's landing, the log, truth, belief)."""
+    record, result = run_job(_wall_draw(index, runs=runs))
+    assert record["status"] == "ok", record.get("error")
+    verdict = result.verdict.summary
+    assert verdict["success"], verdict["reason"]
+    landing = verdict["landing"]
+    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
+    return landing, result.log, result.plant_scenario, result.belief_scenario
+
+
 @pytest.mark.slow
 def test_a_wall_landing_waits_out_a_swing_along_the_wall():
     """wall90 draw tethered-base-00014 (seed 2026, 20 runs): before, a 0.49 N gust set the
@@ -320,13 +332,7 @@ def test_a_wall_landing_waits_out_a_swing_along_the_wall():
     true sideways speed along the wall at the first touch is below twice that speed, the
     slip from the first touch stays within condition (5), and the mission succeeds with
     conditions (1)-(5)."""
-    record, result = run_job(_wall_draw(14))
-    assert record["status"] == "ok", record.get("error")
-    verdict = result.verdict.summary
-    assert verdict["success"], verdict["reason"]
-    landing = verdict["landing"]
-    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
-    log, truth, belief = result.log, result.plant_scenario, result.belief_scenario
+    landing, log, truth, belief = _lands_on_the_wall(14)
     td = belief.mission.touchdown
     assert td.hold_lateral_speed > 0.0
     t = log["t"]
@@ -356,13 +362,7 @@ def test_the_press_descent_keeps_an_early_touch_on_the_wall():
     landers' stop t_p the elevation reference stays at or below the guarded descent
     phi_p - r (t - t_p) from the estimated link there, and the mission succeeds with
     conditions (1)-(5)."""
-    record, result = run_job(_wall_draw(39, runs=100))
-    assert record["status"] == "ok", record.get("error")
-    verdict = result.verdict.summary
-    assert verdict["success"], verdict["reason"]
-    landing = verdict["landing"]
-    assert landing["conditions"] == {str(i): True for i in range(1, 6)}
-    log, truth, belief = result.log, result.plant_scenario, result.belief_scenario
+    landing, log, truth, belief = _lands_on_the_wall(39, runs=100)
     td, rule = belief.mission.touchdown, belief.mission.contact
     assert truth.surface.slope_deg == 90.0 and td.press_descent
     (press,) = [e["t"] for e in log.events if e.get("message", "").startswith("landers stopped")]
