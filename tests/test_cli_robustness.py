@@ -291,20 +291,20 @@ def test_numbers_still_take_integers_and_arrays_fill_tuples():
 
 
 def test_deploy_time_that_cannot_fit_the_time_limit_is_bad_input(capsys):
-    code = main(["mission", "slope50", "--set", "mission.deploy_time=179.5"])
+    code = main(["mission", "slope50", "--set", "mission.deploy_time=299.5"])
     err = one_error(capsys, code)
     assert "mission.deploy_time" in err and "mission.time_limit" in err
 
 
 @pytest.mark.slow
 def test_deploy_time_that_cuts_the_return_off_is_not_flown(tmp_path, capsys):
-    """The fixed holds fit (121 < 180 s), but with the flight legs and the plans the
-    nominal slope50 mission (80 s at deploy_time 2 s) needs about 200 s: not flown."""
+    """The fixed holds fit (241 < 300 s), but with the flight legs and the plans the
+    nominal slope50 mission (80 s at deploy_time 2 s) needs about 320 s: not flown."""
     out = tmp_path / "m"
-    code = main(["mission", "slope50", "--set", "mission.deploy_time=120", "--out", str(out)])
+    code = main(["mission", "slope50", "--set", "mission.deploy_time=240", "--out", str(out)])
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.count("\n") == 0
-    assert "mission.time_limit = 180 s is too short" in err
+    assert "mission.time_limit = 300 s is too short" in err
     assert not out.exists()
 
 

@@ -143,7 +143,7 @@ class TouchdownConfig(Section):
     reference backs away from the surface along the plan instead of only stopping (a
     vehicle approaching at a few cm/s does not stop within the last centimetre; 0: the
     clock stands still) [-]."""
-    lateral_clearance: float = Field(0.05, ge=0, le=1)
+    lateral_clearance: float | None = Field(None, ge=0, le=1)
     """Lateral release: within this estimated lander clearance of the believed surface, and
     through the guarded descent, the link azimuth is let hang where gravity puts it
     (``Reference.lateral_free``): the hierarchical law's sideways force is then a fraction
@@ -153,7 +153,14 @@ class TouchdownConfig(Section):
     tilt of about 3.7 delta on a wall, where the rotors carry only a quarter of the
     weight, 2.5 delta at 70 deg (condition (2)); hanging free it also lands nearer the
     true landing point, which lies in the true plumb plane; it ends at the first sign of
-    contact with ``lateral_lock`` (0: off) [m]."""
+    contact with ``lateral_lock`` (0: off). None: 0.05 m, and off with the bar mechanism
+    (:func:`tetherland.mission.contact.lateral_release_clearance`): the hook seats on the
+    anchoring cable wherever the line crosses it, and slides along it after the vehicle
+    in the swing and the stretch, which the vehicle flies in its believed plane; the
+    true pivot is then beside the anchor by about the believed plane's error there (the
+    azimuth error over the cable's length), and hanging free swung the vehicle on into
+    that pivot's plumb plane, 1.1-1.2 cm farther from the landing point (35 deg bar sweep,
+    draws 00037 and 00038: 3.0 and 3.4 cm, condition (1)) [m]."""
     lateral_lock: bool = True
     """Lateral lock: end the lateral release at the first sign of contact (the landers
     within ``contact.clearance`` of the believed surface and the surface force or an impact
@@ -291,8 +298,13 @@ class MissionConfig(Section):
     vehicle to be still; the run then ends as it is [s]."""
     done_hold_time: float = Field(0.5, ge=0, le=10)
     """Simulated time with the motors off on the pad before the run ends [s]."""
-    time_limit: float = Field(180.0, gt=0, le=3600)
-    """The run ends (failed) if the mission has not finished by this mission time [s]."""
+    time_limit: float = Field(300.0, gt=0, le=3600)
+    """The run ends (failed) if the mission has not finished by this mission time, about
+    a flight battery's endurance. The bar mechanism's mission takes about 150 s and each
+    further hooking attempt about 60 s more (the retry, the hooking pass and the
+    stretch), so ``hooking.max_attempts`` = 3 needs about 270 s; at 180 s a 35 deg
+    campaign draw caught on its second attempt, landed and took off, and was cut off
+    in the unhooking (``no_return``) [s]."""
     flight: FlightConfig = FlightConfig()
     """Free-flight transfers between the start pad and the anchor."""
     hooking: HookingConfig = HookingConfig()
