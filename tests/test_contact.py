@@ -16,6 +16,7 @@ from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import ControlMode, Feedforward, Reference, StateEstimate
 from tetherland.mission import Phase
 from tetherland.mission.contact import (
+    LATERAL_CLEARANCE,
     ContactGeometry,
     ContactRule,
     SlowApproach,
@@ -188,7 +189,7 @@ def test_the_slow_approach_caps_the_reference_speed_near_the_surface(scenario, g
     alpha dt and the k-th derivative rows (and the feed-forward rates) scale by alpha^k."""
     cfg = scenario.mission
     rule = ContactRule(scenario)
-    slow = SlowApproach(cfg.touchdown, rule.geometry, scenario.tether.length)
+    slow = SlowApproach(cfg.touchdown, rule.geometry, scenario.tether.length, LATERAL_CLEARANCE)
     l, v0, gain = scenario.tether.length, cfg.touchdown.approach_speed, cfg.touchdown.approach_gain
     rate = math.radians(5.0)  # 0.1 m/s of reference speed at l = 1.2 m
     c = 0.01
@@ -223,7 +224,9 @@ def test_the_rate_hold_backs_the_clock_while_the_frame_rotates_near_the_surface(
     from dataclasses import replace
 
     cfg = scenario.mission
-    slow = SlowApproach(cfg.touchdown, ContactRule(scenario).geometry, scenario.tether.length)
+    slow = SlowApproach(
+        cfg.touchdown, ContactRule(scenario).geometry, scenario.tether.length, LATERAL_CLEARANCE
+    )
     l, v0, gain = scenario.tether.length, cfg.touchdown.approach_speed, cfg.touchdown.approach_gain
     rate = math.radians(5.0)
     c = 0.5 * cfg.touchdown.hold_clearance
@@ -255,7 +258,9 @@ def test_the_rate_hold_backs_the_clock_while_the_frame_rotates_near_the_surface(
     tau4 = slow.advance(10.0 + 5 * dt, spinning(far, [w, 0.0, 0.0], 10.0), rate)
     assert slow.alpha == 1.0 and tau4 == pytest.approx(tau3 + dt)
     # never before the plan's start
-    early = SlowApproach(cfg.touchdown, ContactRule(scenario).geometry, scenario.tether.length)
+    early = SlowApproach(
+        cfg.touchdown, ContactRule(scenario).geometry, scenario.tether.length, LATERAL_CLEARANCE
+    )
     early.start(10.0)
     assert early.advance(10.0 + dt, spinning(c, [w, 0.0, 0.0], 10.0), rate) == 10.0
     # the hold ends after touchdown.hold_max_time in total
@@ -295,7 +300,7 @@ def test_the_swing_hold_backs_the_clock_away_from_a_swing_along_a_wall():
 
     fast, slow_swing = 1.5 * td.hold_lateral_speed, 0.9 * td.hold_lateral_speed
     dt = 0.01
-    slow = SlowApproach(td, rule.geometry, l)
+    slow = SlowApproach(td, rule.geometry, l, LATERAL_CLEARANCE)
     slow.start(9.0)
     tau0 = slow.advance(10.0, swinging(0.0, 10.0), rate)
     tau = slow.advance(10.0 + dt, swinging(-fast, 10.0 + dt), rate)  # either sign
@@ -310,7 +315,9 @@ def test_the_swing_hold_backs_the_clock_away_from_a_swing_along_a_wall():
     tau5 = slow.advance(10.0 + 5 * dt, swinging(fast, 10.0 + 5 * dt), rate)
     assert slow.alpha == 0.0 and tau5 == tau4
     # the default: no swing hold
-    off = SlowApproach(td.model_copy(update={"hold_lateral_speed": 0.0}), rule.geometry, l)
+    off = SlowApproach(
+        td.model_copy(update={"hold_lateral_speed": 0.0}), rule.geometry, l, LATERAL_CLEARANCE
+    )
     off.start(9.0)
     off.advance(10.0, swinging(0.0, 10.0), rate)
     off.advance(10.0 + dt, swinging(10.0 * fast, 10.0 + dt), rate)

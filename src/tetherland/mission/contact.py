@@ -315,6 +315,21 @@ def contact_hold(
     )  # fmt: skip
 
 
+LATERAL_CLEARANCE = 0.05
+"""``mission.touchdown.lateral_clearance`` when it is None, but with the bar [m]."""
+
+
+def lateral_release_clearance(scenario: Scenario) -> float:
+    """The lateral release's clearance [m]: ``mission.touchdown.lateral_clearance``; when
+    None, :data:`LATERAL_CLEARANCE`, or 0 (no release) with the bar mechanism, whose hook
+    seats beside the anchor in the plane the vehicle flew the stretch in: let hang, the
+    vehicle swings into the seat's plumb plane rather than the landing point's."""
+    c = scenario.mission.touchdown.lateral_clearance
+    if c is not None:
+        return c
+    return 0.0 if scenario.mechanism.kind == "bar" else LATERAL_CLEARANCE
+
+
 class SlowApproach:
     """The plan's clock slowed near the surface: the last centimetres at a capped speed.
 
@@ -343,10 +358,16 @@ class SlowApproach:
     geometry : ContactGeometry
     length : float
         Believed cable length l [m].
+    lateral_clearance : float
+        The lateral release's clearance (:func:`lateral_release_clearance`) [m].
     """
 
-    def __init__(self, cfg: TouchdownConfig, geometry: ContactGeometry, length: float) -> None:
+    def __init__(
+        self, cfg: TouchdownConfig, geometry: ContactGeometry, length: float,
+        lateral_clearance: float,
+    ) -> None:  # fmt: skip
         self.cfg = cfg
+        self.lateral_clearance = lateral_clearance
         self.geometry = geometry
         self.length = length
         g = geometry
@@ -385,7 +406,7 @@ class SlowApproach:
         slow = v0 > 0.0 and speed > v0
         holds = cfg.hold_rate > 0.0 or cfg.hold_lateral_speed > 0.0
         hold = holds and self.held < cfg.hold_max_time
-        lateral = cfg.lateral_clearance
+        lateral = self.lateral_clearance
         self.clearance = math.inf
         if slow or hold or lateral > 0.0:
             px, py, pz = est.body.p_W.tolist()

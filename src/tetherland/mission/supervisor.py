@@ -55,6 +55,7 @@ from tetherland.mission.contact import (
     contact_hold,
     early_contact_armed,
     guarded_descent,
+    lateral_release_clearance,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
@@ -263,7 +264,12 @@ class MissionSupervisor:
         start (``mission.stretch.tension_tare``; None: off): every reading of the
         supervisor and its fault monitor is taken less it from then on."""
         self._contact_rule = ContactRule(scenario)
-        self._slow = SlowApproach(cfg.touchdown, self._contact_rule.geometry, self.geo.link_length)
+        self._lateral_clearance = lateral_release_clearance(scenario)
+        """The lateral release's clearance (``mission.touchdown.lateral_clearance``) [m]."""
+        self._slow = SlowApproach(
+            cfg.touchdown, self._contact_rule.geometry, self.geo.link_length,
+            self._lateral_clearance,
+        )  # fmt: skip
         self._landing_rate = 0.0  # |phi_d'| of the landing plan at the approach clock
         self._search_start: float | None = None
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
@@ -854,7 +860,7 @@ class MissionSupervisor:
         planned = self._track.reference(tau, self.phase)
         self._landing_rate = abs(float(planned.output[1, 0]))
         ref = self._slow.scale(planned, t)
-        ref = self._lateral(ref, self._slow.clearance < self.cfg.touchdown.lateral_clearance)
+        ref = self._lateral(ref, self._slow.clearance < self._lateral_clearance)
         ref = self._pressed(ref, t)
         if early_contact_armed(self.cfg.contact, tau, track.t0, track.duration):
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
@@ -939,7 +945,7 @@ class MissionSupervisor:
         if self._sign_t is not None:
             return
         self._sign_t = t
-        if td.lateral_lock and td.lateral_clearance > 0.0:
+        if td.lateral_lock and self._lateral_clearance > 0.0:
             self._delta_lock = est.link.delta
             self._event(t, "contact", f"first sign of contact, link azimuth held: {ev.describe()}")
 
@@ -979,7 +985,7 @@ class MissionSupervisor:
         assert self._track is not None
         cfg = self.cfg
         if self._hold is None:  # searching for the surface
-            ref = self._lateral(self._search_reference(t), cfg.touchdown.lateral_clearance > 0.0)
+            ref = self._lateral(self._search_reference(t), self._lateral_clearance > 0.0)
             ref = self._pressed(ref, t)
             decision = self._contact_rule.update(t, est, ref.output[0, 0])
             self._lock_on_contact(t, est, decision)
