@@ -1,8 +1,8 @@
 """The bar mechanism's landing and return on the 100-per-slope sweep's draws.
 
-Where the hook seats on the anchoring cable (beside the anchor, after the vehicle), what
-the lateral release does with that seat, and how long a mission with a second hooking
-attempt takes (docs/mechanism.md, *The bar's sweep*).
+Where the hook seats on the anchoring cable (beside the anchor, after the vehicle), and
+what the lateral release does with that seat (docs/mechanism.md, *The seat beside the
+anchor*).
 """
 
 from __future__ import annotations
@@ -57,17 +57,3 @@ def test_the_hook_seated_beside_the_anchor_does_not_pull_the_landing_aside() -> 
     assert landing["position_error_m"] <= truth.verdict.position_error
     p_RL = log["p_W"][k] - geo.h_R * quat_to_rotmat(log["q_WB"][k])[:, 2]
     assert abs(float((p_RL - geo.p_L) @ y_S)) < abs(seat)
-
-
-@pytest.mark.slow
-def test_a_bar_mission_with_a_second_hooking_attempt_returns_within_the_time_limit() -> None:
-    """Closed loop, the 35 deg sweep's draw 00053: the hook caught the bar on the wrong
-    side on the first pass (the robot read no tension, retried) and on the second. Its
-    mission ends after 180 s (the former limit, where it ran out in the unhooking), home
-    on the pad within ``mission.time_limit``."""
-    truth = _bar(35)
-    r = fly_perturbed(draw_run(truth, 1336911014), "tethered")
-    s = r.summary
-    assert [a["outcome"] for a in s["hooking"]["attempts"]] == ["wrong_side", "caught"]
-    assert s["success"], s["reason"]
-    assert 180.0 < s["times"]["t_done"] < truth.mission.time_limit
