@@ -211,6 +211,27 @@ def test_belief_errors_are_drawn_in_every_direction_within_their_bounds(name):
     assert record["anchor_error_z_S"] == draws[0].anchor_error_S[2]
 
 
+def test_a_campaign_run_meets_gusts_until_its_time_limit():
+    """A run's gusts start anywhere up to ``mission.time_limit`` (the bar's mission flies
+    150 s, its return after 120 s), and the gusts of its first 120 s are those a 120 s
+    horizon draws from the seed's wind stream: a longer horizon only adds later ones."""
+    from tetherland.campaign.jobs import draw_run
+    from tetherland.campaign.perturb import sample_gusts
+
+    truth = load_scenario("slope50")
+    limit = truth.mission.time_limit
+    late = 0
+    for seed in range(10):
+        gusts = draw_run(truth, seed).perturbation.gusts
+        first = sample_gusts(truth.perturbation, RandomSource(seed).stream("wind"), 120.0)
+        assert first and gusts[: len(first)] == first
+        assert all(g.t_start < limit for g in gusts)
+        assert [g.t_start for g in gusts] == sorted(g.t_start for g in gusts)
+        late += sum(g.t_start > 150.0 for g in gusts)
+    # gusts come at wind_gust_rate: about rate x (limit - 150 s) per run after 150 s
+    assert late > 0.5 * 10 * truth.perturbation.wind_gust_rate * (limit - 150.0)
+
+
 @pytest.mark.parametrize("e_h", [0.004, -0.004])
 def test_belief_differs_from_truth_as_drawn_and_the_plant_keeps_the_truth(e_h):
     """pipe60 (h_A = 0) with only position errors: the believed top line is 3 mm out along

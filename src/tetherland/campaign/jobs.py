@@ -105,6 +105,8 @@ def draw_run(
 ) -> PerturbedRun:
     """Draw a campaign run's perturbation (and fault) from its seed's named streams.
 
+    The wind gusts span the whole run, up to ``mission.time_limit``.
+
     Parameters
     ----------
     truth : Scenario

@@ -101,7 +101,10 @@ class Perturbation:
 def sample_gusts(
     c: PerturbationConfig, rng: np.random.Generator, horizon: float = 120.0
 ) -> tuple[Gust, ...]:
-    """Wind gusts over ``horizon`` [s]: Poisson start times, uniform peak force and heading."""
+    """Wind gusts over ``horizon`` [s]: Poisson start times, uniform peak force and heading.
+
+    Drawn in time order, so a longer horizon keeps every gust of a shorter one and adds
+    the later ones."""
     gusts = []
     if c.wind_gust_rate > 0 and c.wind_gust_force > 0:
         t = float(rng.exponential(1.0 / c.wind_gust_rate))
@@ -120,17 +123,19 @@ def sample_gusts(
 
 
 def sample_perturbation(
-    scenario: Scenario, random: RandomSource, horizon: float = 120.0
+    scenario: Scenario, random: RandomSource, horizon: float | None = None
 ) -> Perturbation:
     """Draw one perturbation from the scenario's ``[perturbation]`` ranges.
 
-    The gusts come from ``random``'s ``wind`` stream (over ``horizon`` [s]), everything
+    The gusts come from ``random``'s ``wind`` stream (over ``horizon`` [s]; None: the
+    whole run, ``mission.time_limit``), everything
     else from its ``perturbation`` stream, so that the wind settings leave the model errors
     of a seed unchanged. Within the stream the errors added later are drawn last, so that a
     seed keeps its earlier draws.
     """
     c = scenario.perturbation
-    gusts = sample_gusts(c, random.stream("wind"), horizon)
+    span = scenario.mission.time_limit if horizon is None else horizon
+    gusts = sample_gusts(c, random.stream("wind"), span)
     rng = random.stream("perturbation")
 
     def rel(half: float) -> float:
