@@ -128,10 +128,10 @@ def sample_perturbation(
     """Draw one perturbation from the scenario's ``[perturbation]`` ranges.
 
     The gusts come from ``random``'s ``wind`` stream (over ``horizon`` [s]; None: the
-    whole run, ``mission.time_limit``), everything
-    else from its ``perturbation`` stream, so that the wind settings leave the model errors
-    of a seed unchanged. Within the stream the errors added later are drawn last, so that a
-    seed keeps its earlier draws.
+    whole run, ``mission.time_limit``), everything else from its ``perturbation``
+    stream, so that the wind settings leave the model errors of a seed unchanged. Within
+    the stream the errors added later are drawn last, so that a seed keeps its earlier
+    draws.
     """
     c = scenario.perturbation
     span = scenario.mission.time_limit if horizon is None else horizon
