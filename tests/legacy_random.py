@@ -10,23 +10,33 @@ flew.
 
 from __future__ import annotations
 
-from functools import cached_property
-
 import numpy as np
 
+from tetherland.campaign.perturb import sample_gusts
+from tetherland.config.perturbation import PerturbationConfig
 from tetherland.randomness import RandomSource
+
+LEGACY_GUST_HORIZON = 120.0
+"""The span [s] over which those campaigns drew a run's gusts (now the run's time limit)."""
 
 
 class LegacySource(RandomSource):
-    """A run's random source as campaigns drew it before the named streams."""
+    """A run's random source as campaigns drew it before the named streams.
 
-    @cached_property
-    def _shared(self) -> np.random.Generator:
-        return np.random.default_rng(self.seed)
+    The gusts and then the errors came from one generator, the gusts over
+    :data:`LEGACY_GUST_HORIZON` with the default ``[perturbation]`` wind settings. The
+    ``wind`` stream is that generator (its first 120 s of gusts are those; today's longer
+    horizon draws later ones from where it goes on), and the ``perturbation`` stream the
+    same generator advanced past those 120 s of gusts, so that the errors are those drawn
+    then."""
 
     def stream(self, name: str) -> np.random.Generator:
-        if name in ("wind", "perturbation"):  # one generator, the gusts drawn first
-            return self._shared
+        if name == "wind":
+            return np.random.default_rng(self.seed)
+        if name == "perturbation":
+            rng = np.random.default_rng(self.seed)
+            sample_gusts(PerturbationConfig(), rng, LEGACY_GUST_HORIZON)
+            return rng
         if name == "faults":
             return np.random.default_rng([self.seed, 15])
         return super().stream(name)
