@@ -372,20 +372,19 @@ def fly_study_run(slope: float, seed: int):
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("slope", "seed"),
-    [(60.0, 2046954335), (70.0, 3556918803), (70.0, 1375799514),
-     pytest.param(70.0, 1787690056, marks=pytest.mark.xfail(
-         strict=True,
-         reason="open (issue 22): with the rotor drag on and the press descent on (both "
-         "defaults at 37b19f9) this draw bounces at t = 35.1 s (conditions 2, 3); with either "
-         "one off it lands (slip 2.5 / 0.6 mm): the press descent pivots the frame on one "
-         "lander during a gust's roll swing, as in sweep draw 70-00026 (docs/results.md)"))],
+    [(60.0, 2046954335), (70.0, 3556918803), (70.0, 1375799514), (70.0, 1787690056)],
 )  # fmt: skip
 def test_previously_failing_study_runs_land(slope, seed):
     """The study's failures at 60-70 deg, each flown exactly as the campaign does, now land
     with conditions 1-5 and complete the mission: 2046954335, 3556918803 and 1375799514
     (the guarded descent stopped above the surface: the estimated link 0.8 deg off on a
     1 cm anchor belief error and a gust), 1787690056 (a gust's roll swing met the surface
-    at 0.34 rad/s: the rate hold waits it out); 705352918 has its own test below."""
+    at 0.34 rad/s: the rate hold waits it out; later, with the rotor drag and the press
+    descent on, it bounced at t = 35.1 s, conditions (2) and (3): the preload and the press
+    descent began at 34.82 s on a link the rate hold's retreat had stopped 1.6 deg below
+    its reference, and drove the landers into the surface; since the retreat rule of
+    :meth:`MissionSupervisor._lock_on_contact` the preload waits until the link is back at
+    the reference); 705352918 has its own test below."""
     record, _ = fly_study_run(slope, seed)  # as the study drew it
     assert record["status"] == "ok", record["error"]
     verdict = record["verdict"]

@@ -76,6 +76,9 @@ class ContactEvidence:
         (None: the estimate carries no external force) [N].
     near, stalled, pressed : bool
         Signals 1-3 of the module docstring (``pressed`` is True without a force signal).
+    impact : bool
+        An impact above ``impact_force`` was seen within twice the dwell (False without a
+        force signal).
     """
 
     clearance: float
@@ -85,6 +88,7 @@ class ContactEvidence:
     near: bool
     stalled: bool
     pressed: bool
+    impact: bool = False
 
     def describe(self) -> str:
         """One line for the mission's event log."""
@@ -245,7 +249,7 @@ class ContactRule:
         near = clearance < cfg.clearance and link.phi - geo.phi_star < self._gate
         stalled = lag > self._error and -self._stall < link.phi_dot < self._creep
         force: float | None = None
-        pressed = True
+        pressed, impact = True, False
         if est.external_force_B is not None:
             raw = geo.normal_force(p_W, R_WB, est.external_force_B)
             if cfg.tare_time_constant > 0.0:
@@ -255,8 +259,9 @@ class ContactRule:
             force = self._filtered_force(t, raw)
             if raw > cfg.impact_force:
                 self._impact_at = t
-            pressed = force > cfg.surface_force or t - self._impact_at <= 2.0 * cfg.dwell
-        return ContactEvidence(clearance, lag, link.phi_dot, force, near, stalled, pressed)
+            impact = t - self._impact_at <= 2.0 * cfg.dwell
+            pressed = force > cfg.surface_force or impact
+        return ContactEvidence(clearance, lag, link.phi_dot, force, near, stalled, pressed, impact)
 
     def update(self, t: float, est: StateEstimate, phi_d: float) -> ContactDecision:
         """Feed one tick; CONFIRMED once every signal has agreed for ``contact.dwell``."""

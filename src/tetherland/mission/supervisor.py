@@ -275,6 +275,11 @@ class MissionSupervisor:
         self._delta_lock: float | None = None  # link azimuth held from the first contact sign
         self._sign_t: float | None = None  # time of the first sign of contact [s]
         self._press_t: float | None = None  # time the preload began (landers stopped) [s]
+        self._backed_away = False
+        """True from a tick at which the rate hold ran the landing's clock backwards
+        (:class:`~tetherland.mission.contact.SlowApproach`) until the estimated link is
+        back at or above the reference: meanwhile a stopped link without an impact is not
+        taken for the landers' stop (:meth:`_lock_on_contact`)."""
         self._press_phi = 0.0  # estimated link elevation at the preload's start [rad]
         self._shed_at_contact = 0.0  # preload's thrust shed at the confirmed contact [-]
         self._shed = 0.0  # preload's thrust shed now [-]
@@ -918,10 +923,24 @@ class MissionSupervisor:
         first sign can come while the landers are still a centimetre or so off the surface
         (the estimated push faked by the approach), and shedding thrust then drives them
         into it rocking (condition (3)); a link that the descending reference no longer
-        moves is held by something."""
+        moves is held by something. Not so after the rate hold has backed the reference
+        away (a roll, pitch or sideways swing near the surface): the retreat itself brakes
+        and stops the link, with the reference above it and the braking thrust read as a
+        push, a centimetre or two above the surface. Such a stop counts again only once
+        the estimated link is back at or above the reference, or with an impact (above
+        ``contact.impact_force``, which braking does not make: a lander that meets the
+        surface during the retreat, as in wall90 draw 00039, still starts the preload at
+        once and keeps the vehicle from leaving). Without this, in wall90 draw 00025, 35
+        deg bar draw 00096 and 70 deg draw 1787690056 the shed thrust and the press
+        descent drove the landers from 1-2 cm into the surface at 7-9 cm/s (conditions
+        (2)-(3))."""
         ev = decision.evidence
         if ev is not None and ev.normal_force is not None:
             self._surface_force = ev.normal_force
+        if self._slow.alpha < 0.0:
+            self._backed_away = True
+        elif self._backed_away and ev is not None and ev.link_lag >= 0.0:
+            self._backed_away = False
         sign = (
             ev is not None and ev.normal_force is not None and ev.near and ev.pressed
             and est.link is not None
@@ -933,6 +952,7 @@ class MissionSupervisor:
         if (
             self._press_t is None and td.preload > 0.0
             and ev.link_rate > -math.radians(self.cfg.contact.stall_rate_deg_s)
+            and (ev.impact or not self._backed_away)
         ):  # fmt: skip
             self._press_t = t
             self._press_phi = est.link.phi
