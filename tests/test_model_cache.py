@@ -179,7 +179,9 @@ def test_provenance_asks_git_and_the_libraries_once_per_process(slope50, monkeyp
     first = prov.provenance(slope50, seed=1)
     first["libraries"]["numpy"] = "changed by a caller"
     second = prov.provenance(slope50, seed=2)
-    assert [a[0][:2] for a in calls if a[0][0] == "git"] == [["git", "rev-parse"]]
+    assert [a[0][:3] for a in calls if a[0][0] == "git"] == [
+        ["git", "--no-optional-locks", "describe"]
+    ]
     assert second["git_commit"] == first["git_commit"]
     assert second["libraries"]["numpy"] == np.__version__
     assert second["seed"] == 2 and second["scenario_name"] == "slope50"

@@ -22,17 +22,26 @@ _LIBRARIES = ("numpy", "scipy", "casadi", "mujoco", "pydantic")
 @functools.cache
 def _git_commit() -> str | None:
     """The commit of this checkout, asked once per process (``git`` is a subprocess: a
-    campaign worker would otherwise pay it for every run)."""
-    here = Path(__file__).resolve().parent
+    campaign worker would otherwise pay it for every run); see :func:`checkout_commit`."""
+    return checkout_commit(Path(__file__).resolve().parent)
+
+
+def checkout_commit(directory: Path) -> str | None:
+    """The short commit of the git checkout holding ``directory``, with ``-dirty`` appended
+    when a tracked file differs from it (untracked files do not count), or None outside a
+    checkout or without git: a result computed from changed sources does not claim a
+    commit that did not compute it. One ``git describe`` call, without optional locks (a
+    campaign's workers must not contend for the index with the user's own git)."""
     try:
         out = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            cwd=here,
+            ["git", "--no-optional-locks", "describe", "--always", "--dirty", "--abbrev=7",
+             "--exclude=*"],
+            cwd=directory,
             capture_output=True,
             text=True,
-            timeout=2,
+            timeout=5,
             check=False,
-        )
+        )  # fmt: skip
     except (OSError, subprocess.SubprocessError):
         return None
     return out.stdout.strip() or None if out.returncode == 0 else None
