@@ -166,3 +166,79 @@ def test_predicted_clearance_matches_mujoco_distances_on_walls(slope, yaw):
     assert plant.data.ncon > 0
     deepest = min(plant.data.contact.dist)
     assert deepest == pytest.approx(-0.001, abs=1e-4)
+
+
+MAGNET_WALL = ("mechanism.kind=magnet", "tether.length=0.38")
+"""wall90 with the magnet mechanism (its boom 0.36 m at 40 deg, folding up to 60 deg)."""
+
+
+def _boom_geom_distance(plant: Plant) -> float:
+    """MuJoCo's signed distance between the surface and the boom's capsule [m]."""
+    import mujoco
+
+    m, d = plant.model, plant.data
+    ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n) for n in ("surface", "boom")]
+    return mujoco.mj_geomDistance(m, d, ids[0], ids[1], 1.0, np.zeros(6))
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.3])
+def test_the_magnets_boom_distance_is_the_plants(yaw):
+    """The level vehicle in front of wall90 with the magnet mechanism: the unfolded boom's
+    predicted distance is MuJoCo's for the plant's capsule; along the wall's normal (yaw 0,
+    the approach along -z_S) it is the hinge's distance less L cos(a) and the tube's radius,
+    derived here; clipped, the magnet's face (parallel to the wall) is a further
+    ``magnet_thickness`` nearer; empty, the boom folds up to 60 deg, past the wall's
+    normal (40 + 60 > 90 deg), so its largest distance over its folds is the hinge's."""
+    from tetherland.analysis.clearance import boom_distance, mechanism_distance
+    from tetherland.models.hook import BOOM_RADIUS, magnet_boom
+
+    scenario, surf = _surface("wall90", *MAGNET_WALL)
+    m = scenario.mechanism
+    boom = magnet_boom(scenario)
+    L, a = m.boom_length, math.radians(m.boom_angle_deg)
+    plant = Plant(scenario)
+    R = rotation_from_z_and_yaw(_UP, yaw)
+    for offset in (0.30, 0.33, 0.45):
+        p = surf.origin + offset * surf.z_S + 0.1 * _UP
+        plant.set_state(_level_state(p, yaw))
+        unfolded = boom_distance(scenario, surf, p, R, 0.0)
+        assert unfolded == pytest.approx(_boom_geom_distance(plant), abs=1e-6)
+        hinge = float(surface_distance(surf, p + R @ boom.hinge_B)[0])
+        if yaw == 0.0:
+            assert unfolded == pytest.approx(hinge - L * math.cos(a) - BOOM_RADIUS, abs=1e-9)
+            clipped = mechanism_distance(scenario, surf, p, R, "clipped")
+            tip = hinge - L * math.cos(a)
+            assert clipped == pytest.approx(tip - m.magnet_thickness, abs=1e-9)
+        assert mechanism_distance(scenario, surf, p, R, "held") == pytest.approx(
+            hinge - BOOM_RADIUS, abs=1e-9
+        )
+    # no mechanism on the vehicle: nothing to add
+    plain, surf0 = _surface("wall90")
+    assert mechanism_distance(plain, surf0, surf0.origin + 0.5 * surf0.z_S, R, "held") == math.inf
+
+
+OVERHANG_MAGNET = (
+    "mechanism.kind=magnet", "tether.length=0.36", "mechanism.boom_angle_deg=20",
+    "mechanism.plate_thickness=0.003", "mechanism.magnet_thickness=0.01",
+)  # fmt: skip
+"""overhang93 with the magnet as its campaign flies it (docs/walls.md), boom length apart."""
+
+
+def test_the_take_up_keeps_the_empty_boom_foldable_out_of_the_overhang():
+    """overhang93's take-up point (the level vehicle on the landing's start direction,
+    the frame 2 cm from the overhang) puts the empty 0.32 m boom's unfolded tip behind the
+    surface: the plan accepts it when the boom's 60 deg of fold take it out of the way,
+    and refuses it, naming the boom, when the boom folds only 5 deg."""
+    from tetherland.analysis.clearance import boom_distance, mechanism_distance
+
+    s = load_scenario("overhang93", [*OVERHANG_MAGNET, "mechanism.boom_length=0.32"])
+    plan = plan_mission(s, Plant(s).start_state())
+    wp, surf = plan.waypoints, plan.geometry.surface
+    R = rotation_from_z_and_yaw(_UP, wp.yaw)
+    assert boom_distance(s, surf, wp.slack_out, R, 0.0) < 0.0  # unfolded: behind it
+    assert mechanism_distance(s, surf, wp.slack_out, R, "held") >= 0.0  # folds clear
+    stiff = load_scenario(
+        "overhang93", [*OVERHANG_MAGNET, "mechanism.boom_length=0.32", "mechanism.boom_fold_deg=5"]
+    )
+    with pytest.raises(MissionError, match=r"take-up .* magnet's boom behind the surface"):
+        plan_mission(stiff, Plant(stiff).start_state())

@@ -9,7 +9,10 @@ checks this before it flies and reports the hook drop the slope needs instead of
 The vehicle's collision shape is the one the plant simulates
 (:class:`tetherland.models.airframe.Airframe`): the rotor guards, sampled on their rims
 (5 degree steps, under 0.3 mm error), the corners of the hub, the lander and mount spheres
-and the leg and arm capsules (exact against a plane or a pipe).
+and the leg and arm capsules (exact against a plane or a pipe). With the magnet mechanism
+the checks of the free-flight legs add its boom (:func:`mechanism_distance`): the plant's
+capsule from the hinge to the tip, as far as it can fold, and while the magnet is clipped
+on it the magnet.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from numpy.typing import ArrayLike
 from tetherland.config import Scenario, VehicleConfig
 from tetherland.geometry import FloatArray
 from tetherland.models.airframe import Airframe
+from tetherland.models.hook import BOOM_RADIUS, MagnetWhere, magnet_boom
 from tetherland.rotations import rotation_from_z_and_yaw
 from tetherland.surface import Surface
 
@@ -154,6 +158,66 @@ def vehicle_distance(
     return float(min(d_points.min(), d_spheres.min(), d_caps.min()))
 
 
+def mechanism_distance(
+    scenario: Scenario, surface: Surface, p_W: ArrayLike, R_WB: ArrayLike, magnet: MagnetWhere
+) -> float:
+    """Smallest signed distance [m] of the mechanism's parts carried on the vehicle from the
+    surface, the vehicle's centre of mass at ``p_W`` [m] with attitude ``R_WB``; ``inf``
+    for mechanisms that carry none (the capture disk's point hook, the bar's hanging line,
+    which is no rigid part of the vehicle).
+
+    The magnet mechanism: its boom (:class:`tetherland.models.hook.MagnetBoom`, the plant's
+    capsule of radius :data:`~tetherland.models.hook.BOOM_RADIUS` from the hinge to the
+    tip). With ``magnet = "clipped"`` the boom unfolded and the magnet on its tip, as the
+    cylinder about its axis that holds its square face turned any way about it (the
+    socket's gimbal turns it), radius ``magnet_radius`` sqrt(2), sampled on its face's and
+    back's rims. ``"held"`` and ``"hanging"``: the empty boom, which folds when the surface
+    pushes its tip (up to ``boom_fold_deg``, against a spring of ``boom_preload``), so its
+    distance is the largest over its folds (every 5 deg of the range, the tip then within
+    0.3 mm of the arc): negative only when no fold keeps it out, the boom then on its
+    stop. :func:`boom_distance` gives it at one fold.
+    """
+    if scenario.mechanism.kind != "magnet":
+        return math.inf
+    if magnet == "clipped":
+        boom = boom_distance(scenario, surface, p_W, R_WB, 0.0)
+        rims = np.asarray(p_W, float) + _magnet_rims_B(scenario) @ np.asarray(R_WB, float).T
+        return min(boom, float(surface_distance(surface, rims).min()))
+    fold = math.radians(scenario.mechanism.boom_fold_deg)
+    count = max(1, math.ceil(fold / math.radians(_FOLD_STEP_DEG)))
+    return max(
+        boom_distance(scenario, surface, p_W, R_WB, fold * k / count) for k in range(count + 1)
+    )
+
+
+_FOLD_STEP_DEG = 5.0
+
+
+def boom_distance(
+    scenario: Scenario, surface: Surface, p_W: ArrayLike, R_WB: ArrayLike, fold: float
+) -> float:
+    """Signed distance [m] of the magnet mechanism's boom folded by ``fold`` [rad] (0:
+    unfolded, on its stop) from the surface: the capsule from the hinge to the tip
+    hinge + L (cos(a + fold) n_B + sin(a + fold) w_B), L ``boom_length``, a
+    ``boom_angle_deg`` (:func:`tetherland.models.hook.magnet_fold`'s geometry)."""
+    boom = magnet_boom(scenario)
+    R = np.asarray(R_WB, dtype=float)
+    p = np.asarray(p_W, dtype=float)
+    a = boom.angle + fold
+    tip_B = boom.hinge_B + boom.length * (math.cos(a) * boom.n_B + math.sin(a) * boom.w_B)
+    return float(segment_distance(surface, p + R @ boom.hinge_B, p + R @ tip_B)[0]) - BOOM_RADIUS
+
+
+def _magnet_rims_B(scenario: Scenario) -> FloatArray:
+    """Points on the rims of the clipped magnet's bounding cylinder (back at the eye, face
+    ``magnet_thickness`` beyond along n_B), F_B [m]."""
+    m = scenario.mechanism
+    boom = magnet_boom(scenario)
+    a = math.sqrt(2.0) * m.magnet_radius
+    ring = a * (_RIM[:, :1] * boom.axis_B + _RIM[:, 1:2] * boom.w_B)
+    return np.vstack((boom.eye_B + ring, boom.face_B + ring))
+
+
 def level_vehicle_distance(
     scenario: Scenario, surface: Surface, p_W: ArrayLike, yaw: float
 ) -> float:
@@ -165,6 +229,54 @@ def level_vehicle_distance(
     """
     R = rotation_from_z_and_yaw((0.0, 0.0, 1.0), yaw)
     return vehicle_distance(scenario.vehicle, surface, p_W, R)
+
+
+MECHANISM_MARGIN = 0.0
+"""Least distance the plan keeps between the mechanism's parts on the vehicle and the
+surface (:func:`mechanism_distance`) [m]: the empty boom folds out of the surface's way
+when its tip is pushed harder than its preload (0.5 N for the defaults), so a plan may
+bring it to the surface, but not where even its folds would not keep it out; the frame
+keeps ``mission.hooking.min_clearance``."""
+
+
+@dataclass(frozen=True)
+class VehicleClearance:
+    """Smallest signed distances of the level vehicle's parts from the surface [m].
+
+    Attributes
+    ----------
+    frame_m : float
+        The airframe's collision shape (:func:`level_vehicle_distance`).
+    mechanism_m : float
+        The mechanism's parts on the vehicle (:func:`mechanism_distance`; ``inf``: none).
+    """
+
+    frame_m: float
+    mechanism_m: float
+
+    def keeps(self, margin: float) -> bool:
+        """The frame at least ``margin`` [m] from the surface, the mechanism's parts at
+        least :data:`MECHANISM_MARGIN`."""
+        return self.frame_m >= margin - 1e-9 and self.mechanism_m >= MECHANISM_MARGIN - 1e-9
+
+    def least(self, other: VehicleClearance) -> VehicleClearance:
+        """The smaller of each distance of the two."""
+        return VehicleClearance(
+            min(self.frame_m, other.frame_m), min(self.mechanism_m, other.mechanism_m)
+        )
+
+
+def level_clearance(
+    scenario: Scenario, surface: Surface, p_W: ArrayLike, yaw: float, magnet: MagnetWhere
+) -> VehicleClearance:
+    """The level vehicle's clearance (:func:`level_vehicle_distance`) and its mechanism's,
+    the magnet mechanism's magnet being where ``magnet`` says (:func:`mechanism_distance`),
+    at centre of mass ``p_W`` [m] and heading ``yaw`` [rad]."""
+    R = rotation_from_z_and_yaw((0.0, 0.0, 1.0), yaw)
+    return VehicleClearance(
+        vehicle_distance(scenario.vehicle, surface, p_W, R),
+        mechanism_distance(scenario, surface, p_W, R, magnet),
+    )
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ hooking pass. The supervisor (:mod:`tetherland.mission.supervisor`) only execute
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -15,7 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from tetherland import GRAVITY
-from tetherland.analysis.clearance import HookingClearance, level_vehicle_distance
+from tetherland.analysis.clearance import (
+    MECHANISM_MARGIN,
+    HookingClearance,
+    VehicleClearance,
+    level_clearance,
+)
 from tetherland.config import Scenario
 from tetherland.errors import InfeasibleError
 from tetherland.geometry import (
@@ -29,13 +35,14 @@ from tetherland.mission.hooking import (
     check_pass,
     hooking_pass,
     hooking_pass_for,
+    magnet_pull_out_path,
     pass_overshoot,
     takeoff_height,
     unhook_depth,
     unhooking_path,
 )
 from tetherland.mission.paths import segment_duration
-from tetherland.models.hook import magnet_reach_margin
+from tetherland.models.hook import MagnetWhere, magnet_reach_margin
 from tetherland.planning import Maneuver, Planner, PlanResult
 from tetherland.planning.trajectory import Trajectory
 from tetherland.rotations import rotation_from_z_and_yaw
@@ -155,11 +162,15 @@ def _leg_points(surface: Surface, leg: list[FloatArray]) -> list[FloatArray]:
 
 
 def _leg_clearance(
-    scenario: Scenario, surface: Surface, leg: list[FloatArray], yaw: float
-) -> float:
-    """Smallest distance of the level vehicle from the surface along a polyline of
-    centre-of-mass points [m]."""
-    return min(level_vehicle_distance(scenario, surface, p, yaw) for p in _leg_points(surface, leg))
+    scenario: Scenario, surface: Surface, leg: list[FloatArray], yaw: float, magnet: MagnetWhere
+) -> VehicleClearance:
+    """Smallest distances of the level vehicle and of its mechanism's parts (the magnet
+    being where ``magnet`` says) from the surface along a polyline of centre-of-mass
+    points [m]."""
+    return functools.reduce(
+        VehicleClearance.least,
+        (level_clearance(scenario, surface, p, yaw, magnet) for p in _leg_points(surface, leg)),
+    )
 
 
 def _clear_radius(
@@ -175,12 +186,14 @@ def _clear_radius(
     """Distance r along the cable direction ``d_W`` for a waypoint p_A + r d - r_att: the
     wanted ``r_wanted`` if the level vehicle there keeps ``margin`` from the surface, else
     the smallest r up to ``r_max`` that does (bisection: the clearance grows along a
-    direction pointing away from the surface), None if none does [m]."""
+    direction pointing away from the surface), None if none does [m]. The vehicle has
+    hooked: the magnet mechanism's magnet is on the plate, and its empty boom must not go
+    behind the surface (:meth:`VehicleClearance.keeps`)."""
     length = r_max
 
     def clear(r: float) -> bool:
         p = geo.p_A + r * d_W - attachment_W
-        return level_vehicle_distance(scenario, geo.surface, p, yaw) >= margin
+        return level_clearance(scenario, geo.surface, p, yaw, "held").keeps(margin)
 
     if clear(r_wanted):
         return r_wanted
@@ -192,6 +205,15 @@ def _clear_radius(
         lo, hi = (lo, mid) if clear(mid) else (mid, hi)
     return hi
 
+
+LEG_MAGNET: dict[str, MagnetWhere] = {
+    "approach": "clipped",
+    "stretch": "held",
+    "release": "held",
+    "return": "hanging",
+}
+"""Where the magnet mechanism's magnet is on each of :func:`free_flight_legs`: the legs'
+clearance checks include its boom, and on the approach the magnet clipped on it."""
 
 HOOK_DROP_STEP = 0.01
 """Step of the hook drops :func:`working_hook_drop` tries [m]."""
@@ -343,14 +365,21 @@ def plan_mission(
             )  # fmt: skip
         radii.append(r)
     r_slack, r_release = radii
-    for r, what in ((r_slack, "cable take-up at the planned start"),
-                    (r_release, "release at the planned takeoff end")):  # fmt: skip
+    for r, what, d_W in ((r_slack, "cable take-up at the planned start", d0),
+                         (r_release, "release at the planned takeoff end", d_T)):  # fmt: skip
         if r is None:
+            p = p_A + (length - SLACK_MIN) * d_W - attachment_W
+            far = level_clearance(scenario, geo.surface, p, yaw, "held")
+            parts = (
+                f"would bring the frame within mission.hooking.min_clearance = "
+                f"{cfg.hooking.min_clearance * 100:.0f} cm of the surface"
+                if far.frame_m < cfg.hooking.min_clearance
+                else "would put the magnet's boom behind the surface, however far it folds "
+                f"(mechanism.boom_fold_deg = {scenario.mechanism.boom_fold_deg:g})"
+            )
             raise MissionError(
-                f"the {what} would bring the frame within mission.hooking.min_clearance = "
-                f"{cfg.hooking.min_clearance * 100:.0f} cm of the surface anywhere more than "
-                f"{SLACK_MIN * 100:.0f} cm inside the cable length {length:g} m; "
-                + design_hint(scenario)
+                f"the {what} {parts} anywhere more than {SLACK_MIN * 100:.0f} cm inside the "
+                f"cable length {length:g} m; " + design_hint(scenario)
             )
     assert r_slack is not None and r_release is not None
     z_safe = max(float(hook_start[2]), float(p_start[2]) + takeoff_height(scenario))
@@ -391,14 +420,16 @@ def take_up_path(
 ) -> list[tuple[FloatArray, float | None]]:
     """The take-up after the hooking pass up to the stretch (not included): centre-of-mass
     corners F_W [m] and their speeds [m/s] (None: the take-up's). The slack point, or with
-    the bar the seating path (:func:`tetherland.mission.hooking.bar_seating_path`); the
-    magnet's pull-out is left out (a few centimetres). The path of
-    :mod:`tetherland.mission.supervisor`."""
-    if scenario.mechanism.kind == "bar":
+    the bar the seating path (:func:`tetherland.mission.hooking.bar_seating_path`), or with
+    the magnet its pull-out (:func:`tetherland.mission.hooking.magnet_pull_out_path`) and
+    then the slack point. The path of :mod:`tetherland.mission.supervisor`."""
+    kind = scenario.mechanism.kind
+    if kind == "bar":
         return bar_seating_path(
             scenario, geo.p_A, geo.R_WA[:, 0], wp.hook_end, wp.stretch, wp.attachment_W
         )
-    return [(wp.slack_out, None)]
+    pull_out = magnet_pull_out_path(scenario, wp.hook_end, geo.R_WA) if kind == "magnet" else []
+    return [*((c, None) for c in pull_out), (wp.slack_out, None)]
 
 
 def free_flight_legs(
@@ -410,15 +441,19 @@ def free_flight_legs(
     The release leg starts at its slack point, on the planned takeoff end direction
     ``d_T_W`` (the supervisor uses the estimated direction there), and is the unhooking
     pass from there (its last stretch, the reverse hooking pass, is also checked as part
-    of the hooking pass). The paths are those of
+    of the hooking pass). The magnet's stretch leg starts where its pull-out has drawn the
+    boom's tip out of the magnet on the plate (from the pass's end to there the tip is at
+    the plate by design, as at the pass's end). The paths are those of
     :mod:`tetherland.mission.supervisor`.
     """
     top = wp.start + takeoff_height(scenario) * Z_W
     over_hook = np.array([*wp.hook_start[:2], wp.z_safe])
     release = geo.p_A + wp.release_distance * d_T_W - wp.attachment_W
+    take_up = [c for c, _ in take_up_path(scenario, geo, wp)]
+    first = [] if scenario.mechanism.kind == "magnet" else [wp.hook_end]
     return {
         "approach": [top, np.array([*top[:2], wp.z_safe]), over_hook, wp.hook_start],
-        "stretch": [wp.hook_end, *(c for c, _ in take_up_path(scenario, geo, wp)), wp.stretch],
+        "stretch": [*first, *take_up, wp.stretch],
         "release": unhooking_path(
             release, wp.unhook_entry, wp.hook_start, unhook_reach(scenario, geo, wp),
             back_off=scenario.mechanism.kind != "bar",
@@ -526,12 +561,21 @@ def _check_duration(scenario: Scenario, bound: float) -> None:
 def _check_legs(
     scenario: Scenario, geo: LandingGeometry, wp: Waypoints, d_T_W: FloatArray
 ) -> float:
-    """Smallest clearance over :func:`free_flight_legs`; raises :class:`MissionError`
-    naming the first leg below ``mission.hooking.min_clearance`` [m]."""
+    """Smallest clearance of the frame over :func:`free_flight_legs` [m]; raises
+    :class:`MissionError` naming the first leg whose frame comes within
+    ``mission.hooking.min_clearance`` of the surface or whose mechanism's parts (where the
+    magnet is on the leg, :data:`LEG_MAGNET`) would go behind it
+    (:data:`~tetherland.analysis.clearance.MECHANISM_MARGIN`)."""
     margin = scenario.mission.hooking.min_clearance
     smallest = math.inf
     for name, leg in free_flight_legs(scenario, geo, wp, d_T_W).items():
-        c = _leg_clearance(scenario, geo.surface, leg, wp.yaw)
+        clear = _leg_clearance(scenario, geo.surface, leg, wp.yaw, LEG_MAGNET[name])
+        if clear.mechanism_m < MECHANISM_MARGIN - 1e-9:
+            raise MissionError(
+                f"the {name} leg would put the magnet's boom {-clear.mechanism_m * 100:.1f} cm "
+                f"behind the surface; {design_hint(scenario)}"
+            )
+        c = clear.frame_m
         if c < margin - 1e-9:
             raise MissionError(
                 f"the {name} leg would pass {c * 100:.1f} cm from the surface (needs >= "

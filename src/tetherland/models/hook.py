@@ -89,6 +89,11 @@ def swing_period(line_length: float, hook_shank: float) -> float:
     return 2.0 * math.pi * math.sqrt((line_length + 0.5 * hook_shank) / GRAVITY)
 
 
+BOOM_RADIUS = 0.004
+"""Radius of the magnet mechanism's boom (a 4 mm carbon tube), the plant's capsule and the
+plan's clearance checks [m]."""
+
+
 @dataclass(frozen=True)
 class MagnetBoom:
     """The magnet mechanism's folding boom and its magnet, unfolded, in F_B [m]: the one

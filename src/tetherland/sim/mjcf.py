@@ -60,6 +60,7 @@ from tetherland.models.airframe import (
     PROP_RADIUS_FRACTION,
     Airframe,
 )
+from tetherland.models.hook import BOOM_RADIUS
 from tetherland.models.quadrotor import RotorLayout
 from tetherland.rotations import rotmat_to_quat
 from tetherland.state import RigidBodyState
@@ -621,8 +622,6 @@ zero, linearly from its full force on contact (an EPM loses most of its force wi
 millimetre of air; :mod:`tetherland.sim.epm`) [m]."""
 BOOM_MASS = 0.01
 """Mass of the folding boom (a 4 mm carbon tube and its hinge) [kg]."""
-BOOM_RADIUS = 0.004
-"""Radius of the boom's capsule [m]."""
 SOCKET_MASS = 0.001
 """Mass of the clip's socket on the boom's tip [kg]."""
 GIMBAL_STIFFNESS = 0.2
