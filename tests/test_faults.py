@@ -649,3 +649,38 @@ def test_rotor_rule_low_passes_the_scalar_cable_torque(slope50):
     a = 1.0 - math.exp(-step / slope50.mission.detection.rotor_torque_time_constant)
     assert mon.torque_residual == math.hypot(a * cx, a * cy)
     assert mon.torque_residual > 0.0
+
+
+def test_the_torque_rule_rests_in_the_landings_preload(slope50):
+    """The supervisor's rotor rule reads a commanded roll/pitch torque beyond the cable's as
+    a lost rotor. In the tethered landing it rests once the preload has begun (the landers
+    believed on the surface, whose push turns the vehicle too: 60 deg bar draw 00014 read
+    one lander's 0.8 N as a lost rotor and hovered away): the same unexplained torque
+    (1.5x the rule's limit, beyond the cable's) aborts the landing before the preload, not
+    during it, and aborts the tethered takeoff after it."""
+    from tetherland.interfaces import Reference
+    from tetherland.mission import MissionSupervisor, plan_mission
+
+    geo = LandingGeometry.from_scenario(slope50)
+    mon = FaultMonitor(slope50, geo)
+    lim = slope50.mission.detection.rotor_torque
+    l, dt = slope50.tether.length, 1.0 / slope50.controller.rate_hz
+    plan = plan_mission(slope50, Plant(slope50).start_state())
+
+    def aborted_within(seconds: float, phase: Phase, preload: bool) -> bool:
+        sup = MissionSupervisor(slope50, plan)
+        sup.phase, sup._phase_start = phase, 0.0  # as the state machine leaves them
+        sup._press_t = 9.0 if preload else None  # the landers stopped at t = 9 s
+        for k in range(round(seconds / dt)):
+            t = 10.0 + k * dt
+            est = _hover_estimate(slope50, t, d_len=l, tension=8.0)
+            torque = -mon.cable_torque_B(est) + np.array([1.5 * lim, 0.0, 0.0])
+            sup.command_sent(t, Command(np.zeros(4), torque_B=torque))
+            sup._check_faults(t, est, Reference(t=t))
+            if sup.phase is not phase:
+                return True
+        return False
+
+    assert aborted_within(2.0, Phase.TETHERED_LANDING, preload=False)
+    assert not aborted_within(2.0, Phase.TETHERED_LANDING, preload=True)
+    assert aborted_within(2.0, Phase.TETHERED_TAKEOFF, preload=True)

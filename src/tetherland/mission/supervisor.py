@@ -586,8 +586,12 @@ class MissionSupervisor:
         if phase in _ENDED:
             return
         det = self.cfg.detection
+        # the torque rule explains the commanded torque by the cable alone: not in the
+        # landing's preload (the landers believed on the surface, whose push turns the
+        # vehicle too; 60 deg bar draw 00014 read one lander's 0.8 N as a lost rotor)
         airborne = t >= self._airborne_after and not (
-            phase == _P_TETHERED_TAKEOFF and t < self._phase_start + det.tethered_airborne_delay
+            (phase == _P_TETHERED_TAKEOFF and t < self._phase_start + det.tethered_airborne_delay)
+            or (phase == _P_TETHERED_LANDING and self._press_t is not None)
         )
         planned = None
         if phase in _PLANNED_TENSION:
