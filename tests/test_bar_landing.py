@@ -42,18 +42,26 @@ def test_the_hook_seated_beside_the_anchor_does_not_pull_the_landing_aside() -> 
     hook slides along the anchoring cable after it and seats beside the anchor, more
     than the anchor's 1 cm belief error. Let hang in the last 5 cm (the lateral release)
     the vehicle swung on into that seat's plumb plane and touched 3.0 cm from the landing
-    point (condition (1)); holding its believed azimuth it lands within the tolerance,
-    no farther sideways from the landing point than the seat is from the anchor."""
+    point (condition (1)); holding its believed azimuth it lands within the tolerance, and
+    sideways where it believes the landing point is (within the anchor's belief error), not
+    where the seat would pull it.
+
+    Where the hook seats is the end of a slide along the cable: it moves with the
+    floating-point rounding of the machine (3.1 cm beside the anchor with OpenBLAS's AVX2
+    kernels, 1.6 cm with its AVX-512 ones, ``tests/rounding.py``); the landing does not."""
     truth = _bar(35)
-    r = fly_perturbed(draw_run(truth, 2980437088), "tethered")
+    run = draw_run(truth, 2980437088)
+    r = fly_perturbed(run, "tethered")
     geo = LandingGeometry.from_scenario(truth)
     y_S = geo.surface.R_WS[:, 1]  # along the anchoring cable
     log, landing = r.log, r.summary["landing"]
     assert log is not None
     k = int(np.searchsorted(log["t"], landing["t_L"]))
     seat = float((log["hook_p_W"][k] - geo.p_A) @ y_S)
-    assert abs(seat) > 2.0 * truth.perturbation.anchor_error  # beside the anchor
+    anchor_error = truth.perturbation.anchor_error
+    assert abs(seat) > anchor_error  # beside the anchor, beyond its belief error
     assert r.summary["success"], r.summary["reason"]
     assert landing["position_error_m"] <= truth.verdict.position_error
     p_RL = log["p_W"][k] - geo.h_R * quat_to_rotmat(log["q_WB"][k])[:, 2]
-    assert abs(float((p_RL - geo.p_L) @ y_S)) < abs(seat)
+    believed = LandingGeometry.from_scenario(run.belief).p_L
+    assert abs(float((p_RL - believed) @ y_S)) < anchor_error

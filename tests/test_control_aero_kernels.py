@@ -6,13 +6,13 @@ and exactly against numpy where this machine's BLAS rounds as the kernels assume
 from __future__ import annotations
 
 import dataclasses
-from fractions import Fraction
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rounding import BLAS_AS_KERNELS
 from tetherland.config import load_scenario
 from tetherland.control.kernels import aero as K
 from tetherland.control.rotor_drag import RotorDragCompensation, replaced
@@ -61,26 +61,6 @@ def _aero_into(belief: BelievedGroundEffect, p, q, thrusts) -> tuple[np.ndarray,
     return factors, acting
 
 
-def _blas_rounds_as_the_kernels() -> bool:
-    """True when numpy's ``R @ v`` (C-ordered R) rounds each row as
-    fma(R_i2, v_2, fma(R_i0, v_0, R_i1 v_1)) and ``R.T @ v`` as the plain sum left to right,
-    as :mod:`tetherland.control.kernels.aero` assumes (checked in exact arithmetic)."""
-    rng = np.random.default_rng(0)
-
-    def fma(a: float, b: float, c: float) -> float:
-        return float(Fraction(a) * Fraction(b) + Fraction(c))
-
-    for _ in range(300):
-        R, v = rng.normal(size=(3, 3)), rng.normal(size=3)
-        x, y, z = v.tolist()
-        rows = [fma(r[2], z, fma(r[0], x, r[1] * y)) for r in R.tolist()]
-        cols = [c[0] * x + c[1] * y + c[2] * z for c in R.T.tolist()]
-        if not (np.array_equal(R @ v, rows) and np.array_equal(R.T @ v, cols)):
-            return False
-    return True
-
-
-BLAS_AS_KERNELS = _blas_rounds_as_the_kernels()
 
 
 # ------------------------------------------------------------------ the believed ground effect
@@ -195,13 +175,6 @@ def test_link_drag_matches_the_reference(beliefs, seed, name):
     np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-12)
     if BLAS_AS_KERNELS:
         assert got == ref
-
-
-def test_the_machine_rounds_as_the_kernels_assume():
-    """The missions' logs keep their bits (issue 25) only where numpy's BLAS rounds as the
-    kernels do; this project's machines (OpenBLAS, x86-64 with FMA) do. Elsewhere the
-    tests above hold to rounding and this one says why the bits differ."""
-    assert BLAS_AS_KERNELS, "numpy's BLAS rounds 3x3 products otherwise: logs differ in bits"
 
 
 class Recorder:
