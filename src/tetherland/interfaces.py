@@ -181,6 +181,12 @@ class Reference:
         fraction of the damping of delta' (the supervisor's lateral release in the last centimetres,
         ``mission.touchdown.lateral_clearance``). The hierarchical controller honours it;
         the DFL controller tracks ``output`` as given.
+    lean_limit : float
+        Tethered: the largest lean of the desired thrust axis out of the link plane,
+        atan(|u_y| / sqrt(u_x^2 + u_z^2)) in F_L [rad]; the sideways force u_y is cut to it
+        and the delta integral stops growing meanwhile (the supervisor's lean limit at the
+        landing, ``mission.touchdown.lean_limit_deg``). 0: no limit. The hierarchical
+        controller honours it; the DFL controller tracks ``output`` as given.
     thrust_scale : float
         Every rotor thrust the controller commands is multiplied by this, 0 to 1 (rotor
         speeds by its square root, the wanted thrust and torque by it) [-]: the
@@ -215,6 +221,7 @@ class Reference:
     feedforward: Feedforward | None = None
     terminate: bool = False
     lateral_free: bool = False
+    lean_limit: float = 0.0
     thrust_scale: float = 1.0
     thrust_shed: float = 0.0
     drag_in_rows: bool = False

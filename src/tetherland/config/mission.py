@@ -161,6 +161,17 @@ class TouchdownConfig(Section):
     azimuth error over the cable's length), and hanging free swung the vehicle on into
     that pivot's plumb plane, 1.1-1.2 cm farther from the landing point (35 deg bar sweep,
     draws 00037 and 00038: 3.0 and 3.4 cm, condition (1)) [m]."""
+    lean_limit_deg: float | None = Field(None, gt=0, le=30)
+    """Lean limit: through the tethered landing and the touchdown, the desired thrust axis
+    leans at most this far out of the link plane (``Reference.lean_limit``: the sideways
+    force is cut, the vehicle then drifts towards its true plumb plane only as far as the
+    limit needs). Held at the believed delta = 0, a vehicle whose true plumb plane is off
+    (an anchor belief error sideways) needs a sideways thrust that tilts it, the more the
+    larger the cable's pull against the rotors' (the bar at 70 deg with the line at the
+    centre of mass: 9.3 N against 0.75 N per rotor, 2.4-3.1 deg out of the plane in the last
+    0.5 s of two campaign draws, condition (2)); the lateral release (``lateral_clearance``)
+    lets the azimuth hang for good instead, and lands in the true plumb plane, farther from
+    the landing point. The hierarchical law only. None: no limit [deg]."""
     lateral_lock: bool = True
     """Lateral lock: end the lateral release at the first sign of contact (the landers
     within ``contact.clearance`` of the believed surface and the surface force or an impact

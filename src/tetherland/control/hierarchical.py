@@ -86,6 +86,7 @@ class HierarchicalController:
         # thrust and attitude (held through singularities)
         self._state = kernel.hierarchical_state(self.mass, self.g)
         self._lateral_free = False  # the last reference left the link azimuth to gravity
+        self._lean_limit = 0.0  # the lean limit in state (Reference.lean_limit) [rad]
         # load the compiled law now (numba's cache, once per process), not at the first
         # tethered tick of a mission: a call on scratch arrays
         kernel.hierarchical_into(
@@ -100,6 +101,7 @@ class HierarchicalController:
         self._state[:] = kernel.hierarchical_state(self.mass, self.g)
         self._state[kernel.STATE_THRUST] = last_thrust
         self._lateral_free = False
+        self._lean_limit = 0.0
 
     def hand_over(self, estimate: StateEstimate, reference: Reference, thrust: float) -> None:
         """Take over from the free-flight law that commanded ``thrust`` [N] along the
@@ -174,6 +176,10 @@ class HierarchicalController:
             # surface. The hold starts from no integral, as the free hang applied none.
             self._state[kernel.STATE_INTEGRAL][1] = 0.0
         self._lateral_free = reference.lateral_free
+        lean = reference.lean_limit
+        if lean != self._lean_limit:  # (tan once per change, not per tick)
+            self._lean_limit = lean
+            self._state[kernel.STATE_LEAN_TAN] = math.tan(lean) if lean > 0.0 else 0.0
         ff = reference.feedforward
         tension = estimate.tension if estimate.tension is not None else (ff.tension if ff else 0.0)
         body = estimate.body

@@ -309,7 +309,8 @@ def contact_hold(
 ) -> Reference:
     """The reference held from contact until the motors go off: the plan's delta,
     theta_A, psi and the estimated link elevation less ``contact.press_deg``, at rest
-    (the link azimuth still left to gravity if it was, ``Reference.lateral_free``)."""
+    (the link azimuth still left to gravity if it was, ``Reference.lateral_free``, and the
+    lean limit kept, ``Reference.lean_limit``)."""
     assert est.link is not None and ref.output is not None
     out = np.zeros((5, 4))
     out[0] = ref.output[0]
@@ -317,6 +318,7 @@ def contact_hold(
     return Reference(
         t=t, mode=ControlMode.TETHERED, phase=phase, output=out,
         thrust_ff=ref.thrust_ff, feedforward=ref.feedforward, lateral_free=ref.lateral_free,
+        lean_limit=ref.lean_limit,
     )  # fmt: skip
 
 

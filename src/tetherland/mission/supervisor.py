@@ -266,6 +266,9 @@ class MissionSupervisor:
         self._contact_rule = ContactRule(scenario)
         self._lateral_clearance = lateral_release_clearance(scenario)
         """The lateral release's clearance (``mission.touchdown.lateral_clearance``) [m]."""
+        lean = cfg.touchdown.lean_limit_deg
+        self._lean_limit = 0.0 if lean is None else math.radians(lean)
+        """The landing's lean limit (``mission.touchdown.lean_limit_deg``; 0: none) [rad]."""
         self._slow = SlowApproach(
             cfg.touchdown, self._contact_rule.geometry, self.geo.link_length,
             self._lateral_clearance,
@@ -888,14 +891,18 @@ class MissionSupervisor:
     def _lateral(self, ref: Reference, release: bool) -> Reference:
         """``ref`` with the link azimuth left to gravity (``release``, the lateral release
         of ``mission.touchdown.lateral_clearance``), or held where it was at the first sign
-        of contact once there was one."""
+        of contact once there was one; with the landing's lean limit
+        (``mission.touchdown.lean_limit_deg``)."""
+        lean = self._lean_limit
         if self._delta_lock is not None:
             assert ref.output is not None
             out = ref.output.copy()
             out[0, 1] = self._delta_lock
             out[1:, 1] = 0.0
-            return dataclasses.replace(ref, output=out, lateral_free=False)
-        return dataclasses.replace(ref, lateral_free=True) if release else ref
+            return dataclasses.replace(ref, output=out, lateral_free=False, lean_limit=lean)
+        if release:
+            return dataclasses.replace(ref, lateral_free=True, lean_limit=lean)
+        return dataclasses.replace(ref, lean_limit=lean) if lean > 0.0 else ref
 
     def _pressed(self, ref: Reference, t: float) -> Reference:
         """``ref`` with its link elevation no higher than a guarded descent from where the
@@ -1032,7 +1039,8 @@ class MissionSupervisor:
         return Reference(
             t=t, mode=ControlMode.TETHERED, phase=int(self.phase), output=self._hold.output,
             thrust_ff=self._hold.thrust_ff, feedforward=self._hold.feedforward,
-            lateral_free=self._hold.lateral_free, thrust_scale=scale,
+            lateral_free=self._hold.lateral_free, lean_limit=self._hold.lean_limit,
+            thrust_scale=scale,
             thrust_shed=self._shed_at_contact,
         )  # fmt: skip
 

@@ -67,6 +67,9 @@ STATE_HAS_R_D = _state.scalar()
 """1 once a regular desired attitude was computed."""
 STATE_R_D = _state.vector(9)
 """Last regular desired attitude R_WB,d, row-major (held through singularities)."""
+STATE_LEAN_TAN = _state.scalar()
+"""tan of the lean limit of this update (``Reference.lean_limit``; 0: none) [-]: set by the
+controller before each call."""
 STATE_WIDTH = _state.width
 
 # ------------------------------------------------------------------ out: after the mixer's
@@ -131,6 +134,18 @@ def link_force_components(
     return u_y, u_z
 
 
+def _lean_limited(u_x: float, u_y: float, u_z: float, state: FloatArray, integral: FloatArray,
+                  delta_integral: float) -> float:  # fmt: skip
+    """u_y cut to the lean limit tan(lean) sqrt(u_x^2 + u_z^2) of ``state`` [N] (plain);
+    where it cuts, the delta integral is put back to ``delta_integral``, its value before
+    this update."""
+    limit = state[STATE_LEAN_TAN] * math.hypot(u_x, u_z)
+    if limit > 0.0 and abs(u_y) > limit:
+        integral[1] = delta_integral
+        return math.copysign(limit, u_y)
+    return u_y
+
+
 def hierarchical_reference(
     t: float,
     link: FloatArray,
@@ -159,6 +174,7 @@ def hierarchical_reference(
     yd = Y[0]
     yd1 = Y[1] if Y.shape[0] > 1 else np.zeros(4)
     yd2 = Y[2] if Y.shape[0] > 2 else np.zeros(4)
+    delta_integral = integral[1]  # (kept while the lean limit cuts u_y: no wind-up)
     if not math.isnan(state[STATE_T_LAST]) and k_i > 0.0:
         bound, dt = par[PAR_INTEGRAL_MAX] / k_i, t - state[STATE_T_LAST]
         integral[0] = min(max(integral[0] + (yd[0] - phi) * dt, -bound), bound)
@@ -175,6 +191,7 @@ def hierarchical_reference(
         cos_sum) < COS_SUM_MIN  # fmt: skip
     if not singular:
         u_x = u_z * math.tan(phi + yd[2]) / cd
+        u_y = _lean_limited(u_x, u_y, u_z, state, integral, delta_integral)
         F_A = link_frame(phi, delta) @ np.array([u_x, u_y, u_z])
         F_norm = float(np.linalg.norm(F_A))
         singular = F_norm < 1e-6 * m * g
@@ -231,6 +248,7 @@ def hierarchical_into(
     yd1_0, yd1_1 = (Y[1, 0], Y[1, 1]) if k > 1 else (0.0, 0.0)
     yd2_0, yd2_1 = (Y[2, 0], Y[2, 1]) if k > 2 else (0.0, 0.0)
     t_last = state[STATE_T_LAST]
+    delta_integral = integral[1]  # (kept while the lean limit cuts u_y: no wind-up)
     if t_last == t_last and k_i > 0.0:
         bound, dt = par[PAR_INTEGRAL_MAX] / k_i, t - t_last
         integral[0] = min(max(integral[0] + (y0 - phi) * dt, -bound), bound)
@@ -249,6 +267,10 @@ def hierarchical_into(
     F0 = F1 = F2 = F_norm = 0.0
     if not singular:
         u_x = u_z * math.tan(phi + y2) / cd
+        lean = state[STATE_LEAN_TAN] * math.hypot(u_x, u_z)  # the lean limit (_lean_limited)
+        if lean > 0.0 and abs(u_y) > lean:
+            integral[1] = delta_integral
+            u_y = math.copysign(lean, u_y)
         # F_A = R_AL [u_x, u_y, u_z], R_AL = link_frame(phi, delta)
         F0 = cd * cp * u_x + cp * sd * u_y - sp * u_z
         F1 = -sd * u_x + cd * u_y
