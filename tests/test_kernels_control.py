@@ -22,6 +22,7 @@ from tetherland.control.kernels import (
 )
 from tetherland.control.kernels.packing import Fields
 from tetherland.control.tracking import FreeFlightTracker
+from tetherland.geometry import link_frame
 from tetherland.rotations import exp_so3, rotmat_to_quat
 
 SEEDS = st.integers(0, 2**32 - 1)
@@ -158,12 +159,15 @@ def _hierarchical_inputs(rng: np.random.Generator, ctrl: HierarchicalController)
 
 
 @settings(max_examples=200, deadline=None)
-@given(SEEDS, st.booleans(), st.booleans(), st.booleans())
-def test_compiled_hierarchical_matches_the_reference(scenario, seed, feedforward, fresh, taut):
+@given(SEEDS, st.booleans(), st.booleans(), st.booleans(), st.booleans())
+def test_compiled_hierarchical_matches_the_reference(scenario, seed, feedforward, fresh, taut,
+                                                     lean):  # fmt: skip
     ctrl = HierarchicalController(scenario)
     rng = np.random.default_rng(seed)
     link, q, w, Y, ff_w, ff_wd = _hierarchical_inputs(rng, ctrl)
     state = hierarchical.hierarchical_state(ctrl.mass, ctrl.g)
+    if lean:  # a lean limit of 0.3-6 deg (Reference.lean_limit)
+        state[hierarchical.STATE_LEAN_TAN] = math.tan(rng.uniform(0.005, 0.1))
     if not fresh:  # an earlier update: integral, time and a regular attitude to hold
         state[hierarchical.STATE_INTEGRAL] = rng.normal(0, 0.05, 2)
         state[hierarchical.STATE_T_LAST] = 0.998
@@ -180,6 +184,59 @@ def test_compiled_hierarchical_matches_the_reference(scenario, seed, feedforward
                               ctrl._par, ctrl.mixer.packed, out)  # fmt: skip
     np.testing.assert_allclose(out, expected, rtol=1e-9, atol=1e-9, equal_nan=True)
     np.testing.assert_allclose(state, s_ref, rtol=1e-9, atol=1e-12)
+
+
+def _desired_lean(ctrl: HierarchicalController, link: np.ndarray, state: np.ndarray) -> float:
+    """Lean of the desired thrust axis z_B,d (``state``'s last regular attitude) out of the
+    link plane: asin(z_B,d . y_L), y_L = R_WA link_frame(phi, delta) e_y [rad]."""
+    z_d = state[hierarchical.STATE_R_D].reshape(3, 3)[:, 2]
+    y_L = ctrl.R_WA @ link_frame(link[0], link[1])[:, 1]
+    return math.asin(float(z_d @ y_L))
+
+
+@pytest.mark.parametrize("sign", [-1.0, 1.0])
+def test_the_lean_limit_cuts_the_sideways_force_to_the_limit_and_holds_the_delta_integral(
+    scenario, sign
+):
+    """A link 0.15 rad off its azimuth reference asks for a sideways force that leans the
+    thrust axis by more than 2 deg out of the link plane: with a 2 deg limit the desired
+    axis leans exactly 2 deg, to the same side; the phi integral advances, the delta
+    integral keeps its value (no wind-up against the limit). With the error small, the
+    limit changes nothing."""
+    ctrl = HierarchicalController(scenario)
+    limit = math.radians(2.0)
+    link = np.array([0.8, sign * 0.15, 0.0, 0.0])
+    q = rotmat_to_quat(ctrl.R_WA @ exp_so3([0.0, math.pi / 2 - link[0], 0.0]))
+    Y = np.zeros((3, 4))
+    Y[0, 0] = 0.75  # phi_d: 0.05 rad below, so the phi integral moves
+    s0 = hierarchical.hierarchical_state(ctrl.mass, ctrl.g)
+    s0[hierarchical.STATE_T_LAST] = 0.998
+    s0[hierarchical.STATE_INTEGRAL] = [0.01, -0.02]
+
+    def update(state, link):
+        out = np.empty(hierarchical.OUT_WIDTH)
+        zero = np.zeros(3)
+        hierarchical.hierarchical_into(1.0, link, q, zero, Y, zero, zero, False, 5.0, state,
+                                       ctrl._par, ctrl.mixer.packed, out)  # fmt: skip
+        return out
+
+    free, held = s0.copy(), s0.copy()
+    held[hierarchical.STATE_LEAN_TAN] = math.tan(limit)
+    update(free, link)
+    update(held, link)
+    assert abs(_desired_lean(ctrl, link, free)) > 1.5 * limit  # the case asks for more
+    assert _desired_lean(ctrl, link, held) == pytest.approx(
+        math.copysign(limit, _desired_lean(ctrl, link, free)), abs=1e-12)
+    dt = 1.0 - 0.998
+    assert held[hierarchical.STATE_INTEGRAL][0] == pytest.approx(0.01 + (0.75 - 0.8) * dt)
+    assert held[hierarchical.STATE_INTEGRAL][1] == -0.02
+    assert free[hierarchical.STATE_INTEGRAL][1] == pytest.approx(-0.02 - sign * 0.15 * dt)
+    # within the limit: the same command, bit for bit
+    small = np.array([0.8, sign * 1e-4, 0.0, 0.0])
+    free, held = s0.copy(), s0.copy()
+    held[hierarchical.STATE_LEAN_TAN] = math.tan(limit)
+    np.testing.assert_array_equal(update(free, small), update(held, small))
+    assert abs(_desired_lean(ctrl, small, held)) < limit
 
 
 def test_remainder_matches_math_remainder():
