@@ -194,8 +194,8 @@ def test_replaced_is_dataclasses_replace():
     values = dict(
         t=1.5, mode=ControlMode.TETHERED, phase=7, p_W=np.ones((3, 3)), yaw=0.3,
         output=np.ones((5, 4)), thrust_ff=11.0, feedforward=ff, terminate=True,
-        lateral_free=True, thrust_scale=0.5, thrust_shed=0.25, drag_in_rows=True,
-        torque_ff_B=np.full(3, 0.01),
+        lateral_free=True, lean_limit=0.02, thrust_scale=0.5, thrust_shed=0.25,
+        drag_in_rows=True, torque_ff_B=np.full(3, 0.01),
     )  # fmt: skip
     names = [f.name for f in dataclasses.fields(Reference)]
     assert sorted(values) == sorted(names)  # every field set to a value not its default
