@@ -139,10 +139,12 @@ def _lean_limited(u_x: float, u_y: float, u_z: float, state: FloatArray, integra
     """u_y cut to the lean limit tan(lean) sqrt(u_x^2 + u_z^2) of ``state`` [N] (plain);
     where it cuts, the delta integral is put back to ``delta_integral``, its value before
     this update."""
-    limit = state[STATE_LEAN_TAN] * math.hypot(u_x, u_z)
-    if limit > 0.0 and abs(u_y) > limit:
-        integral[1] = delta_integral
-        return math.copysign(limit, u_y)
+    lean_tan = state[STATE_LEAN_TAN]
+    if lean_tan > 0.0:
+        limit = lean_tan * math.hypot(u_x, u_z)
+        if abs(u_y) > limit:
+            integral[1] = delta_integral
+            return math.copysign(limit, u_y)
     return u_y
 
 
@@ -267,10 +269,12 @@ def hierarchical_into(
     F0 = F1 = F2 = F_norm = 0.0
     if not singular:
         u_x = u_z * math.tan(phi + y2) / cd
-        lean = state[STATE_LEAN_TAN] * math.hypot(u_x, u_z)  # the lean limit (_lean_limited)
-        if lean > 0.0 and abs(u_y) > lean:
-            integral[1] = delta_integral
-            u_y = math.copysign(lean, u_y)
+        lean_tan = state[STATE_LEAN_TAN]
+        if lean_tan > 0.0:  # the lean limit (_lean_limited); no work without one
+            lean = lean_tan * math.hypot(u_x, u_z)
+            if abs(u_y) > lean:
+                integral[1] = delta_integral
+                u_y = math.copysign(lean, u_y)
         # F_A = R_AL [u_x, u_y, u_z], R_AL = link_frame(phi, delta)
         F0 = cd * cp * u_x + cp * sd * u_y - sp * u_z
         F1 = -sd * u_x + cd * u_y
