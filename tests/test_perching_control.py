@@ -172,10 +172,16 @@ def test_reference_cuts_the_motors_on_estimated_contact(traj20):
     assert "contact" in ref.events[-1].message
 
 
-def test_the_reference_rows_of_a_tick_are_the_samples_numbers(traj20):
-    """``reference_at`` (once per control tick) gives ``sample``'s rows and thrust bit for
-    bit: before the start, at the nodes, between substeps, at t_L and after it; the
+@pytest.mark.parametrize("drag", [True, False])
+def test_the_reference_rows_of_a_tick_are_the_samples_numbers(traj20, drag):
+    """``reference_at`` (once per control tick, a compiled call) gives ``sample``'s rows
+    and thrust (numpy) bit for bit, with the believed rotor drag in the plan's model and
+    without: before the start, at the nodes, between substeps, at t_L and after it; the
     continuation past t_L starts from the rows at t_L and is the same on every call."""
+    if not drag:
+        no_drag = load_scenario("slope50", ["surface.slope_deg=20", "controller.rotor_drag=[0, 0]"])
+        traj20 = PerchingPlanner().plan(no_drag).require()
+    assert (traj20.meta.rotor_drag > 0.0) == drag
     T = traj20.duration
     times = np.concatenate(([-0.3, 0.0, T, T + 0.2], traj20.times, np.linspace(0.0, T, 157)))
     for t in times:

@@ -76,9 +76,11 @@ def warm_estimation_and_control() -> None:
 def warm_plant_and_mission() -> None:
     """The plant's rotor step, aerodynamics and log row (the point hook's and the bar's
     plant, whose hanging line has its drag), the magnet's EPM pull, the landing plan's
-    verification, the supervisor's paths and the fault rules' cable torque."""
+    verification, the supervisor's paths, the fault rules' cable torque and the perching
+    maneuver's reference."""
     from tetherland.mission import MissionSupervisor, plan_mission
     from tetherland.mission.faults import cable_torque_xy_of
+    from tetherland.planning.perching import kernels as perching_kernels
     from tetherland.sim.epm import cell_offsets, epm_pull_into
     from tetherland.sim.plant import ROTOR_STATE_WIDTH, Plant
 
@@ -98,6 +100,10 @@ def warm_plant_and_mission() -> None:
     supervisor.reference(0.0, StateEstimate(t=0.0, body=start))
     r_att = np.asarray(sc.vehicle.cable_attachment, dtype=float)
     cable_torque_xy_of(start.q_WB, start.p_W, 0.0, r_att, np.asarray(plan.geometry.p_A))
+    # the contact-free method's maneuver reference (its arrays as the trajectory packs them)
+    c = perching_kernels.pack(1.0, 0.01, 9.81, 0.0, 1, np.eye(3), np.zeros(3))
+    perching_kernels.reference_into(0.5, np.array([0.0, 1.0]), np.zeros((1, 1, 10)),
+                                    np.zeros((1, 2)), c, np.empty((5, 3)))  # fmt: skip
 
 
 GROUPS: tuple[Callable[[], None], ...] = (warm_estimation_and_control, warm_plant_and_mission)

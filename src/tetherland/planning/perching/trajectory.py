@@ -36,6 +36,7 @@ from tetherland.geometry import FloatArray
 from tetherland.io import atomic_write_text
 from tetherland.models.integrators import rk4
 from tetherland.planning import codec
+from tetherland.planning.perching import kernels
 from tetherland.planning.perching.model import (
     CASADI,
     NU,
@@ -273,6 +274,7 @@ class FreeFlightTrajectory:
         self.times, self.X, self.U = self._motion.times, self._motion.X, self._motion.U
         self.duration = self._motion.duration
         self._touchdown_rows: FloatArray | None = None  # flat outputs at T (continuation)
+        self._reference_pack: tuple[FloatArray, ...] | None = None  # reference_at's arrays
 
     @classmethod
     def simulate(
@@ -343,12 +345,21 @@ class FreeFlightTrajectory:
     def reference_at(self, t: float) -> tuple[FloatArray, float]:
         """The tracker's (5, 3) rows in F_W and the collective thrust [N] at one time
         ``t`` [s]: ``sample([t]).reference_W[0]`` and ``sample([t]).thrust[0]``, the same
-        numbers by the same operations, without the rest of the sample (the perching
+        numbers by the same operations, without the rest of the sample, in one compiled
+        call (:func:`~tetherland.planning.perching.kernels.reference_into`; the perching
         reference asks this every control tick of the maneuver). With rotor drag in the
         model the rows from the acceleration on are the thrust's, not the flat outputs'
         (:class:`FreeFlightSamples`)."""
-        _, x, u, outside = self._masked_states([t])
-        return self._thrust_rows(x, u, outside)[0], float(x[0, 6])
+        pack = self._reference_pack
+        if pack is None:
+            motion, meta = self._motion, self.meta
+            c = kernels.pack(meta.mass, meta.inertia, meta.gravity, meta.rotor_drag,
+                             motion.sub, meta.R_WA, meta.p_L)  # fmt: skip
+            arrays = (motion.times, motion.table, motion.U)
+            pack = self._reference_pack = (*map(np.ascontiguousarray, arrays), c)
+        rows = np.empty((5, 3))
+        thrust = kernels.reference_into(float(t), *pack, rows)
+        return rows, thrust
 
     def sample(self, times: ArrayLike) -> FreeFlightSamples:
         """Everything at ``times`` [s] (see :class:`FreeFlightSamples`)."""
