@@ -118,14 +118,14 @@ def perched_full():
     """A free-flight landing on a 20 deg slope (touchdown, bounces, rest, return), with
     the full-precision log the runner produced before it was made compact."""
     full: list[SimLog] = []
-    compact = SimLog.at_storage_precision
+    compact = SimLog.round_to_storage
 
     def keep(log: SimLog) -> SimLog:
-        full.append(log)
+        full.append(SimLog(log.columns, log.matrix.copy(), dict(log.metadata)))
         return compact(log)
 
     mp = pytest.MonkeyPatch()
-    mp.setattr(SimLog, "at_storage_precision", keep)
+    mp.setattr(SimLog, "round_to_storage", keep)
     try:
         sc = load_scenario("slope50", ["surface.slope_deg=20"])
         result = run_mission(sc, method="free-flight", seed=0)
@@ -163,3 +163,17 @@ def test_the_judge_gives_the_same_verdict_on_the_compact_log(perched_full, tmp_p
         else:
             assert have == want, path
     assert compared >= 10
+
+
+def test_rounding_in_place_gives_the_copys_numbers_and_the_same_log(perched_full):
+    """``round_to_storage`` (the run's own log, in place) gives exactly what
+    ``at_storage_precision`` (a copy) gives, and leaves a rounded log as it is."""
+    _, full = perched_full
+    copy = full.at_storage_precision()
+    assert not np.array_equal(copy.matrix, full.matrix, equal_nan=True)  # it rounds
+    own = SimLog(full.columns, full.matrix.copy(), dict(full.metadata))
+    assert own.round_to_storage() is own
+    assert np.array_equal(own.matrix, copy.matrix, equal_nan=True)
+    again = own.matrix.copy()
+    own.round_to_storage()
+    assert np.array_equal(own.matrix, again, equal_nan=True)

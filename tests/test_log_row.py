@@ -62,3 +62,35 @@ def test_each_part_lands_in_its_columns() -> None:
         assert set(expected) == set(log.names)
         for name, value in expected.items():
             np.testing.assert_array_equal(log[name][n], value, err_msg=name)
+
+
+def test_the_finished_log_holds_the_written_rows_and_later_writes_do_not_touch_them() -> None:
+    """``finish`` hands out the rows it wrote without a copy, the derived link angles
+    beside them: rows written after it (the buffer growing into a new one on the way)
+    leave that log as it was, and a second ``finish`` holds every row."""
+    from tetherland.sim.log import DERIVED, link_angles_from_log
+
+    columns = BASE_COLUMNS
+    width = sum(c.width for c in columns)
+    writer = LogWriter(columns, 3)
+    rows = [np.linspace(0.0, 1.0, width) + 0.1 * n for n in range(5)]
+    rows[0][3:10] = rows[1][3:10] = (0.3, -0.2, 1.1, 0.9, 0.1, 0.2, 0.3)  # p_W, q_WB
+    geometry = {"p_A": np.array([0.5, 0.0, 1.0]), "R_WA": np.eye(3),
+                "r_att_B": np.array([0.0, 0.0, -0.03])}  # fmt: skip
+    for row in rows[:2]:
+        writer.write(row)
+    first = writer.finish({}, **geometry)
+    assert first.columns == columns + DERIVED
+    want = first.matrix.copy()
+    np.testing.assert_array_equal(want[:, :width], np.vstack(rows[:2]))
+    base = type(first)(columns, np.vstack(rows[:2]), {})
+    phi, delta = link_angles_from_log(base, **geometry)
+    np.testing.assert_array_equal(want[:, width], phi)
+    np.testing.assert_array_equal(want[:, width + 1], delta)
+    for row in rows[2:]:  # the fourth row grows the buffer
+        writer.write(row)
+    np.testing.assert_array_equal(first.matrix, want)
+    second = writer.finish({}, **geometry)
+    np.testing.assert_array_equal(second.matrix[:, :width], np.vstack(rows))
+    np.testing.assert_array_equal(second.matrix[:2], want)
+    np.testing.assert_array_equal(writer.last_row, rows[-1])

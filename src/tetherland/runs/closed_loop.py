@@ -195,8 +195,8 @@ def run_mission(
                      rotor_speeds=flight.rotor_speeds)  # fmt: skip
     wall = time.perf_counter() - wall0
     # judged (and drawn, exported) as the log file holds it: `judge` on the saved run
-    # gives this verdict exactly
-    log = log.at_storage_precision()
+    # gives this verdict exactly (rounded in place: the runner's log is this run's alone)
+    log = log.round_to_storage()
     t_end = float(log["t"][-1]) if len(log) else 0.0
     record = how.record(plan, flight, t_end, replace(base, wall_time_s=wall))
     return RunResult(how.name, record, judge(log, record), log, plan, flight, scenario, belief)
