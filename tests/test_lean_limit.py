@@ -74,3 +74,19 @@ def test_the_hold_at_contact_keeps_the_lean_limit(slope50):
     assert held.lean_limit == 0.04 and held.lateral_free
     assert contact_hold(slope50.mission.contact, 1.0, est, Reference(
         t=1.0, mode=ControlMode.TETHERED, output=np.full((3, 4), 0.1)), 7).lean_limit == 0.0
+
+
+def test_the_bar_lands_with_a_lean_limit_unless_told_otherwise():
+    """None resolves to the bar's 2.5 deg (its lateral release is off) and to no limit
+    for the point hook and the magnet; a value set in the scenario is kept, 0 is none."""
+    from tetherland.mission.contact import BAR_LEAN_LIMIT_DEG, lean_limit
+
+    bar = ["mechanism.kind=bar"]
+    assert lean_limit(load_scenario("slope50", bar)) == math.radians(BAR_LEAN_LIMIT_DEG) > 0.0
+    assert lean_limit(load_scenario("slope50")) == 0.0
+    assert lean_limit(load_scenario("wall90", ["mechanism.kind=magnet"])) == 0.0
+    for sets, want in ((bar, 1.5), ([], 1.5), (bar, 0.0)):
+        scenario = load_scenario("slope50", [*sets, f"mission.touchdown.lean_limit_deg={want}"])
+        assert lean_limit(scenario) == math.radians(want)
+    with pytest.raises(ValueError, match="lean_limit_deg"):
+        load_scenario("slope50", ["mission.touchdown.lean_limit_deg=-1"])

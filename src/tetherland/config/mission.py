@@ -161,7 +161,7 @@ class TouchdownConfig(Section):
     azimuth error over the cable's length), and hanging free swung the vehicle on into
     that pivot's plumb plane, 1.1-1.2 cm farther from the landing point (35 deg bar sweep,
     draws 00037 and 00038: 3.0 and 3.4 cm, condition (1)) [m]."""
-    lean_limit_deg: float | None = Field(None, gt=0, le=30)
+    lean_limit_deg: float | None = Field(None, ge=0, le=30)
     """Lean limit: through the tethered landing and the touchdown, the desired thrust axis
     leans at most this far out of the link plane (``Reference.lean_limit``: the sideways
     force is cut, the vehicle then drifts towards its true plumb plane only as far as the
@@ -171,7 +171,9 @@ class TouchdownConfig(Section):
     centre of mass: 9.3 N against 0.75 N per rotor, 2.4-3.1 deg out of the plane in the last
     0.5 s of two campaign draws, condition (2)); the lateral release (``lateral_clearance``)
     lets the azimuth hang for good instead, and lands in the true plumb plane, farther from
-    the landing point. The hierarchical law only. None: no limit [deg]."""
+    the landing point. The hierarchical law only. None: 2.5 deg with the bar mechanism,
+    whose lateral release is off (docs/mechanism.md, *The lean limit*), no limit
+    otherwise (:func:`tetherland.mission.contact.lean_limit`); 0: no limit [deg]."""
     lateral_lock: bool = True
     """Lateral lock: end the lateral release at the first sign of contact (the landers
     within ``contact.clearance`` of the believed surface and the surface force or an impact

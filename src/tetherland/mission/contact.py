@@ -337,6 +337,20 @@ def lateral_release_clearance(scenario: Scenario) -> float:
     return 0.0 if scenario.mechanism.kind == "bar" else LATERAL_CLEARANCE
 
 
+BAR_LEAN_LIMIT_DEG = 2.5
+"""``mission.touchdown.lean_limit_deg`` when it is None, with the bar mechanism [deg]."""
+
+
+def lean_limit(scenario: Scenario) -> float:
+    """The landing's lean limit [rad] (0: none): ``mission.touchdown.lean_limit_deg``;
+    when None, :data:`BAR_LEAN_LIMIT_DEG` with the bar mechanism (its lateral release is
+    off: :func:`lateral_release_clearance`), none otherwise."""
+    limit = scenario.mission.touchdown.lean_limit_deg
+    if limit is None:
+        limit = BAR_LEAN_LIMIT_DEG if scenario.mechanism.kind == "bar" else 0.0
+    return math.radians(limit)
+
+
 class SlowApproach:
     """The plan's clock slowed near the surface: the last centimetres at a capped speed.
 

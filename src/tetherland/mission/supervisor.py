@@ -56,6 +56,7 @@ from tetherland.mission.contact import (
     early_contact_armed,
     guarded_descent,
     lateral_release_clearance,
+    lean_limit,
 )
 from tetherland.mission.faults import FaultDetection, FaultMonitor
 from tetherland.mission.hooking import (
@@ -266,9 +267,9 @@ class MissionSupervisor:
         self._contact_rule = ContactRule(scenario)
         self._lateral_clearance = lateral_release_clearance(scenario)
         """The lateral release's clearance (``mission.touchdown.lateral_clearance``) [m]."""
-        lean = cfg.touchdown.lean_limit_deg
-        self._lean_limit = 0.0 if lean is None else math.radians(lean)
-        """The landing's lean limit (``mission.touchdown.lean_limit_deg``; 0: none) [rad]."""
+        self._lean_limit = lean_limit(scenario)
+        """The landing's lean limit (:func:`~tetherland.mission.contact.lean_limit`; 0:
+        none) [rad]."""
         self._slow = SlowApproach(
             cfg.touchdown, self._contact_rule.geometry, self.geo.link_length,
             self._lateral_clearance,
