@@ -66,6 +66,15 @@ def test_bar_config_needs_a_standoff_and_a_vertical_pass(arms: list[str]) -> Non
         load_scenario("slope50", [*bar, "anchor.h_A=0.3"])
     with pytest.raises(ConfigError, match="pass_offset"):
         load_scenario("slope50", [*bar, "mechanism.pass_offset=0.02"])
+    # the climb after a reverse pass rises beside the bar as the pass does: beyond the
+    # tips' reach and the two radii (hook_reach + tip length sin(angle) + radii)
+    m = s.mechanism
+    clear = (m.hook_reach + m.hook_tip_length * math.sin(math.radians(m.hook_tip_angle_deg))
+             + m.hook_radius + m.bar_radius)  # fmt: skip
+    assert m.reverse_climb_offset > clear
+    load_scenario("slope50", [*bar, f"mechanism.reverse_climb_offset={clear + 1e-3}"])
+    with pytest.raises(ConfigError, match="reverse_climb_offset"):
+        load_scenario("slope50", [*bar, f"mechanism.reverse_climb_offset={clear - 1e-3}"])
     # the pass's depth: the tips' tops (a tip's height less the arm's fall, plus the two
     # radii) under the bar, the eye (hook_shank less the bar and line radii) above it
     m = s.mechanism

@@ -10,6 +10,8 @@ read a free hook as still on the bar.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import copy
 import math
 
@@ -224,13 +226,20 @@ def test_with_the_tare_the_robot_reads_its_line_right(bias: float) -> None:
 
 
 def _climb(
-    sup: MissionSupervisor, s, bias: float, held: float | None, trace: list | None = None
+    sup: MissionSupervisor,
+    s,
+    bias: float,
+    held: float | None,
+    trace: list | None = None,
+    holding: Callable[[float, np.ndarray], bool] | None = None,
 ) -> tuple[list[str], np.ndarray]:
     """After the release (the supervisor moved to it by hand, its tare taken): the
     unhooking climb from the release's slack point, the line told hanging free
-    (``held`` None) or pulling ``held`` N wherever the hook on the bar lets it be taut;
-    returns the supervisor's hook events and the vehicle's positions until the return.
-    ``trace`` gets each tick's time, reference rows (p, v, a) and the supervisor's path."""
+    (``held`` None) or pulling ``held`` N wherever the hook on the bar lets it be taut
+    (and, given ``holding``, only while ``holding(t, p_W)`` says the hook is on the bar:
+    called at every tick with the vehicle's position); returns the supervisor's hook
+    events and the vehicle's positions until the return. ``trace`` gets each tick's
+    time, reference rows (p, v, a) and the supervisor's path."""
     plan, geo = sup.plan, sup.geo
     r_att = np.asarray(s.vehicle.cable_attachment)
     W = bar_hanging_weight(s.tether.length, s.mechanism)
@@ -247,7 +256,7 @@ def _climb(
     sup._climb_away(t0, est, slack)
     dt = 1.0 / s.controller.rate_hz
     flown = []
-    for k in range(round(60.0 / dt)):
+    for k in range(round(90.0 / dt)):
         t = t0 + k * dt
         flown.append(rows[0].copy())
         d_W = rows[0] + R_WB @ r_att - geo.p_A
@@ -255,7 +264,8 @@ def _climb(
         phi, delta = link_angles(geo.R_WA.T @ d_W)
         d_W /= r
         true = W * d_W[2]
-        if held is not None and r >= s.tether.length - s.mission.detection.anchor_length_error:
+        on_bar = held is not None and (holding is None or holding(t, rows[0]))
+        if on_bar and r >= s.tether.length - s.mission.detection.anchor_length_error:
             true = held
         est = StateEstimate(
             t=t, body=RigidBodyState(rows[0].copy(), rows[1].copy(), q, np.zeros(3)),
@@ -289,43 +299,126 @@ def test_the_unhooking_climb_reads_a_free_hook_free_with_the_tare(tare: bool) ->
             assert sup.phase == Phase.RETURN
 
 
-def test_the_reverse_pass_climbs_away_from_the_bar() -> None:
-    """A hook read on the bar during the unhooking climb: the reverse pass goes under the
-    bar to its entry, then away from the bar before it climbs to the hooking start. The
-    tips point up: climbing straight up from the entry, the crown ``pass_offset`` beside
-    the believed bar, a hook swinging after its release, or a bar off its belief (1.6 cm
-    in draw 35-00000), met the bar and caught it again. Every tick that lifts the hanging
-    crown (straight under the attachment) from under the bar's top holds it at least
-    2 ``pass_offset`` from the believed axis along x_A, on its side away from the
-    landing point (the take-up's mirror distance, the other side)."""
-    s = load_scenario("slope50", PILOT)
-    m = s.mechanism
-    sup = _story(PILOT, BIAS)
-    events, flown = _climb(sup, s, BIAS, 1.5)
-    assert any("still on the bar" in e for e in events), events
-    assert sup.phase == Phase.RETURN
-    geo = sup.geo
+def _until_the_entry(sup: MissionSupervisor) -> Callable[[float, np.ndarray], bool]:
+    """The hook on the bar until the reverse pass reaches its entry (the hook drops out of
+    its crook there), then free."""
+    entry_at: list[float] = []
+
+    def holding(t: float, _p: np.ndarray) -> bool:
+        if not entry_at and sup._entry_climb is not None:
+            entry_at.append(sup._entry_climb[0])
+        return not entry_at or t < entry_at[0]
+
+    return holding
+
+
+def _crown(sup: MissionSupervisor, s, flown: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The hanging crown (straight under the attachment) of the vehicle's positions
+    ``flown``, F_W [m], and its distance along x_A's horizontal part from the believed
+    bar's axis (positive on the landing side) [m]."""
+    m, geo = s.mechanism, sup.geo
     hang = bar_line_length(s.tether.length, m)
     crown = flown + sup.wp.attachment_W - np.array([0.0, 0.0, hang + m.hook_shank])
     x = geo.R_WA[:, 0].copy()
     x[2] = 0.0
     x /= np.linalg.norm(x)
-    along = (crown - geo.p_A) @ x  # along x_A's horizontal part [m]
+    return crown, (crown - geo.p_A) @ x
+
+
+def _lifts(crown: np.ndarray, along: np.ndarray, top: float) -> np.ndarray:
+    """The ticks of the straight climbs that lift the crown past the bar's top ``top``
+    from below."""
     step = np.diff(crown, axis=0)
-    # the climbs (straight up, the legs that lift the hook past the bar from below: the
-    # slack point's, on the landing side, and the last one to the hooking start)
-    climbing = (step[:, 2] > 1e-9) & (step[:, 2] > 10.0 * np.abs(step @ x))
-    under = crown[:-1, 2] < geo.p_A[2] + m.bar_radius
-    k = np.flatnonzero(climbing & under)
+    horizontal = np.abs(np.diff(along))
+    climbing = (step[:, 2] > 1e-9) & (step[:, 2] > 10.0 * horizontal)
+    return np.flatnonzero(climbing & (crown[:-1, 2] < top))
+
+
+def test_the_reverse_pass_climbs_away_from_the_bar() -> None:
+    """A hook read on the bar during the unhooking climb: the reverse pass goes under the
+    bar to its entry, then away from the bar before it climbs to the hooking start. The
+    tips point up: climbing straight up from the entry, the crown ``pass_offset`` beside
+    the believed bar, a hook swinging or a bar off its belief (1.6 cm in draw 35-00000),
+    met the bar and caught it again. The hook, out of its crook at the entry, hangs free
+    there: every tick that lifts the hanging crown from under the bar's top holds it at
+    least 2 ``pass_offset`` from the believed axis along x_A, on its side away from the
+    landing point (the take-up's mirror distance, the other side), or on the landing
+    side (the slack point's climb); the climb reads the line slack and the return
+    follows."""
+    s = load_scenario("slope50", PILOT)
+    m = s.mechanism
+    sup = _story(PILOT, BIAS)
+    events, flown = _climb(sup, s, BIAS, 1.5, holding=_until_the_entry(sup))
+    assert any("still on the bar" in e for e in events), events
+    assert not any("caught the bar again" in e for e in events), events
+    assert sup.phase == Phase.RETURN
+    crown, along = _crown(sup, s, flown)
+    k = _lifts(crown, along, sup.geo.p_A[2] + m.bar_radius)
     assert np.all((along[k] > 0.0) | (along[k] <= -2.0 * m.pass_offset + 1e-9)), along[k]
     assert np.any(along[k] > 0.0) and np.any(along[k] <= -2.0 * m.pass_offset + 1e-9)
 
 
-@pytest.mark.parametrize("held", [None, 1.5])
-def test_the_unhooking_legs_leave_a_hanging_hook_still(held: float | None) -> None:
+def test_a_hook_caught_again_from_the_entry_is_lifted_on_the_landing_side() -> None:
+    """The replayed 60 deg draw 00011: out of its crook at the reverse pass's entry, the
+    hook hung on the bar's landing side with its line over the bar, and the climb from
+    the entry lifted it into the bar (caught again, the jam rule's safe stop). The climb
+    from the entry checks the line as the first climb does: taut (the hook pulled 1.5 N
+    from 5 cm up the climb on, until the vehicle is back down at the entry's height), the
+    robot goes back down to the entry, over the bar at the entry's depth (the tips under
+    it: the crown at least ``pass_depth`` under the axis) and up on the landing side, at
+    least ``reverse_climb_offset`` beyond the believed axis, to the hooking start's height;
+    the flight back over the bar to the hooking start passes with the crown above it,
+    and the return follows. Every lift of the crown past the bar's top is on the landing
+    side but the first climb from the entry (the one that caught it)."""
+    s = load_scenario("slope50", PILOT)
+    m = s.mechanism
+    sup = _story(PILOT, BIAS)
+    first = _until_the_entry(sup)
+    caught: list[float] = []  # the entry's height, once the climb from it caught the hook
+    released: list[bool] = []
+
+    def holding(t: float, p: np.ndarray) -> bool:
+        if first(t, p):
+            return True
+        climb = sup._entry_climb
+        if not caught and climb is not None and p[2] > climb[1][2] + 0.05:
+            caught.append(float(climb[1][2]))
+        if caught and not released and p[2] <= caught[0] + 1e-6:
+            released.append(True)  # back down at the entry's height: slack, it drops off
+        return bool(caught) and not released
+
+    events, flown = _climb(sup, s, BIAS, 1.5, holding=holding)
+    assert any("still on the bar" in e for e in events), events
+    assert any("caught the bar again" in e for e in events), events
+    assert caught and released, (caught, released)
+    assert sup.phase == Phase.RETURN
+    top = sup.geo.p_A[2] + m.bar_radius
+    crown, along = _crown(sup, s, flown)
+    k = _lifts(crown, along, top)
+    # the lifts past the bar: the slack point's climb and the second one on the landing
+    # side; the only other, the first climb from the entry, beside it on the far side
+    far = k[along[k] <= 0.0]
+    assert far.size and np.all(along[far] <= -2.0 * m.pass_offset + 1e-9), along[far]
+    entry = int(far[0])
+    after = k[k > far[-1]]
+    assert after.size and np.all(along[after] >= m.reverse_climb_offset - 1e-6), along[after]
+    # from the first climb from the entry on: every crossing of the bar's vertical plane
+    # passes with the tips under the bar or the crown above it
+    crossing = np.flatnonzero(np.diff(np.sign(along[entry:])) != 0) + entry
+    under = crossing[crown[crossing, 2] <= top]
+    assert under.size and np.all(crown[under, 2] <= sup.geo.p_A[2] - m.pass_depth), crown[under]
+    back = crossing[crossing > after[-1]]
+    assert back.size and np.all(crown[back, 2] > top), crown[back, 2]
+
+
+@pytest.mark.parametrize(("held", "again"), [(None, False), (1.5, False), (1.5, True)],
+                         ids=["free", "on-the-bar", "caught-again"])  # fmt: skip
+def test_the_unhooking_legs_leave_a_hanging_hook_still(held: float | None, again: bool) -> None:
     """The bar's unhooking (the climb on the landing side and the flight over the bar to
     the hooking start; with the hook read on the bar, ``held`` N, the reverse pass under
-    it) flies the take-up's legs (:func:`~tetherland.mission.hooking.take_up_legs`): each
+    it, out of its crook at the entry; ``again``: caught again by the climb from the
+    entry, then the way back down, over the bar and up on its landing side) flies the
+    take-up's legs (:func:`~tetherland.mission.hooking.take_up_legs`): each
     the speed-limited smoothstep, at least one believed swing period P, at the take-up's
     speed (the climb at ``hooking.speed``: it may draw the line of a hook on the bar
     taut), convolved with the zero-vibration shaper (P/2 longer). Driving the pivot of an
@@ -340,8 +433,15 @@ def test_the_unhooking_legs_leave_a_hanging_hook_still(held: float | None) -> No
     plan = plan_mission(s, Plant(s).start_state())
     sup = MissionSupervisor(s, plan)
     trace: list = []
-    events, _ = _climb(sup, s, 0.0, held, trace)
+    first = _until_the_entry(sup)
+
+    def holding(t: float, p: np.ndarray) -> bool:  # (again: on the bar from 5 cm up)
+        climb = sup._entry_climb
+        return first(t, p) or (again and climb is not None and p[2] > climb[1][2] + 0.05)
+
+    events, _ = _climb(sup, s, 0.0, held, trace, holding)
     assert any("still on the bar" in e for e in events) is (held is not None), events
+    assert any("caught the bar again" in e for e in events) is again, events
     assert sup.phase == Phase.RETURN
     P = swing_shaper(s).period
     shortest, shaper = take_up_legs(s)
@@ -359,15 +459,18 @@ def test_the_unhooking_legs_leave_a_hanging_hook_still(held: float | None) -> No
             d = seg.p1 - seg.p0
             if not d.any() or seg.t_end > t_last + dt:
                 continue  # a pause, or a move cut short by the hook read on the bar
-            speed = cfg.hooking.speed if (i, j) == (0, 0) else take_up
+            # the climbs that may draw a hook's line taut: the first, and the second
+            # from the entry (the third path's third leg)
+            speed = cfg.hooking.speed if (i, j) in ((0, 0), (2, 2)) else take_up
             base = segment_duration(float(np.linalg.norm(d)), speed, cfg.flight.cruise_accel,
                                     shortest)  # fmt: skip
             assert seg.base == pytest.approx(base, abs=1e-12)
             assert seg.duration == pytest.approx(base + 0.5 * P, abs=1e-12)
             legs.append((seg.t0, seg.duration, base, float(np.hypot(d[0], d[1]))))
     # the climb and the flight over the bar; or the way back to the slack point, the
-    # reverse pass under the bar and the climb beside it
-    assert len(legs) == (2 if held is None else 3)
+    # reverse pass under the bar and the climb beside it; again: that climb cut short,
+    # then down to the entry, over the bar, up on its landing side and over to the start
+    assert len(legs) == (2 if held is None else 6 if again else 3)
     assert sum(D_h > 0.1 for *_, D_h in legs) >= 1
     assert_legs_leave_the_shaped_swing(t, a_h, legs, P, dt)
 

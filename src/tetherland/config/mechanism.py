@@ -104,6 +104,14 @@ class MechanismConfig(Section):
     believed meets the line just above the eye, and the take-up drags the hook up into
     it. The hook's bottom stays above the surface (pass_depth + pass_margin +
     hook_radius < standoff - pass_offset) [m]."""
+    reverse_climb_offset: float = Field(0.2, ge=0.02, le=1)
+    """Horizontal distance from the bar's axis, on the landing side, of the second climb
+    after a reverse pass under the bar: when the climb from the pass's entry draws the line
+    taut (the hook, out of its crook, hung on the bar's landing side with its line over
+    the bar, and that climb lifted it into the bar), the vehicle goes back down to the
+    entry, over the bar at the entry's depth (the line leaves the bar) and climbs here,
+    beyond the hook's reach and its swing, to the hooking start's height. Must exceed the
+    hook's outer reach + hook_radius + bar_radius, as ``pass_offset`` [m]."""
     swing_periods: float = Field(2.0, ge=0, le=10)
     """Shortest free-flight leg of the mission, in swing periods of the hanging hook
     (2 pi sqrt(L/g)): a smooth rest-to-rest leg that long leaves the hook almost still
@@ -269,6 +277,13 @@ class MechanismConfig(Section):
                 f"reach (hook_reach + hook_tip_length sin(hook_tip_angle_deg)) + hook_radius "
                 f"+ bar_radius = "
                 f"{self.pass_offset - gap:g} m (the hook must pass beside the bar)"
+            )
+        clear = self.outer_reach + self.hook_radius + self.bar_radius
+        if self.reverse_climb_offset <= clear:
+            raise ValueError(
+                f"mechanism.reverse_climb_offset = {self.reverse_climb_offset:g} m must be > "
+                f"the hook's outer reach + hook_radius + bar_radius = {clear:g} m (the hook "
+                "must rise beside the bar)"
             )
         if self.hook_arm_rise_deg > 0.0:
             foot = self.bar_seat_foot

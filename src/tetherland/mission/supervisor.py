@@ -220,6 +220,10 @@ class MissionSupervisor:
         """Shortest leg [s] and shaper of the take-up's legs (:meth:`_take_up_path`)."""
         self._climb_slack: np.ndarray | None = None
         """Bar mechanism: the slack point of a climb that checks the hook is off the bar."""
+        self._entry_climb: tuple[float, np.ndarray, np.ndarray] | None = None
+        """Bar mechanism, after a reverse pass: when the climb from its entry begins [s],
+        the entry and the climb's top (the hooking start), F_W [m]; that climb checks the
+        hook is off the bar as well (:meth:`_unhook`)."""
         self._swing_at: float | None = None
         """Bar mechanism: when the take-up's swing starts from where the seat's climb left
         the vehicle (the end of the climb plus the settle time) [s]."""
@@ -1149,6 +1153,13 @@ class MissionSupervisor:
         )
         self._path.delay(self.scenario.mechanism.epm_off_time + self._shaper.period)
 
+    def _bar_x(self) -> np.ndarray:
+        """Bar mechanism: the horizontal unit direction of x_A, across the bar towards the
+        landing point, F_W [-]."""
+        x = self.geo.R_WA[:, 0].copy()
+        x[2] = 0.0
+        return x / np.linalg.norm(x)
+
     def _climb_away(self, t: float, est: StateEstimate, slack: np.ndarray) -> Reference:
         """Bar mechanism, the cable slack: climb on the landing side until a hook hanging
         free clears the bar, then fly over it to the hooking start. If the hook still sits
@@ -1193,18 +1204,47 @@ class MissionSupervisor:
             # believed bar) the tips, pointing up, of a hook swinging or a bar off its
             # belief met the bar and caught it again (pilot draw 35-00000: released, then
             # caught by that climb, "hook did not release"); the return starts from there
-            x = self.geo.R_WA[:, 0].copy()
-            x[2] = 0.0
-            away = -self.scenario.mechanism.pass_offset * x / np.linalg.norm(x)
+            away = -self.scenario.mechanism.pass_offset * self._bar_x()
             corners, last = [p + away for p in corners], last + away
             # the take-up's legs (shaped, at its speed): main's, unshaped at hooking.speed,
             # took 31 s from the climb's top (pilot draw 60-00008 out of the 180 s)
             self._path = self._take_up_path(t, est.body.p_W).to(slack)
             for p in corners:
                 self._path.to(p)
+            self._entry_climb = (self._path.t_end, corners[-1].copy(), last.copy())
             self._path.to(last, pause=cfg.settle_time)
+            self._taut.reset()
             self._event(t, "hook", f"tension {est.tension:.2f} N while climbing: the hook is "
                         "still on the bar, reverse pass under it")  # fmt: skip
+            return self._free(t, est)
+        climb = self._entry_climb
+        if climb is not None and t >= climb[0] and self._taut.update(t, est.tension or 0.0):
+            # the climb from the reverse pass's entry drew the line taut: the hook, out of
+            # its crook at the entry, hung on the bar's landing side with its line over the
+            # bar, and the climb lifted it into the bar (60 deg draw 00011: 2.8 cm beside
+            # the axis, 10.7 cm under it; caught, the jam rule's safe stop). Back down to
+            # the entry (slack: the hook drops off again), over the bar at the entry's depth
+            # (the line leaves the bar, the hook hangs free on the landing side), up there
+            # mechanism.reverse_climb_offset beyond the believed axis to the hooking start's
+            # height, and over the bar to the hooking start. Not first: a hook hanging free
+            # beside the entry (flat arms, the common case) is dragged under the bar by that
+            # move and its line draped over it (flat-arm draws 50-00004, -07, 60-00000)
+            self._entry_climb = None
+            _, entry, last = climb
+            x = self._bar_x()
+            side = entry + (
+                self.scenario.mechanism.reverse_climb_offset - float(x @ (entry - self.geo.p_A))
+            ) * x
+            self._path = (
+                self._take_up_path(t, est.body.p_W)
+                .to(entry)
+                .to(side)
+                .to(np.array([*side[:2], last[2]]), speed=cfg.hooking.speed)
+                .to(last, pause=cfg.settle_time)
+            )
+            self._event(t, "hook", f"tension {est.tension:.2f} N climbing from the reverse "
+                        "pass: the hook caught the bar again, down, over and up on its "
+                        "landing side")  # fmt: skip
             return self._free(t, est)
         if t >= self._path.t_end:
             up = np.array([*wp.hook_start[:2], wp.z_safe])
