@@ -10,10 +10,9 @@ read a free hook as still on the bar.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import copy
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
