@@ -158,6 +158,9 @@ class ElasticCable:
         self._vel = data.ten_velocity[tendon : tendon + 1]
         self._ctrl = data.ctrl[act : act + 1]
         self._engaged = False
+        self.state = np.array([0.0, self.k, self.c, self.length])
+        """Engaged (1/0), k, c and l in one array, as the plant's compiled step reads them
+        (:data:`~tetherland.sim.step_kernel.C_ENGAGED` ...)."""
 
     @property
     def engaged(self) -> bool:
@@ -199,6 +202,7 @@ class ElasticCable:
 
     def set_engaged(self, engaged: bool) -> None:
         self._engaged = bool(engaged)
+        self.state[0] = 1.0 if engaged else 0.0
         if not engaged:
             self._ctrl[0] = 0.0
         set_cable_visible(self._model, engaged)

@@ -41,7 +41,7 @@ from tetherland.interfaces import StateEstimate
 from tetherland.models.aero import aero_into, aero_work_size
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
 from tetherland.sim.aero import aero_model
-from tetherland.sim.cable import Cable, HangingLine, MagnetCable, make_cable
+from tetherland.sim.cable import Cable, ElasticCable, HangingLine, MagnetCable, make_cable
 from tetherland.sim.hook import Hook, HookState
 from tetherland.sim.mjcf import (
     CONTACT_PARTNERS,
@@ -51,13 +51,50 @@ from tetherland.sim.mjcf import (
     build_mjcf,
 )
 from tetherland.sim.model_cache import compiled_model
+from tetherland.sim.native import address, step_functions
 from tetherland.sim.step_kernel import (
+    H_C0,
+    H_NOW,
+    H_NX,
+    H_PREV,
+    H_SIDE,
+    HOOK_WIDTH,
     R_BASE,
     R_CMD,
     R_FACTOR,
     R_SPINNING,
     R_W,
+    STEP_DIVERGED,
+    T_ATTACHMENT,
+    T_BAD_QACC,
+    T_CABLE,
+    T_CABLE_CTRL,
+    T_CENTRES,
+    T_CTRL,
+    T_DATA,
+    T_HOOK,
+    T_MODEL,
+    T_N_CENTRES,
+    T_N_PARAMS,
+    T_N_SAMPLES,
+    T_N_SHAPES,
+    T_N_WORK,
+    T_PARAMS,
+    T_QPOS,
+    T_QVEL,
+    T_ROT,
+    T_SAMPLES,
+    T_SHAPE_WIDTH,
+    T_SHAPES,
+    T_STEP1,
+    T_STEP2,
+    T_TENDON_LENGTH,
+    T_TENDON_RATE,
+    T_WORK,
+    T_WRENCH,
+    TABLE_SIZE,
     command_rotors,
+    physics_step,
     rotor_row_into,
     rotor_state,
     rotor_step,
@@ -89,6 +126,11 @@ class Plant:
     ----------
     scenario : Scenario
         Vehicle, tether, surface, anchor and ``[sim]`` settings.
+    compiled_step : bool
+        Step a plant with the elastic cable and the capture disk (every scenario's
+        default) in one compiled call per physics step
+        (:func:`~tetherland.sim.step_kernel.physics_step`); False: through the Python
+        bindings, the same bits (for tests). Other mechanisms always step in Python.
 
     Attributes
     ----------
@@ -105,7 +147,7 @@ class Plant:
         The generated MJCF.
     """
 
-    def __init__(self, scenario: Scenario) -> None:
+    def __init__(self, scenario: Scenario, *, compiled_step: bool = True) -> None:
         self.scenario = scenario
         self.layout = SceneLayout.from_scenario(scenario)
         self.xml = build_mjcf(scenario, self.layout)
@@ -202,6 +244,9 @@ class Plant:
         self._prev_att = (0.0, 0.0, 0.0)
         self._hook_side = False
         self._tick = 0
+        self._table = self._address_table() if compiled_step else None
+        self.compiled_step = self._table is not None
+        """Whether :meth:`step` makes one compiled call per physics step."""
         # what step() reads, in one tuple: the cable's step (mj_step with the cable force,
         # sim/cable.py), the kernel's arguments, the hook, views into MjData and the
         # capture plane (line: the mechanism whose contact decides the hook instead)
@@ -522,6 +567,54 @@ class Plant:
         x, y, z = self._p_att_view.tolist()
         self._prev_att = (x, y, z)
         self._hook_side = self._contact_hook is None and self.hook.side(x, y, z) >= 0.0
+        if self._table is not None:
+            h = self._hook_state
+            h[H_SIDE] = 1.0 if self._hook_side else 0.0
+            h[H_PREV : H_PREV + 3] = (x, y, z)
+
+    def _address_table(self) -> np.ndarray | None:
+        """The address table of :func:`~tetherland.sim.step_kernel.physics_step`, for a
+        plant with the elastic cable and the capture disk (None otherwise, or without the
+        MuJoCo library's functions: :func:`~tetherland.sim.native.step_functions`).
+
+        Its arrays stay referenced by this plant (``_held``); the MjData views are stable
+        for the life of ``data``. The point-hook plant's arena cannot overflow (a vehicle
+        of a few parts over a slope and the ground), so no MuJoCo error can arise inside the
+        compiled call."""
+        functions = step_functions()
+        cable = self.cable
+        if functions is None or type(cable) is not ElasticCable or self._contact_hook is not None:
+            return None
+        d, m = self.data, self.model
+        rot, (centres, samples, shapes, params), work = (
+            self._rot, self._aero_args, self._step_args[7]
+        )
+        held = [np.ascontiguousarray(a, dtype=float) for a in (centres, samples, shapes, params)]
+        centres, samples, shapes, params = held
+        hook = np.zeros(HOOK_WIDTH)
+        hook[H_NX : H_NX + 3] = self._hook_plane[0:3]
+        hook[H_C0] = self._hook_plane[3]
+        self._hook_state = hook
+        self._held = (*held, hook)
+        table = np.zeros(TABLE_SIZE, dtype=np.int64)
+        table[T_MODEL], table[T_DATA] = m._address, d._address
+        table[T_STEP1], table[T_STEP2] = functions
+        table[T_QPOS], table[T_QVEL] = address(self._qpos), address(self._qvel)
+        table[T_CTRL], table[T_WRENCH] = address(self._ctrl), address(self._wrench)
+        table[T_TENDON_LENGTH], table[T_TENDON_RATE] = address(cable._len), address(cable._vel)
+        table[T_CABLE_CTRL], table[T_CABLE] = address(cable._ctrl), address(cable.state)
+        table[T_ATTACHMENT] = address(self._p_att_view)
+        bad = _BAD_STATE_WARNINGS[2]
+        table[T_BAD_QACC] = address(self._warnings[bad : bad + 1], np.int32)
+        table[T_HOOK] = address(hook)
+        table[T_ROT] = address(rot)
+        table[T_CENTRES], table[T_N_CENTRES] = address(centres), centres.shape[0]
+        table[T_SAMPLES], table[T_N_SAMPLES] = address(samples), samples.shape[0]
+        table[T_SHAPES], table[T_N_SHAPES] = address(shapes), shapes.shape[0]
+        table[T_SHAPE_WIDTH] = shapes.shape[1]
+        table[T_PARAMS], table[T_N_PARAMS] = address(params), params.size
+        table[T_WORK], table[T_N_WORK] = address(work), work.size
+        return table
 
     def _set_cable(self, engaged: bool) -> None:
         # Disengaged, the cable exerts no force and is not drawn (sim/cable.py).
@@ -640,6 +733,29 @@ class Plant:
         # (one tuple, built once: this runs once per physics step)
         (advance, args, hook, p_att, warn, bad_qacc, lander_normals, lander_peak, frame_found,
          depth, line, nx, ny, nz, n_dot_p0, data, dt) = self._step_context  # fmt: skip
+        table = self._table
+        if table is not None:
+            h = self._hook_state
+            for _ in range(n):
+                found = physics_step(table)
+                if data.ncon:  # (as below)
+                    self._touched = True
+                    np.maximum(lander_peak, lander_normals, out=lander_peak)
+                    if frame_found[0]:
+                        self._track_parts()
+                    if depth[0] < self._depth_min:
+                        self._depth_min = depth.item()
+                k = self._tick
+                self._tick = k + 1
+                if found:
+                    if found == STEP_DIVERGED:
+                        self._diverged(k * dt)
+                    prev, now = h[H_PREV : H_PREV + 3].tolist(), h[H_NOW : H_NOW + 3].tolist()
+                    h[H_PREV : H_PREV + 3] = now
+                    self._hook_side = h[H_SIDE] != 0.0
+                    if hook.cross(k * dt, tuple(prev), tuple(now)) is not None:
+                        self._set_cable(hook.engaged)
+            return
         for _ in range(n):
             rotor_step(*args)
             advance()

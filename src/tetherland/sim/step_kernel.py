@@ -16,10 +16,18 @@ Beside it sits its plain Python reference, :func:`rotor_step_reference` (Python 
 the lag, :func:`~tetherland.models.aero.aero_into` for the surface model, itself checked
 against its numpy reference), which a test compares bit for bit with the kernel.
 
-numba's on-disk cache of :func:`rotor_step` is keyed on this file alone: after an edit of
-the aero kernel (:mod:`tetherland.models.aero`) delete this module's cache files
-(``__pycache__/step_kernel.*``), or the plant keeps the old aero code compiled in (the
-bit-for-bit test then fails where the change shows).
+For the plant with the elastic cable and the capture disk (every scenario's default),
+:func:`physics_step` makes the whole physics step one compiled call: the rotors, MuJoCo's
+``mj_step1``, the cable's force, ``mj_step2`` and the checks of the attachment point,
+reading the plant's arrays and MuJoCo's functions through one address table
+(:mod:`tetherland.sim.native`). Its plain form is the plant's Python path
+(``Plant(..., compiled_step=False)``), which a test compares bit for bit with it.
+
+numba's on-disk cache of :func:`rotor_step` and :func:`physics_step` is keyed on this file
+alone: after an edit of the aero kernel (:mod:`tetherland.models.aero`) or of
+:mod:`tetherland.sim.native` delete this module's cache files
+(``__pycache__/step_kernel.*``), or the plant keeps the old code compiled in (the
+bit-for-bit tests then fail where the change shows).
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ from numba import njit
 
 from tetherland.geometry import FloatArray
 from tetherland.models.aero import aero_into, aero_work_into
+from tetherland.sim.native import call_model_data, f64_at, f64_matrix_at, i32_at
 
 R_W, R_CMD, R_BASE, R_FACTOR = 0, 4, 8, 12
 """Offsets of the speeds [rad/s], commands [rad/s], thrusts out of ground effect [N] and
@@ -224,3 +233,100 @@ def command_rotors_reference(rot: FloatArray, speeds: FloatArray, w_max: float) 
         rot[R_CMD : R_CMD + 4] = cmd
         rot[R_SPINNING] = 1.0
     return ok
+
+
+# --------------------------------------------------------------------- the whole step
+T_MODEL, T_DATA, T_STEP1, T_STEP2 = 0, 1, 2, 3
+"""Address table of :func:`physics_step`: ``mjModel``, ``mjData``, ``mj_step1``, ``mj_step2``."""
+T_QPOS, T_QVEL, T_CTRL, T_WRENCH = 4, 5, 6, 7
+"""... the vehicle's ``qpos[0:7]``, ``qvel[0:6]``, the rotor actuators' ``ctrl[0:4]`` and
+the aero wrench ``qfrc_applied[0:6]``."""
+T_TENDON_LENGTH, T_TENDON_RATE, T_CABLE_CTRL, T_CABLE = 8, 9, 10, 11
+"""... the cable tendon's length and rate, its actuator's ``ctrl`` and the cable's state
+(:data:`C_ENGAGED` ...)."""
+T_ATTACHMENT, T_BAD_QACC, T_HOOK = 12, 13, 14
+"""... the attachment site's position ``site_xpos``, MuJoCo's bad-acceleration warning
+count (int32) and the capture plane's state (:data:`H_NX` ...)."""
+T_ROT, T_CENTRES, T_N_CENTRES, T_SAMPLES, T_N_SAMPLES = 15, 16, 17, 18, 19
+T_SHAPES, T_N_SHAPES, T_SHAPE_WIDTH, T_PARAMS, T_N_PARAMS, T_WORK, T_N_WORK = (
+    20, 21, 22, 23, 24, 25, 26,
+)  # fmt: skip
+"""... :func:`rotor_step`'s arrays (addresses and sizes)."""
+TABLE_SIZE = 27
+"""Entries of the address table."""
+
+C_ENGAGED, C_STIFFNESS, C_DAMPING, C_LENGTH = 0, 1, 2, 3
+"""The elastic cable's state (:class:`~tetherland.sim.cable.ElasticCable`): engaged (1/0),
+k [N/m], c [N s/m], unstretched length l [m]."""
+CABLE_WIDTH = 4
+
+H_NX, H_NY, H_NZ, H_C0, H_SIDE, H_PREV, H_NOW = 0, 1, 2, 3, 4, 5, 8
+"""The capture plane's state: its normal n (3) and offset c0 (the hook's side of the
+plane: n.p >= c0), the side of the attachment point at the last step (1/0), the point
+before the last crossing (3) and at it (3) [m]."""
+HOOK_WIDTH = 11
+
+STEP_OK, STEP_CROSSED, STEP_DIVERGED = 0, 1, 2
+"""What :func:`physics_step` found: nothing, the attachment point crossed the capture
+plane (``hook[H_PREV:H_PREV+3]`` -> ``hook[H_NOW:H_NOW+3]``), a non-finite state or
+MuJoCo's bad-acceleration flag."""
+
+
+@njit(cache=True)
+def physics_step(table: np.ndarray) -> int:
+    """One physics step of a plant with the elastic cable and the capture disk, compiled.
+
+    The plain forms are :meth:`Plant.step <tetherland.sim.plant.Plant.step>`'s Python path
+    with :meth:`ElasticCable.advance <tetherland.sim.cable.ElasticCable.advance>`: the rotors
+    (:func:`rotor_step`), ``mj_step1``, the cable's force f_L = max(0, k x + c x') for a
+    stretch x > 0 into its actuator (engaged only), ``mj_step2``, then the checks on the
+    attachment point's new position (divergence, a crossing of the capture plane). A test
+    compares both bit for bit.
+
+    Parameters
+    ----------
+    table : (TABLE_SIZE,) int64 array
+        Addresses and sizes (``T_*``, :mod:`tetherland.sim.native`).
+
+    Returns
+    -------
+    int
+        :data:`STEP_OK`, :data:`STEP_CROSSED` or :data:`STEP_DIVERGED`.
+    """
+    qpos = f64_at(table[T_QPOS], 7)
+    qvel = f64_at(table[T_QVEL], 6)
+    rot = f64_at(table[T_ROT], ROTOR_WIDTH)
+    rotor_step(
+        rot, qpos, qvel,
+        f64_matrix_at(table[T_CENTRES], table[T_N_CENTRES], 3),
+        f64_matrix_at(table[T_SAMPLES], table[T_N_SAMPLES], 2),
+        f64_matrix_at(table[T_SHAPES], table[T_N_SHAPES], table[T_SHAPE_WIDTH]),
+        f64_at(table[T_PARAMS], table[T_N_PARAMS]),
+        f64_at(table[T_WORK], table[T_N_WORK]),
+        f64_at(table[T_CTRL], 4),
+        f64_at(table[T_WRENCH], 6),
+    )  # fmt: skip
+    model, data = table[T_MODEL], table[T_DATA]
+    call_model_data(table[T_STEP1], model, data)  # positions, velocities, tendon at t_k
+    cable = f64_at(table[T_CABLE], CABLE_WIDTH)
+    if cable[C_ENGAGED] != 0.0:
+        force = f64_at(table[T_CABLE_CTRL], 1)
+        x = f64_at(table[T_TENDON_LENGTH], 1)[0] - cable[C_LENGTH]
+        if x > 0.0:
+            f = cable[C_STIFFNESS] * x + cable[C_DAMPING] * f64_at(table[T_TENDON_RATE], 1)[0]
+            force[0] = f if f > 0.0 else 0.0
+        else:
+            force[0] = 0.0
+    call_model_data(table[T_STEP2], model, data)  # actuation, constraints, integration
+    p = f64_at(table[T_ATTACHMENT], 3)
+    x, y, z = p[0], p[1], p[2]
+    if x != x or i32_at(table[T_BAD_QACC], 1)[0] != 0:
+        return STEP_DIVERGED
+    hook = f64_at(table[T_HOOK], HOOK_WIDTH)
+    side = 1.0 if hook[H_NX] * x + hook[H_NY] * y + hook[H_NZ] * z >= hook[H_C0] else 0.0
+    if side != hook[H_SIDE]:
+        hook[H_SIDE] = side
+        hook[H_NOW], hook[H_NOW + 1], hook[H_NOW + 2] = x, y, z
+        return STEP_CROSSED
+    hook[H_PREV], hook[H_PREV + 1], hook[H_PREV + 2] = x, y, z
+    return STEP_OK
