@@ -115,3 +115,20 @@ def test_dropouts_do_not_change_the_noise_stream():
     assert 0 < len(valid) < 600
     for x, y in valid:
         np.testing.assert_array_equal(x.p_W, y.p_W)
+
+
+def test_sample_into_writes_the_row_of_sample():
+    """The runner's allocation-free row [t, f_B, omega_B] carries the very values of
+    :meth:`Imu.sample` from the same stream, across the noise blocks' refills."""
+    cfg = ImuConfig(accel_noise=0.05, gyro_noise=0.005, accel_bias_walk=0.01)
+    a = Imu(cfg, np.random.default_rng(9))
+    b = Imu(cfg, np.random.default_rng(9))
+    row = np.full(8, np.nan)
+    for k in range(2500):  # (the noise is drawn in blocks of 1024)
+        s = a.sample(k * a.period, TRUTH)
+        b.sample_into(k * b.period, TRUTH, row)
+        assert row[0] == s.t
+        assert row[1:4].tobytes() == s.specific_force_B.tobytes()
+        assert row[4:7].tobytes() == s.omega_B.tobytes()
+        assert math.isnan(row[7])  # nothing written past the row
+        np.testing.assert_array_equal(a.bias, b.bias)

@@ -310,6 +310,21 @@ class Estimator(Protocol):
 
 
 @runtime_checkable
+class ImuBatchAware(Protocol):
+    """Optional estimator capability: IMU samples handed over as rows, several at once.
+
+    The runner then collects the samples of its physics steps as rows [t, f_B (3),
+    omega_B (3)] and hands them over before each motion-capture update and each estimate,
+    in the order taken, instead of one :meth:`Estimator.predict` per sample (without
+    building an :class:`ImuSample` for each: the loop's cost, issue 25)."""
+
+    def predict_rows(self, rows: FloatArray) -> None:
+        """The same as :meth:`Estimator.predict` of ``ImuSample(r[0], r[1:4], r[4:7])`` for
+        each row ``r`` of ``rows`` (n, 7), in order [s, m/s^2, rad/s]."""
+        ...
+
+
+@runtime_checkable
 class CommandAware(Protocol):
     """Optional estimator or reference-source capability: told each command sent (e.g. for
     tension estimation, or the supervisor's fault monitor)."""

@@ -1,9 +1,10 @@
 """The estimator used in the loop: UKF + link state + cable tension (docs/theory.md section 8).
 
-Implements :class:`tetherland.interfaces.Estimator` and ``CommandAware``. IMU samples are
-buffered by :meth:`UkfEstimator.predict` and integrated together (every sample, one
-unscented transform) when an estimate or a motion-capture update needs them, i.e. at the
-control rate. The cable tension is estimated from the rotors' actual thrust (commanded
+Implements :class:`tetherland.interfaces.Estimator`, ``ImuBatchAware`` and ``CommandAware``.
+IMU samples are buffered by :meth:`UkfEstimator.predict` (or, several at once,
+:meth:`~UkfEstimator.predict_rows`) and integrated together (every sample, one unscented
+transform) when an estimate or a motion-capture update needs them, i.e. at the control
+rate. The cable tension is estimated from the rotors' actual thrust (commanded
 speeds through the motor lag, the believed ground effect) and the bias-corrected specific
 force, projected on the estimated link direction. Each step is one compiled call on the
 estimator's mutable state (the filter's workspace and the estimator's own array, see
@@ -34,6 +35,7 @@ from tetherland.estimation.kernels import command_into as _command_into
 from tetherland.estimation.kernels import estimate_tick as _estimate_tick
 from tetherland.estimation.kernels import fuse_pose as _fuse_pose
 from tetherland.estimation.kernels import push_imu as _push_imu
+from tetherland.estimation.kernels import push_imu_rows as _push_imu_rows
 from tetherland.estimation.tension import (
     F_T,
     F_TAUT,
@@ -49,7 +51,7 @@ from tetherland.estimation.tension import (
 )
 from tetherland.estimation.ukf import NavState, Ukf, UkfNoise, initial_covariance
 from tetherland.estimation.ukf_kernels import REJECTED
-from tetherland.geometry import LandingGeometry
+from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.interfaces import Command, ImuSample, MocapSample, StateEstimate
 from tetherland.rotations import quat_to_rotmat
 from tetherland.state import LinkState, RigidBodyState
@@ -139,6 +141,7 @@ class UkfEstimator:
         t = float(ws[kernels.WS_CLOCK0]) + 1e-3
         f_B, omega_B = np.array([0.0, 0.0, 9.81]), np.zeros(3)
         kernels.push_imu(ws, e, t, f_B, omega_B)
+        kernels.push_imu_rows(ws, e, np.array([[t + 1e-3, *f_B, *omega_B]]))
         kernels.estimate_tick(ws, e, np.empty(kernels.WIDTH))
         held = np.zeros(4)
         kernels.command_into(e, t, held)
@@ -151,6 +154,13 @@ class UkfEstimator:
     def predict(self, imu: ImuSample) -> None:
         """Buffer one IMU sample; it is integrated before the next estimate or update."""
         if _push_imu(self._ws, self._e, imu.t, imu.specific_force_B, imu.omega_B):
+            self._cached = None
+
+    def predict_rows(self, rows: FloatArray) -> None:
+        """Buffer the IMU samples [t, f_B (3), omega_B (3)] of the rows of ``rows`` (n, 7),
+        in order: the same as :meth:`predict` of each (``ImuBatchAware``, one compiled
+        call)."""
+        if _push_imu_rows(self._ws, self._e, rows):
             self._cached = None
 
     def update(self, mocap: MocapSample) -> None:

@@ -151,6 +151,16 @@ def push_imu(ws: FloatArray, e: FloatArray, t: float, f_B: FloatArray,
 
 
 @njit(cache=True)
+def push_imu_rows(ws: FloatArray, e: FloatArray, rows: FloatArray) -> bool:
+    """:func:`push_imu` for each row [t, f_B (3), omega_B (3)] of ``rows``, in order; True
+    if any was buffered."""
+    pushed = False
+    for j in range(rows.shape[0]):
+        pushed |= push_imu(ws, e, rows[j, 0], rows[j, 1:4], rows[j, 4:7])
+    return pushed
+
+
+@njit(cache=True)
 def fuse_pose(ws: FloatArray, e: FloatArray, t_meas: float, p_W: FloatArray,
               q_WB: FloatArray) -> float:  # fmt: skip
     """The buffered samples integrated, then the pose (p_W [m], q_WB) measured at

@@ -37,6 +37,7 @@ from tetherland.interfaces import (
     Controller,
     Estimator,
     EventSource,
+    ImuBatchAware,
     InnerLoop,
     MagnetCommander,
     MocapSample,
@@ -370,6 +371,18 @@ class Runner:
         specific_force, diag_buf = sd[0:3], row.diagnostics
         nans = [math.nan] * len(diag_keys)
         inner = self.inner_loop
+        # An ImuBatchAware estimator gets the IMU samples as rows, before each motion-capture
+        # update and each estimate (with the firmware's inner loop: one record per sample).
+        batch = (
+            estimator.predict_rows
+            if inner is None and isinstance(estimator, ImuBatchAware)
+            else None
+        )
+        n_rows = n_ctrl // imu_every + 1  # (samples between two hand-overs, at most)
+        imu_rows = np.empty((n_rows, 7))
+        imu_row = list(imu_rows)  # row views: [t, f_B, omega_B]
+        imu_batch = [imu_rows[:j] for j in range(n_rows + 1)]
+        imu_sample_into, n_imu, last_imu = imu.sample_into, 0, imu_row[0]
         wall0 = time.perf_counter()
         try:
             if inner is not None:
@@ -385,16 +398,27 @@ class Runner:
                         hook_point_into(hook_buf)
                 step()
                 if k % imu_every == 0:
-                    sample = imu_sample(k * dt, imu_truth)
-                    predict(sample)
-                    if inner is not None:
-                        command(inner.step(sample))
+                    if batch is not None:
+                        if n_imu == n_rows:
+                            batch(imu_rows)
+                            n_imu = 0
+                        last_imu = imu_row[n_imu]
+                        imu_sample_into(k * dt, imu_truth, last_imu)
+                        n_imu += 1
+                    else:
+                        sample = imu_sample(k * dt, imu_truth)
+                        predict(sample)
+                        if inner is not None:
+                            command(inner.step(sample))
                 if k == next_mocap:
                     t_del = k + lat
                     queue.append((t_del, mocap_measure(k * dt, snap_p, snap_att, t_del * dt)))
                     j_mocap += 1
                     next_mocap = mocap_tick(j_mocap)
                 if queue and queue[0][0] <= k:
+                    if n_imu:
+                        batch(imu_batch[n_imu])  # type: ignore[misc]
+                        n_imu = 0
                     while queue and queue[0][0] <= k:
                         m = queue.popleft()[1]
                         update(m)
@@ -404,6 +428,9 @@ class Runner:
                 if not control_tick:
                     continue
                 t_k = k * dt
+                if n_imu:
+                    batch(imu_batch[n_imu])  # type: ignore[misc]
+                    n_imu = 0
                 est = estimate()
                 ref = get_reference(t_k, est)
                 if magnet is not None:
@@ -419,8 +446,11 @@ class Runner:
                     estimator_sent(t_k + dt, cmd)
                 if reference_sent is not None:
                     reference_sent(t_k + dt, cmd)
-                imu_f[...] = sample.specific_force_B  # the last sample (k = 0 is an IMU tick)
-                imu_w[...] = sample.omega_B
+                if batch is None:
+                    imu_f[...] = sample.specific_force_B  # the last sample (k = 0: an IMU tick)
+                    imu_w[...] = sample.omega_B
+                else:
+                    imu_y[...] = last_imu[1:7]
                 bias_into(bias_buf)
                 contact_peaks_into(contact_buf)
                 if diag_keys:
@@ -433,6 +463,8 @@ class Runner:
                     status = RunStatus.TERMINATED
                     message = f"reference terminated at t = {t_k:.3f} s"
                     break
+            if n_imu:  # the samples after the last control tick, as predict would have
+                batch(imu_batch[n_imu])  # type: ignore[misc]
         except SimulationError as err:
             status, message = RunStatus.DIVERGED, str(err)
         except TetherlandError as err:

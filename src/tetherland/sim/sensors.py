@@ -92,6 +92,17 @@ class Imu:
         self._i = i + 1
         return ImuSample(t, y[0:3], y[3:6])
 
+    def sample_into(self, t: float, truth: FloatArray, out: FloatArray) -> None:
+        """:meth:`sample` written as the row [t, specific_force_B (3), omega_B (3)] into
+        ``out[:7]`` (no allocation, no record; the same values)."""
+        i = self._i
+        if i == NOISE_BLOCK:
+            self._refill()
+            i = 0
+        np.add(truth, self._noise[i], out=out[1:7])
+        out[0] = t
+        self._i = i + 1
+
     @property
     def bias(self) -> FloatArray:
         """True biases [accel (3) m/s^2, gyro (3) rad/s] of the last sample (of the next one
