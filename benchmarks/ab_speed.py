@@ -18,7 +18,8 @@ It prints each measurement and the ratio this / other of the means. Issue 25's t
 were set with 009063c's numbers of its day (30.9x, 1.75 s per run): a ratio r here puts
 this tree at r times those numbers on that day's machine.
 
-Run (about 15 minutes; the other tree's kernels compile on its first run):
+Both trees' kernels are compiled first (``python -m tetherland.warmup`` in each), so that
+no round pays numba's compilation. Run (about 15 minutes):
 
     .venv/bin/python benchmarks/ab_speed.py [--against 009063c] [--rounds 2]
         [--campaign-runs 20]
@@ -86,6 +87,14 @@ def campaign_cpu_per_run(tree: Path, runs: int) -> float:
     return cpu / n
 
 
+def warm_up(tree: Path) -> None:
+    """Compile ``tree``'s kernels into its numba cache (``tetherland.warmup``; a tree
+    without that module compiles them on its first mission), so that the first round's
+    campaign workers do not compile the kernels the missions never call."""
+    subprocess.run([sys.executable, "-m", "tetherland.warmup", "--jobs", "2"], env=_env(tree),
+                   capture_output=True)  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--against", default="009063c", help="the other commit")
@@ -102,6 +111,8 @@ def main() -> None:
             trees = {args.against: other, f"this ({head})": ROOT}
             factors: dict[tuple[str, str], list[float]] = {}
             cpu: dict[str, list[float]] = {name: [] for name in trees}
+            for tree in trees.values():  # every kernel compiled and cached before timing
+                warm_up(tree)
             for k in range(args.rounds):
                 for name, tree in trees.items():
                     for scenario in ("slope50", "wall90"):
