@@ -74,7 +74,7 @@ def warm_estimation_and_control() -> None:
 
 
 def warm_plant_and_mission() -> None:
-    """The plant's rotor step, aerodynamics and log row (the point hook's and the bar's
+    """The plant's rotor step, aerodynamics, IMU row and log row (the point hook's and the bar's
     plant, whose hanging line has its drag), the magnet's EPM pull, the landing plan's
     verification, the supervisor's paths, the fault rules' cable torque and the perching
     maneuver's reference."""
@@ -83,6 +83,7 @@ def warm_plant_and_mission() -> None:
     from tetherland.planning.perching import kernels as perching_kernels
     from tetherland.sim.epm import cell_offsets, epm_pull_into
     from tetherland.sim.plant import ROTOR_STATE_WIDTH, Plant
+    from tetherland.sim.sensors import Imu
 
     sc = load_scenario("slope50")
     for plant in (Plant(sc), Plant(load_scenario("pipe60", ["mechanism.kind=bar"]))):
@@ -91,6 +92,10 @@ def warm_plant_and_mission() -> None:
         plant.command(hover)
         plant.step(2)
         plant.rotor_state_into(np.empty(ROTOR_STATE_WIDTH))
+        # the IMU's row, as the runner takes it (truth: a view into MuJoCo's sensordata)
+        Imu(sc.sensors.imu, np.random.default_rng(0)).sample_into(
+            0.0, plant.sensordata[0:6], np.empty((2, 7))[0]
+        )
     # the EPM's pull (the magnet's plant calls it only while the EPM is on)
     epm_pull_into(np.zeros(3), np.eye(3).ravel(), np.zeros(3), cell_offsets(0.02), np.zeros(3),
                   np.eye(3).ravel(), 0.1, 1.0, 1e-3, np.empty(6))  # fmt: skip
