@@ -40,6 +40,7 @@ from tetherland.geometry import FloatArray, landed_rotation
 from tetherland.interfaces import StateEstimate
 from tetherland.models.aero import aero_into, aero_work_size
 from tetherland.rotations import quat_to_rotmat, rotmat_to_quat
+from tetherland.sim import step_kernel as sk
 from tetherland.sim.aero import aero_model
 from tetherland.sim.cable import Cable, ElasticCable, HangingLine, MagnetCable, make_cable
 from tetherland.sim.hook import Hook, HookState
@@ -53,46 +54,11 @@ from tetherland.sim.mjcf import (
 from tetherland.sim.model_cache import compiled_model
 from tetherland.sim.native import address, step_functions
 from tetherland.sim.step_kernel import (
-    H_C0,
-    H_NOW,
-    H_NX,
-    H_PREV,
-    H_SIDE,
-    HOOK_WIDTH,
     R_BASE,
     R_CMD,
     R_FACTOR,
     R_SPINNING,
     R_W,
-    STEP_DIVERGED,
-    T_ATTACHMENT,
-    T_BAD_QACC,
-    T_CABLE,
-    T_CABLE_CTRL,
-    T_CENTRES,
-    T_CTRL,
-    T_DATA,
-    T_HOOK,
-    T_MODEL,
-    T_N_CENTRES,
-    T_N_PARAMS,
-    T_N_SAMPLES,
-    T_N_SHAPES,
-    T_N_WORK,
-    T_PARAMS,
-    T_QPOS,
-    T_QVEL,
-    T_ROT,
-    T_SAMPLES,
-    T_SHAPE_WIDTH,
-    T_SHAPES,
-    T_STEP1,
-    T_STEP2,
-    T_TENDON_LENGTH,
-    T_TENDON_RATE,
-    T_WORK,
-    T_WRENCH,
-    TABLE_SIZE,
     command_rotors,
     physics_step,
     rotor_row_into,
@@ -191,6 +157,7 @@ class Plant:
         # Views into MjData (stable for the life of ``data``).
         self._ctrl = self.data.ctrl[0:4]  # rotor thrusts (the elastic cable owns ctrl[4])
         self._wrench = self.data.qfrc_applied[0:6]  # aero force F_W and torque F_B
+        self._aero_work = work
         self._step_args = (self._rot, self.data.qpos[0:7], self.data.qvel[0:6],
                            *self._aero_args, work, self._ctrl, self._wrench)  # fmt: skip
         self._p_att_view = self.data.site_xpos[self._att_site]
@@ -569,8 +536,8 @@ class Plant:
         self._hook_side = self._contact_hook is None and self.hook.side(x, y, z) >= 0.0
         if self._table is not None:
             h = self._hook_state
-            h[H_SIDE] = 1.0 if self._hook_side else 0.0
-            h[H_PREV : H_PREV + 3] = (x, y, z)
+            h[sk.H_SIDE] = 1.0 if self._hook_side else 0.0
+            h[sk.H_PREV : sk.H_PREV + 3] = (x, y, z)
 
     def _address_table(self) -> np.ndarray | None:
         """The address table of :func:`~tetherland.sim.step_kernel.physics_step`, for a
@@ -586,34 +553,33 @@ class Plant:
         if functions is None or type(cable) is not ElasticCable or self._contact_hook is not None:
             return None
         d, m = self.data, self.model
-        rot, (centres, samples, shapes, params), work = (
-            self._rot, self._aero_args, self._step_args[7]
-        )
+        rot, (centres, samples, shapes, params), work = self._rot, self._aero_args, self._aero_work
         held = [np.ascontiguousarray(a, dtype=float) for a in (centres, samples, shapes, params)]
         centres, samples, shapes, params = held
-        hook = np.zeros(HOOK_WIDTH)
-        hook[H_NX : H_NX + 3] = self._hook_plane[0:3]
-        hook[H_C0] = self._hook_plane[3]
+        hook = np.zeros(sk.HOOK_WIDTH)
+        hook[sk.H_NX : sk.H_NX + 3] = self._hook_plane[0:3]
+        hook[sk.H_C0] = self._hook_plane[3]
         self._hook_state = hook
         self._held = (*held, hook)
-        table = np.zeros(TABLE_SIZE, dtype=np.int64)
-        table[T_MODEL], table[T_DATA] = m._address, d._address
-        table[T_STEP1], table[T_STEP2] = functions
-        table[T_QPOS], table[T_QVEL] = address(self._qpos), address(self._qvel)
-        table[T_CTRL], table[T_WRENCH] = address(self._ctrl), address(self._wrench)
-        table[T_TENDON_LENGTH], table[T_TENDON_RATE] = address(cable._len), address(cable._vel)
-        table[T_CABLE_CTRL], table[T_CABLE] = address(cable._ctrl), address(cable.state)
-        table[T_ATTACHMENT] = address(self._p_att_view)
+        table = np.zeros(sk.TABLE_SIZE, dtype=np.int64)
+        table[sk.T_MODEL], table[sk.T_DATA] = m._address, d._address
+        table[sk.T_STEP1], table[sk.T_STEP2] = functions
+        table[sk.T_QPOS], table[sk.T_QVEL] = address(self._qpos), address(self._qvel)
+        table[sk.T_CTRL], table[sk.T_WRENCH] = address(self._ctrl), address(self._wrench)
+        table[sk.T_TENDON_LENGTH] = address(cable._len)
+        table[sk.T_TENDON_RATE] = address(cable._vel)
+        table[sk.T_CABLE_CTRL], table[sk.T_CABLE] = address(cable._ctrl), address(cable.state)
+        table[sk.T_ATTACHMENT] = address(self._p_att_view)
         bad = _BAD_STATE_WARNINGS[2]
-        table[T_BAD_QACC] = address(self._warnings[bad : bad + 1], np.int32)
-        table[T_HOOK] = address(hook)
-        table[T_ROT] = address(rot)
-        table[T_CENTRES], table[T_N_CENTRES] = address(centres), centres.shape[0]
-        table[T_SAMPLES], table[T_N_SAMPLES] = address(samples), samples.shape[0]
-        table[T_SHAPES], table[T_N_SHAPES] = address(shapes), shapes.shape[0]
-        table[T_SHAPE_WIDTH] = shapes.shape[1]
-        table[T_PARAMS], table[T_N_PARAMS] = address(params), params.size
-        table[T_WORK], table[T_N_WORK] = address(work), work.size
+        table[sk.T_BAD_QACC] = address(self._warnings[bad : bad + 1], np.int32)
+        table[sk.T_HOOK] = address(hook)
+        table[sk.T_ROT] = address(rot)
+        table[sk.T_CENTRES], table[sk.T_N_CENTRES] = address(centres), centres.shape[0]
+        table[sk.T_SAMPLES], table[sk.T_N_SAMPLES] = address(samples), samples.shape[0]
+        table[sk.T_SHAPES], table[sk.T_N_SHAPES] = address(shapes), shapes.shape[0]
+        table[sk.T_SHAPE_WIDTH] = shapes.shape[1]
+        table[sk.T_PARAMS], table[sk.T_N_PARAMS] = address(params), params.size
+        table[sk.T_WORK], table[sk.T_N_WORK] = address(work), work.size
         return table
 
     def _set_cable(self, engaged: bool) -> None:
@@ -748,11 +714,12 @@ class Plant:
                 k = self._tick
                 self._tick = k + 1
                 if found:
-                    if found == STEP_DIVERGED:
+                    if found == sk.STEP_DIVERGED:
                         self._diverged(k * dt)
-                    prev, now = h[H_PREV : H_PREV + 3].tolist(), h[H_NOW : H_NOW + 3].tolist()
-                    h[H_PREV : H_PREV + 3] = now
-                    self._hook_side = h[H_SIDE] != 0.0
+                    prev = h[sk.H_PREV : sk.H_PREV + 3].tolist()
+                    now = h[sk.H_NOW : sk.H_NOW + 3].tolist()
+                    h[sk.H_PREV : sk.H_PREV + 3] = now
+                    self._hook_side = h[sk.H_SIDE] != 0.0
                     if hook.cross(k * dt, tuple(prev), tuple(now)) is not None:
                         self._set_cable(hook.engaged)
             return
