@@ -10,6 +10,9 @@ of the frame, and a divergence.
 
 from __future__ import annotations
 
+import copy
+import pickle
+
 import numpy as np
 import pytest
 
@@ -145,3 +148,11 @@ def test_which_plants_step_compiled(name, sets, compiled):
     # the compiled step covers the elastic cable with the capture disk (every scenario's
     # default); the contact mechanisms and the other cables step in Python
     assert Plant(load_scenario(name, sets)).compiled_step is compiled
+
+
+@pytest.mark.parametrize("how", [copy.copy, copy.deepcopy, pickle.dumps])
+def test_a_plant_is_neither_copied_nor_pickled(how):
+    # a copy's views and address table would point into the original's MuJoCo data (its
+    # steps would move the original): refused with one clear message
+    with pytest.raises(TypeError, match="cannot be copied or pickled"):
+        how(Plant(load_scenario("slope50")))

@@ -29,6 +29,7 @@ so after ``step()`` the sensor readings (IMU, cable force, touch) refer to t_k, 
 from __future__ import annotations
 
 import math
+from typing import NoReturn
 
 import mujoco
 import numpy as np
@@ -224,6 +225,14 @@ class Plant:
             self.data, self.dt,
         )  # fmt: skip
         self.reset()
+
+    def __reduce_ex__(self, protocol: object) -> NoReturn:
+        """A plant is neither copied nor pickled: its views and its compiled step's address
+        table point into its own MuJoCo data (a copy would step the original's)."""
+        raise TypeError(
+            "a Plant cannot be copied or pickled (its views and its compiled step point into "
+            "its own MuJoCo data): build another one with Plant(scenario)"
+        )
 
     # -- state ----------------------------------------------------------------------------
 
