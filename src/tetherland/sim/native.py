@@ -65,24 +65,23 @@ def address(array: np.ndarray, dtype: type = np.float64) -> int:
     return int(array.ctypes.data)
 
 
-@intrinsic
-def _f64_pointer(typingctx, addr):  # type: ignore[no-untyped-def]
-    sig = types.CPointer(types.float64)(types.int64)
+def _pointer_cast(item: types.Type):  # type: ignore[no-untyped-def]
+    """An intrinsic: an int64 address as a typed pointer to ``item`` (for ``carray``)."""
 
-    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
-        return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.float64)))
+    @intrinsic
+    def cast(typingctx, addr):  # type: ignore[no-untyped-def]
+        sig = types.CPointer(item)(types.int64)
 
-    return sig, codegen
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            return builder.inttoptr(args[0], context.get_value_type(types.CPointer(item)))
+
+        return sig, codegen
+
+    return cast
 
 
-@intrinsic
-def _i32_pointer(typingctx, addr):  # type: ignore[no-untyped-def]
-    sig = types.CPointer(types.int32)(types.int64)
-
-    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
-        return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.int32)))
-
-    return sig, codegen
+_f64_pointer = _pointer_cast(types.float64)
+_i32_pointer = _pointer_cast(types.int32)
 
 
 @intrinsic
