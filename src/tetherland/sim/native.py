@@ -46,6 +46,9 @@ def step_functions() -> tuple[int, int] | None:
         for path in sorted(root.glob(pattern)):
             try:
                 lib = ctypes.CDLL(str(path))  # the same loaded library: dlopen counts it once
+                lib.mj_version.restype = ctypes.c_int
+                if lib.mj_version() != mujoco.mj_version():  # another build: not ours
+                    continue
                 return tuple(  # type: ignore[return-value]
                     int(ctypes.cast(getattr(lib, name), ctypes.c_void_p).value or 0)
                     for name in ("mj_step1", "mj_step2")
