@@ -6,7 +6,9 @@ Cases (each the best of ``REPEATS`` runs of ``DURATION`` simulated seconds, one 
    contacts and the cable limit): the floor.
 2. ``plant``: :meth:`Plant.step` (rotor lag, thrust actuators, hook check), hovering; with
    every ``[aero]`` effect off (the plain plant), and 5 cm above the landing pose with
-   the effects on (surface factors and rotor drag every step).
+   the effects on (surface factors and rotor drag every step), there also through the
+   Python bindings (``Plant(..., compiled_step=False)``: the compiled physics step's
+   plain form, issue 25; about 1.2x slower).
 3. ``runner/hover``: the full multi-rate loop (IMU 1 kHz, mocap 120 Hz, control 500 Hz,
    log) with the truth estimator and an open-loop constant-speed controller.
 4. ``runner/changing``: as 3, with a controller whose command changes every tick (no
@@ -115,6 +117,14 @@ def main() -> None:
         plant.step(n)
 
     rows.append(("plant (5 cm up, aero)", best(plant_near)))
+    # the same through the Python bindings (the compiled step's plain form, same bits)
+    python_step = Plant(sc, compiled_step=False)
+
+    def plant_near_python() -> None:
+        python_step.reset(near, rotor_speeds=np.full(4, w_hover))
+        python_step.step(n)
+
+    rows.append(("  (same, Python step)", best(plant_near_python)))
 
     hover_speeds = np.full(4, w_hover)
     hover = Runner(sc, ConstantSpeedController.hover(v), seed=0)
