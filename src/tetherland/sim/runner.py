@@ -7,7 +7,9 @@ so 120 Hz on a 1 kHz plant alternates 8- and 9-tick gaps) and delivered
 ``round(latency/dt)`` ticks later. At tick k:
 
 1. the plant steps from t_k to t_{k+1} with the held command (sensors read at t_k);
-2. IMU tick: a sample stamped t_k goes to ``estimator.predict``;
+2. IMU tick: a sample stamped t_k goes to ``estimator.predict`` (to an ``ImuBatchAware``
+   estimator as a row, the rows handed over before the next update or estimate: the
+   same order, without a record per sample);
 3. mocap tick: the pose at t_k is measured and queued; due samples go to ``estimator.update``;
 4. control tick: ``estimate()``, ``reference(t_k, est)``, ``controller.update(t_k, est, ref)``;
    the command is held from t_{k+1} on (one physics step of compute/transport delay, then
