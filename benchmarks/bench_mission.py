@@ -62,6 +62,7 @@ controllers, on one core."""
 
 ROLES = (
     (UkfEstimator, "predict", "estimator (IMU predict, estimate, mocap update)"),
+    (UkfEstimator, "predict_rows", "estimator (IMU predict, estimate, mocap update)"),
     (UkfEstimator, "estimate", "estimator (IMU predict, estimate, mocap update)"),
     (UkfEstimator, "update", "estimator (IMU predict, estimate, mocap update)"),
     (UkfEstimator, "command_sent", "estimator (IMU predict, estimate, mocap update)"),
@@ -69,6 +70,7 @@ ROLES = (
     (MissionSupervisor, "reference", "supervisor (reference)"),
     (Plant, "step", "plant (2 MuJoCo steps, rotors, hook)"),
     (Imu, "sample", "sensors (2 IMU samples, mocap)"),
+    (Imu, "sample_into", "sensors (2 IMU samples, mocap)"),
     (Mocap, "measure", "sensors (2 IMU samples, mocap)"),
     (LogRow, "write", "log row"),
 )
