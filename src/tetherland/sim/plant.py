@@ -212,6 +212,7 @@ class Plant:
         self._prev_att = (0.0, 0.0, 0.0)
         self._hook_side = False
         self._tick = 0
+        self._hook_state: np.ndarray | None = None  # (the compiled step's capture plane)
         self._table = self._address_table() if compiled_step else None
         self.compiled_step = self._table is not None
         """Whether :meth:`step` makes one compiled call per physics step."""
@@ -223,6 +224,11 @@ class Plant:
             _BAD_STATE_WARNINGS[2], self._lander_normals, self._lander_peak,
             self._frame_found, self._depth_view, self._contact_hook, *self._hook_plane,
             self.data, self.dt,
+        )  # fmt: skip
+        # what the compiled step's loop reads (sim/step_kernel.physics_step does the rest)
+        self._compiled_context = (
+            self.data, self.hook, self._hook_state, self._lander_normals,
+            self._lander_peak, self._frame_found, self._depth_view, self.dt,
         )  # fmt: skip
         self.reset()
 
@@ -705,12 +711,11 @@ class Plant:
         SimulationError
             If MuJoCo reports a non-finite or diverging state.
         """
-        # (one tuple, built once: this runs once per physics step)
-        (advance, args, hook, p_att, warn, bad_qacc, lander_normals, lander_peak, frame_found,
-         depth, line, nx, ny, nz, n_dot_p0, data, dt) = self._step_context  # fmt: skip
         table = self._table
         if table is not None:
-            h = self._hook_state
+            data, hook, h, lander_normals, lander_peak, frame_found, depth, dt = (
+                self._compiled_context
+            )
             for _ in range(n):
                 found = physics_step(table)
                 if data.ncon:  # (as below)
@@ -732,6 +737,9 @@ class Plant:
                     if hook.cross(k * dt, tuple(prev), tuple(now)) is not None:
                         self._set_cable(hook.engaged)
             return
+        # (one tuple, built once: this runs once per physics step)
+        (advance, args, hook, p_att, warn, bad_qacc, lander_normals, lander_peak, frame_found,
+         depth, line, nx, ny, nz, n_dot_p0, data, dt) = self._step_context  # fmt: skip
         for _ in range(n):
             rotor_step(*args)
             advance()
