@@ -221,15 +221,10 @@ class Plant:
         # capture plane (line: the mechanism whose contact decides the hook instead)
         self._step_context = (
             self.cable.advance, self._step_args, self.hook, self._p_att_view, self._warnings,
-            _BAD_STATE_WARNINGS[2], self._lander_normals, self._lander_peak,
-            self._frame_found, self._depth_view, self._contact_hook, *self._hook_plane,
-            self.data, self.dt,
+            _BAD_STATE_WARNINGS[2], self._contact_hook, *self._hook_plane, self.data, self.dt,
         )  # fmt: skip
         # what the compiled step's loop reads (sim/step_kernel.physics_step does the rest)
-        self._compiled_context = (
-            self.data, self.hook, self._hook_state, self._lander_normals,
-            self._lander_peak, self._frame_found, self._depth_view, self.dt,
-        )  # fmt: skip
+        self._compiled_context = (self.data, self.hook, self._hook_state, self.dt)
         self.reset()
 
     def __reduce_ex__(self, protocol: object) -> NoReturn:
@@ -713,18 +708,11 @@ class Plant:
         """
         table = self._table
         if table is not None:
-            data, hook, h, lander_normals, lander_peak, frame_found, depth, dt = (
-                self._compiled_context
-            )
+            data, hook, h, dt = self._compiled_context
             for _ in range(n):
                 found = physics_step(table)
-                if data.ncon:  # (as below)
-                    self._touched = True
-                    np.maximum(lander_peak, lander_normals, out=lander_peak)
-                    if frame_found[0]:
-                        self._track_parts()
-                    if depth[0] < self._depth_min:
-                        self._depth_min = depth.item()
+                if data.ncon:  # (no contact: every contact sensor reads 0, nothing to track)
+                    self._track_contacts()
                 k = self._tick
                 self._tick = k + 1
                 if found:
@@ -738,18 +726,13 @@ class Plant:
                         self._set_cable(hook.engaged)
             return
         # (one tuple, built once: this runs once per physics step)
-        (advance, args, hook, p_att, warn, bad_qacc, lander_normals, lander_peak, frame_found,
-         depth, line, nx, ny, nz, n_dot_p0, data, dt) = self._step_context  # fmt: skip
+        (advance, args, hook, p_att, warn, bad_qacc, line, nx, ny, nz, n_dot_p0, data,
+         dt) = self._step_context  # fmt: skip
         for _ in range(n):
             rotor_step(*args)
             advance()
             if data.ncon:  # (no contact: every contact sensor reads 0, nothing to track)
-                self._touched = True
-                np.maximum(lander_peak, lander_normals, out=lander_peak)
-                if frame_found[0]:  # a part but the landers touches: a crash
-                    self._track_parts()
-                if depth[0] < self._depth_min:
-                    self._depth_min = depth.item()
+                self._track_contacts()
             k = self._tick
             self._tick = k + 1
             # Kinematics in ``data`` refer to t_k after mj_step; a hook crossing found
@@ -767,6 +750,17 @@ class Plant:
                 if hook.cross(k * dt, self._prev_att, (x, y, z)) is not None:
                     self._set_cable(hook.engaged)
             self._prev_att = (x, y, z)
+
+    def _track_contacts(self) -> None:
+        """After a step with contacts: the landers' peak forces, the parts in contact (a
+        crash) and the deepest penetration since the last read."""
+        self._touched = True
+        np.maximum(self._lander_peak, self._lander_normals, out=self._lander_peak)
+        if self._frame_found[0]:  # a part but the landers touches: a crash
+            self._track_parts()
+        depth = self._depth_view[0]
+        if depth < self._depth_min:
+            self._depth_min = float(depth)
 
     def _diverged(self, t: float) -> None:
         names = ("qpos", "qvel", "qacc")
