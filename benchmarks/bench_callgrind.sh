@@ -7,7 +7,7 @@ PY=${1:-.venv/bin/python}
 shift || true
 HERE=$(dirname "$0")
 
-WORKLOADS=${*:-"free_flight hierarchical dfl estimator aero believed compensation plant bar_free bar_seated mission"}
+WORKLOADS=${*:-"free_flight hierarchical dfl estimator aero believed compensation stack stack_layered plant bar_free bar_seated mission"}
 tmp=$(mktemp -d)
 for w in $WORKLOADS; do
     if [ "$w" = mission ]; then n=1; else n=2000; fi

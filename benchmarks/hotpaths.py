@@ -16,7 +16,10 @@ of slope50, cycling over poses near the slope, on the pad and at cruise height),
 ``believed`` (the estimator's believed ground effect at the same poses),
 ``compensation`` (the controller wrappers of a mission, rotor-drag feed-forward and
 ground-effect compensation, around a controller that returns fixed speeds: the same poses,
-moving, with free-flight references of 2 to 4 rows and tethered ones in turn) and
+moving, with free-flight references of 2 to 4 rows and tethered ones in turn),
+``stack`` and ``stack_layered`` (a mission's whole controller, the wrappers around the
+switching controller, on free-flight ticks at the same poses: the tick in one compiled
+call, :class:`~tetherland.control.stack.CompiledStack`, or through the layers) and
 ``plant`` (one physics step of the slope50 plant, :meth:`Plant.step`, as the runner calls
 it: the command changed every second step, cycling over 16 starts near the slope with the
 cable engaged, each held for 64 steps; counted per physics step, the restarts included).
@@ -256,12 +259,12 @@ def _bar_plant(seated: bool):
 
 
 def _compensation():
-    """The two controller wrappers of a mission (:func:`~tetherland.control.rotor_drag.
+    """The two controller wrappers of a mission (:func:`~tetherland.control.stack.
     with_aero_belief`) around a controller that returns fixed speeds: one control tick per
     call, cycling over the poses of :func:`_poses` (moving at 0.4 m/s toward the slope,
     turning at 1 rad/s) and over free-flight references of 2, 3 and 4 rows and a
     tethered one."""
-    from tetherland.control.rotor_drag import with_aero_belief
+    from tetherland.control.stack import with_aero_belief
     from tetherland.geometry import LandingGeometry
     from tetherland.interfaces import Command, ControlMode, Reference, StateEstimate
     from tetherland.state import RigidBodyState
@@ -288,6 +291,38 @@ def _compensation():
         k[0] += 1
         i = k[0]
         ctrl.update(0.0, estimates[i % len(estimates)], references[i % len(references)])
+
+    return call
+
+
+def _stack(compiled: bool):
+    """A mission's whole controller (:func:`~tetherland.control.stack.with_aero_belief`
+    around the switching controller) on free-flight ticks: the poses of :func:`_poses`,
+    moving, with references of 3 rows at the pose; ``compiled``: the free-flight tick in
+    one call (:class:`~tetherland.control.stack.CompiledStack`), else the layers."""
+    from tetherland.control import SwitchingController
+    from tetherland.control.stack import with_aero_belief
+    from tetherland.geometry import LandingGeometry
+    from tetherland.interfaces import Reference, StateEstimate
+    from tetherland.state import RigidBodyState
+
+    sc = load_scenario("slope50")
+    geo = LandingGeometry.from_scenario(sc)
+    ctrl = with_aero_belief(SwitchingController(sc), sc, compiled=compiled)
+    v_W, omega_B = -0.4 * geo.surface.z_S, np.array([0.3, -1.0, 0.2])
+    estimates = [
+        StateEstimate(t=0.0, body=RigidBodyState(q[0:3], v_W, q[3:7], omega_B))
+        for q in _poses(sc)
+    ]
+    references = [
+        Reference(t=0.0, p_W=np.array([e.body.p_W + 0.01, v_W, np.zeros(3)])) for e in estimates
+    ]
+    k = [0]
+
+    def call() -> None:
+        k[0] += 1
+        i = k[0]
+        ctrl.update(2e-3 * i, estimates[i % len(estimates)], references[i % len(references)])
 
     return call
 
@@ -351,6 +386,8 @@ def main() -> None:
         call = _bar_plant(name == "bar_seated")
     elif name == "compensation":
         call = _compensation()
+    elif name in ("stack", "stack_layered"):
+        call = _stack(name == "stack")
     else:
         call = _estimator() if name == "estimator" else _controllers(name)
     for _ in range(50):

@@ -160,7 +160,7 @@ def climb_runner():
     free-flight controller inside the believed-aero wrappers, the tethered method's
     diagnostics), flying slope50's vehicle from the start pad up a free-flight path."""
     from tetherland.control import FreeFlightController
-    from tetherland.control.rotor_drag import with_aero_belief
+    from tetherland.control.stack import with_aero_belief
     from tetherland.estimation import UkfEstimator
     from tetherland.interfaces import Reference
     from tetherland.methods.tethered import DIAGNOSTICS

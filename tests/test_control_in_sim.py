@@ -9,7 +9,7 @@ import pytest
 
 from tetherland.analysis import LandingTolerances, evaluate_landing
 from tetherland.control import FreeFlightController, SwitchingController
-from tetherland.control.rotor_drag import with_aero_belief
+from tetherland.control.stack import with_aero_belief
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import LandingGeometry
 from tetherland.interfaces import Reference

@@ -20,7 +20,7 @@ from tetherland.analysis.statics import landing_hover, tethered_rest_tension
 from tetherland.cli import main
 from tetherland.config import TETHER_MATERIALS, CableModel, load_scenario
 from tetherland.control import SwitchingController
-from tetherland.control.rotor_drag import with_aero_belief
+from tetherland.control.stack import with_aero_belief
 from tetherland.errors import ConfigError
 from tetherland.estimation import UkfEstimator, elastic_tension
 from tetherland.estimation.tension import (

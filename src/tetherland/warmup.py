@@ -40,8 +40,13 @@ from tetherland.interfaces import (
 def warm_estimation_and_control() -> None:
     """The UKF, the free-flight, tracking, hierarchical and DFL controllers, each alone and
     wrapped as a mission composes them (believed ground effect and rotor drag)."""
-    from tetherland.control import DflController, FreeFlightController, HierarchicalController
-    from tetherland.control.rotor_drag import with_aero_belief
+    from tetherland.control import (
+        DflController,
+        FreeFlightController,
+        HierarchicalController,
+        SwitchingController,
+    )
+    from tetherland.control.stack import with_aero_belief
     from tetherland.control.tracking import FreeFlightTracker
     from tetherland.estimation import UkfEstimator
     from tetherland.geometry import LandingGeometry
@@ -61,6 +66,11 @@ def warm_estimation_and_control() -> None:
     for rows in (np.zeros((3, 3)), held):
         FreeFlightController(sc).update(2e-3, e, Reference(t=2e-3, p_W=rows))
         with_aero_belief(FreeFlightController(sc), sc).update(2e-3, e, Reference(t=2e-3, p_W=rows))
+        # a mission's stack: its free-flight ticks in one compiled call (control.stack;
+        # the first tick, the switch into free flight, goes through the layers)
+        stack = with_aero_belief(SwitchingController(sc), sc)
+        for t in (2e-3, 4e-3):
+            stack.update(t, e, Reference(t=t, p_W=rows))
     FreeFlightTracker(sc).update(2e-3, e, Reference(t=2e-3, p_W=np.zeros((5, 3))))
     output = np.zeros((5, 4))
     output[0, 0] = e.link.phi if e.link is not None else 0.5

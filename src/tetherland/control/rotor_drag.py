@@ -47,7 +47,6 @@ from typing import Any
 import numpy as np
 
 from tetherland.config import Scenario
-from tetherland.control.ground_effect import GroundEffectCompensation
 from tetherland.control.kernels.aero import (
     drag_acceleration,
     drag_rows_into,
@@ -63,7 +62,6 @@ __all__ = [
     "drag_acceleration",
     "link_drag_acceleration",
     "replaced",
-    "with_aero_belief",
 ]
 
 _FIELDS = tuple(f.name for f in fields(Reference))
@@ -127,15 +125,3 @@ class RotorDragCompensation:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.inner, name)
-
-
-def with_aero_belief(controller: Controller, belief: Scenario) -> Controller:
-    """``controller`` as a mission composes it: wrapped in the believed ground-effect
-    compensation (``controller.ground_effect_compensation``) and the believed rotor-drag
-    feed-forward (``controller.rotor_drag`` not zero), each only when switched on."""
-    out: Controller = controller
-    if belief.controller.ground_effect_compensation:
-        out = GroundEffectCompensation(out, belief)
-    if any(d > 0.0 for d in belief.controller.rotor_drag):
-        out = RotorDragCompensation(out, belief)
-    return out

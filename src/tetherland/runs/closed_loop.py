@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 from tetherland.config import Scenario
-from tetherland.control.rotor_drag import with_aero_belief
+from tetherland.control.stack import with_aero_belief
 from tetherland.errors import InfeasibleError
 from tetherland.estimation import UkfEstimator
 from tetherland.geometry import FloatArray
