@@ -16,6 +16,7 @@ from tetherland.control.kernels.mixer import OUT_SATURATION
 from tetherland.control.mixer import Mixer, command_from
 from tetherland.control.position import PositionController, PositionReference
 from tetherland.errors import SingularityError
+from tetherland.geometry import FloatArray
 from tetherland.interfaces import Command, Reference, StateEstimate
 from tetherland.rotations import quat_to_rotmat
 
@@ -90,13 +91,25 @@ class FreeFlightController:
             self.position.integral, self._par, self.mixer.packed, out,
         )  # fmt: skip
         if out[kernel.OUT_SINGULAR]:
-            raise SingularityError("thrust axis is aligned with the desired heading: yaw undefined")
-        e_x, e_y, e_z = out[kernel.OUT_E_X].tolist()
-        diag = {
-            "e_x": e_x,
-            "e_y": e_y,
-            "e_z": e_z,
-            "tilt_limited": float(out[kernel.OUT_LIMITED]),
-            "saturation": float(out[OUT_SATURATION]),
-        }
-        return command_from(out, diag)
+            raise SingularityError(SINGULAR_MESSAGE)
+        return command_of(out)
+
+
+SINGULAR_MESSAGE = "thrust axis is aligned with the desired heading: yaw undefined"
+"""The :class:`~tetherland.errors.SingularityError` of a heading the law cannot define."""
+
+
+def command_of(out: FloatArray) -> Command:
+    """The :class:`Command` of the compiled law's ``out``
+    (:func:`tetherland.control.kernels.free_flight.free_flight_into`), its diagnostics the
+    position error ``e_x``, ``e_y``, ``e_z`` [m], ``tilt_limited`` (1 when a limit acted)
+    and the mixer's ``saturation`` level."""
+    e_x, e_y, e_z = out[kernel.OUT_E_X].tolist()
+    diag = {
+        "e_x": e_x,
+        "e_y": e_y,
+        "e_z": e_z,
+        "tilt_limited": float(out[kernel.OUT_LIMITED]),
+        "saturation": float(out[OUT_SATURATION]),
+    }
+    return command_from(out, diag)

@@ -23,12 +23,10 @@ from typing import Any
 import numpy as np
 
 from tetherland.config import Scenario
-from tetherland.control.free_flight import FreeFlightController
+from tetherland.control.free_flight import SINGULAR_MESSAGE, FreeFlightController, command_of
 from tetherland.control.ground_effect import GroundEffectCompensation
 from tetherland.control.kernels import free_flight as ff_kernel
-from tetherland.control.kernels.mixer import OUT_SATURATION
 from tetherland.control.kernels.stack import STACK_DIVIDED, STACK_SINGULAR, free_flight_stack_into
-from tetherland.control.mixer import command_from
 from tetherland.control.rotor_drag import RotorDragCompensation
 from tetherland.control.switching import SwitchingController
 from tetherland.errors import SingularityError
@@ -99,18 +97,10 @@ class CompiledStack:
             self._ground_effect, np.empty((max(len(rows), 3), 3)), out, speeds,
         )  # fmt: skip
         if status == STACK_SINGULAR:
-            raise SingularityError("thrust axis is aligned with the desired heading: yaw undefined")
-        e_x, e_y, e_z = out[ff_kernel.OUT_E_X].tolist()
-        diag = {
-            "e_x": e_x,
-            "e_y": e_y,
-            "e_z": e_z,
-            "tilt_limited": float(out[ff_kernel.OUT_LIMITED]),
-            "saturation": float(out[OUT_SATURATION]),
-        }
-        mixed = switching.last = command_from(out, diag)
+            raise SingularityError(SINGULAR_MESSAGE)
+        mixed = switching.last = command_of(out)
         if status == STACK_DIVIDED:
-            return Command(speeds, mixed.thrust, mixed.torque_B, diag)
+            return Command(speeds, mixed.thrust, mixed.torque_B, mixed.diagnostics)
         return mixed
 
     def __getattr__(self, name: str) -> Any:
