@@ -163,3 +163,79 @@ def test_output_derivatives_pad_and_truncate():
     np.testing.assert_allclose(y.theta_A, [0.1, 0.2, 0.3])
     assert y.as_vector().shape == (16,)
     np.testing.assert_allclose(y.value, [1.0, 0.0, 0.1, 0.2])
+
+
+# ------------------------------------------------------------------ the compiled map (issue 25)
+def _samples(n: int) -> np.ndarray:
+    """(n, 16) output rows along the sine outputs above."""
+    return np.array([output_at(0.01 * k).as_vector() for k in range(n)])
+
+
+def _same_bits(flat: FlatnessMap, Y: np.ndarray) -> bool:
+    """``flat.evaluate_many``'s raw values equal the plain function's (numbers built in)."""
+    from tetherland.models import flatness as module
+
+    plain = flat.function.map(len(Y))(Y.T)
+    fn = module._compiled(flat._structure) or module._parametric(flat._structure)
+    fast = fn.map("m", "serial", len(Y), [1], [])(Y.T, flat.parameters)
+    return all(
+        np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)
+        for a, b in zip(plain, fast, strict=True)
+    )
+
+
+@pytest.fixture
+def fresh_flatness_cache(tmp_path, monkeypatch):
+    """The flatness map's compiled and parametric forms built anew, into ``tmp_path``."""
+    from tetherland import ccode
+    from tetherland.models import flatness as module
+
+    monkeypatch.setenv(ccode.CACHE_ENV, str(tmp_path))
+    module._compiled.cache_clear()
+    module._parametric.cache_clear()
+    yield tmp_path
+    module._compiled.cache_clear()
+    module._parametric.cache_clear()
+
+
+def test_the_map_with_its_numbers_as_inputs_gives_the_plain_maps_bits(fresh_flatness_cache):
+    """A full inertia matrix, a cable offset, the default vehicle: compiled to C (or in
+    CasADi's machine without a compiler) the same bits as the map with its numbers built
+    in, and the nominal values through ``evaluate_many`` are those of ``evaluate``."""
+    Y = _samples(300)
+    J = np.array([[0.010, 0.001, 0.0], [0.001, 0.012, -0.0005], [0.0, -0.0005, 0.020]])
+    offset = dataclasses.replace(FLAT, inertia=J, r_att_B=np.array([0.01, 0.0, -0.05]))
+    for flat in (FLAT, offset):
+        assert _same_bits(flat, Y)
+        many = flat.evaluate_many(Y[:3])
+        one = flat.evaluate(output_at(0.01))
+        assert np.array_equal(many["rotor_thrusts"][1], one.rotor_thrusts)
+        assert np.array_equal(many["omega_dot_B"][1], one.omega_dot_B)
+    # one library per structure (where the numbers are not zero), whatever the values
+    from tetherland import ccode
+
+    built = sorted(fresh_flatness_cache.glob("flatness_*.so"))
+    assert len(built) == (2 if ccode.available() else 0)
+    heavier = dataclasses.replace(FLAT, mass=1.3 * FLAT.mass)
+    heavier.evaluate_many(Y)
+    assert sorted(fresh_flatness_cache.glob("flatness_*.so")) == built
+    assert heavier.parameters[0] == pytest.approx(1.3 * FLAT.parameters[0])
+    assert not np.array_equal(heavier.evaluate_many(Y)["f_R"], FLAT.evaluate_many(Y)["f_R"])
+
+
+def test_without_a_compiler_the_map_is_evaluated_by_casadi_with_the_same_bits(
+    fresh_flatness_cache, monkeypatch
+):
+    from tetherland import ccode
+
+    Y = _samples(50)
+    compiled = FLAT.evaluate_many(Y)
+    from tetherland.models import flatness as module
+
+    module._compiled.cache_clear()
+    monkeypatch.setattr(ccode, "available", lambda: False)
+    assert module._compiled(FLAT._structure) is None
+    machine = FLAT.evaluate_many(Y)
+    assert compiled.keys() == machine.keys()
+    for key in compiled:
+        assert np.array_equal(compiled[key], machine[key]), key

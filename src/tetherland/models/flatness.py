@@ -31,6 +31,8 @@ cos(phi + theta_A) = 0, where cos(delta) = 0, or where z_B is along y_A (roll = 
 
 from __future__ import annotations
 
+import functools
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -38,7 +40,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tetherland import GRAVITY
+from tetherland import GRAVITY, ccode
 from tetherland.errors import SingularityError
 from tetherland.geometry import FloatArray, LandingGeometry
 from tetherland.models.quadrotor import RotorLayout
@@ -183,8 +185,82 @@ def _build_function(
     r_att_B: FloatArray,
     g: float,
 ) -> ca.Function:
-    """The flatness map as a CasADi Function of the 16 output derivatives (built once)."""
+    """The flatness map as a CasADi Function of the 16 output derivatives, the numbers
+    built in (the plain form; :func:`_parametric` is the same map with them as inputs)."""
     Y = ca.SX.sym("y", OUTPUT_SIZE)
+    r_att = np.asarray(r_att_B, dtype=float)
+    outputs = _nominal(
+        Y, mass, length, g, ca.DM(inertia), ca.DM(np.linalg.inv(allocation)),
+        ca.DM(r_att) if np.any(r_att != 0) else None,
+    )  # fmt: skip
+    return ca.Function("flatness", [Y], outputs, ["y"], list(_OUTPUT_NAMES))
+
+
+Structure = tuple[tuple[tuple[int, int], ...], tuple[tuple[int, int], ...], tuple[int, ...]]
+"""Where the numbers of a map are not zero: J and Gamma^-1 (row, column) and r_att (row),
+each in CasADi's column-major order (:func:`_structure`)."""
+
+
+def _nonzeros(matrix: FloatArray) -> tuple[tuple[int, int], ...]:
+    """(row, column) of the nonzero entries of ``matrix``, column by column."""
+    cols, rows = np.nonzero(np.asarray(matrix, dtype=float).T)
+    return tuple(zip(rows.tolist(), cols.tolist(), strict=True))
+
+
+def _structure(
+    inertia: FloatArray, allocation_inverse: FloatArray, r_att_B: FloatArray
+) -> Structure:
+    """The :data:`Structure` of J, Gamma^-1 and r_att."""
+    return (
+        _nonzeros(inertia),
+        _nonzeros(allocation_inverse),
+        tuple(int(i) for i in np.flatnonzero(r_att_B)),
+    )
+
+
+def _symbols(name: str, shape: tuple[int, int], where: tuple[tuple[int, int], ...]) -> ca.SX:
+    """A symbolic matrix with entries only at ``where`` (structural zeros elsewhere)."""
+    rows, cols = [w[0] for w in where], [w[1] for w in where]
+    return ca.SX.sym(name, ca.Sparsity.triplet(shape[0], shape[1], rows, cols))
+
+
+@functools.cache
+def _parametric(structure: Structure) -> ca.Function:
+    """The map as a Function ``(y (16), p) -> nominal values`` of the numbers
+    p = [m, l, g, J, Gamma^-1, r_att] (the nonzeros of each, column by column; see
+    :meth:`FlatnessMap.parameters`), built once per :data:`Structure`. Symbols stand only
+    where the numbers are not zero, so that its operations are those of
+    :func:`_build_function` with the numbers built in (CasADi drops the products with a
+    built-in zero; the two give the same bits, tests/test_models_flatness.py)."""
+    J_at, G_at, r_at = structure
+    Y = ca.SX.sym("y", OUTPUT_SIZE)
+    m, length, g = ca.SX.sym("m"), ca.SX.sym("l"), ca.SX.sym("g")
+    J, G_inv = _symbols("J", (3, 3), J_at), _symbols("G_inv", (4, 4), G_at)
+    r_att = _symbols("r_att", (3, 1), tuple((i, 0) for i in r_at)) if r_at else None
+    outputs = _nominal(Y, m, length, g, J, G_inv, r_att)
+    p = ca.vertcat(m, length, g, *J.nonzeros(), *G_inv.nonzeros(),
+                   *(r_att.nonzeros() if r_att is not None else []))  # fmt: skip
+    return ca.Function("flatness_p", [Y, p], outputs, ["y", "p"], list(_OUTPUT_NAMES))
+
+
+@functools.cache
+def _compiled(structure: Structure) -> ca.Function | None:
+    """:func:`_parametric` compiled to C (:func:`tetherland.ccode.library`, once per
+    structure and machine), or None without a C compiler (the virtual machine then)."""
+    if not ccode.available():
+        return None
+    try:
+        path = ccode.library([_parametric(structure)], "flatness", "flatness functions")
+    except (OSError, RuntimeError) as err:
+        warnings.warn(f"compiled flatness map unavailable ({err}); using CasADi's", stacklevel=3)
+        return None
+    return ca.external("flatness_p", str(path))
+
+
+def _nominal(Y: ca.SX, mass, length, g, J, G_inv, r_att) -> list[ca.SX]:  # type: ignore[no-untyped-def]
+    """The nominal values of the outputs ``Y`` (the map's equations): the numbers m, l, g
+    [kg, m, m/s^2], J (3x3), Gamma^-1 (4x4) and r_att (3, or None for no offset), as
+    floats and DM matrices or as symbols."""
     phi, delta, th, psi = Y[0:5], Y[5:10], Y[10:13], Y[13:16]
     top = ca.vertcat(phi[4], delta[4], th[2], psi[2])
     Ydot = ca.vertcat(phi[1:5], 0, delta[1:5], 0, th[1:3], 0, psi[1:3], 0)
@@ -220,17 +296,15 @@ def _build_function(
         + ca.vertcat(0, 0, 1) * psi[1]
     )
     omega_dot = D(omega)
-    J = ca.DM(inertia)
     tau = J @ omega_dot + ca.cross(omega, J @ omega)
-    if np.any(r_att_B != 0):
-        tau_L = ca.cross(ca.DM(r_att_B), -tension * (R_AB.T @ d))
+    if r_att is not None:
+        tau_L = ca.cross(r_att, -tension * (R_AB.T @ d))
         tau = tau - tau_L
-    rotors = ca.DM(np.linalg.inv(allocation)) @ ca.vertcat(f_R, tau)
-    outputs = [
+    rotors = G_inv @ ca.vertcat(f_R, tau)
+    return [
         length * d, length * d1, length * d2, R_AB, roll, omega, omega_dot, f_R, f_R1, f_R2,
         tau, rotors, tension, D(tension), u_z, ca.cos(s), cd,
     ]  # fmt: skip
-    return ca.Function("flatness", [Y], outputs, ["y"], list(_OUTPUT_NAMES))
 
 
 @dataclass(frozen=True)
@@ -269,17 +343,24 @@ class FlatnessMap:
     p_A: FloatArray = field(default_factory=lambda: np.zeros(3))
     r_att_B: FloatArray = field(default_factory=lambda: np.zeros(3))
     gravity: float = GRAVITY
-    _function: ca.Function = field(init=False, repr=False, compare=False)
+    _structure: Structure = field(init=False, repr=False, compare=False)
+    _parameters: FloatArray = field(init=False, repr=False, compare=False)
+    _function: ca.Function | None = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self) -> None:
         J = np.asarray(self.inertia, dtype=float)
         object.__setattr__(self, "inertia", np.diag(J) if J.shape == (3,) else J)
         for name in ("allocation", "R_WA", "p_A", "r_att_B"):
             object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
-        fn = _build_function(
-            self.mass, self.length, self.inertia, self.allocation, self.r_att_B, self.gravity
-        )
-        object.__setattr__(self, "_function", fn)
+        G_inv = np.linalg.inv(self.allocation)
+        structure = _structure(self.inertia, G_inv, self.r_att_B)
+        J_at, G_at, r_at = structure
+        p = [float(self.mass), float(self.length), float(self.gravity)]
+        p += [float(self.inertia[i, j]) for i, j in J_at]
+        p += [float(G_inv[i, j]) for i, j in G_at]
+        p += [float(self.r_att_B[i]) for i in r_at]
+        object.__setattr__(self, "_structure", structure)
+        object.__setattr__(self, "_parameters", np.array(p))
 
     @classmethod
     def from_scenario(
@@ -308,8 +389,25 @@ class FlatnessMap:
 
     @property
     def function(self) -> ca.Function:
-        """The CasADi Function ``y(16) -> nominal values in F_A`` (for symbolic reuse)."""
+        """The CasADi Function ``y(16) -> nominal values in F_A``, the map's numbers built in
+        (for symbolic reuse; built on first use). :meth:`evaluate_many` evaluates the same
+        map with the numbers as inputs (:attr:`parameters`), compiled to C when a compiler
+        is there, with the same bits."""
+        if self._function is None:
+            fn = _build_function(
+                self.mass, self.length, self.inertia, self.allocation, self.r_att_B,
+                self.gravity,
+            )  # fmt: skip
+            object.__setattr__(self, "_function", fn)
+        assert self._function is not None
         return self._function
+
+    @property
+    def parameters(self) -> FloatArray:
+        """The numbers of the map as its parametric form takes them: m [kg], l [m],
+        g [m/s^2], then the nonzeros of J [kg m^2], Gamma^-1 and r_att [m], each column by
+        column (copy)."""
+        return self._parameters.copy()
 
     def evaluate_many(self, outputs: ArrayLike, check: bool = True) -> dict[str, FloatArray]:
         """Vectorised map for an (n, 16) array of :meth:`OutputDerivatives.as_vector` rows.
@@ -323,8 +421,10 @@ class FlatnessMap:
         if Y.shape[1] != OUTPUT_SIZE:
             raise ValueError(f"outputs must have {OUTPUT_SIZE} columns, got shape {Y.shape}")
         n = Y.shape[0]
-        fn = self._function if n == 1 else self._function.map(n)
-        raw = fn(Y.T)
+        fn = _compiled(self._structure) or _parametric(self._structure)
+        if n > 1:  # the samples mapped, the numbers shared
+            fn = fn.map("flatness_map", "serial", n, [1], [])
+        raw = fn(Y.T, self._parameters)
         vals = {name: np.asarray(r) for name, r in zip(_OUTPUT_NAMES, raw, strict=True)}
         if check:
             self._check(vals, Y)

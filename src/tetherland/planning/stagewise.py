@@ -34,40 +34,18 @@ differentiation of :attr:`Transcript.nlp`.
 
 from __future__ import annotations
 
-import functools
-import hashlib
-import os
-import shutil
-import subprocess
-import tempfile
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from tetherland import ccode
 from tetherland.planning.transcription import Transcript
 
-COMPILER = "gcc"
-FLAGS = ("-O2", "-fPIC", "-shared")
-"""C compiler and flags of the library (gcc ``-O2``: about 1.5 s of CPU for the landing
-OCP, any N)."""
-CACHE_ENV = "TETHERLAND_CACHE_DIR"
-"""Environment variable naming the cache directory (default: ``~/.cache/tetherland``)."""
-
-
-@functools.cache
-def available() -> bool:
-    """Whether the C compiler of :func:`library` is installed."""
-    return shutil.which(COMPILER) is not None
-
-
-def cache_dir() -> Path:
-    """Where compiled libraries are kept: ``$TETHERLAND_CACHE_DIR``, else
-    ``$XDG_CACHE_HOME/tetherland``, else ``~/.cache/tetherland``."""
-    if os.environ.get(CACHE_ENV):
-        return Path(os.environ[CACHE_ENV])
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "tetherland"
+# (the compiler, its flags and the cache live in tetherland.ccode; imported here, where the
+# NLP's library is built, under the names they always had)
+COMPILER, FLAGS, CACHE_ENV = ccode.COMPILER, ccode.FLAGS, ccode.CACHE_ENV
+available, cache_dir = ccode.available, ccode.cache_dir
 
 
 def _sx_function(
@@ -238,33 +216,12 @@ def _jacobian_pattern(
 
 
 def library(tr: Transcript) -> Path:
-    """The compiled library of :func:`functions` (built once per structure and machine).
+    """The compiled library of :func:`functions` (built once per structure and machine,
+    :func:`tetherland.ccode.library`).
 
     Raises
     ------
     RuntimeError
         If the C compiler is missing or fails.
     """
-    if not available():
-        raise RuntimeError(f"compiled NLP functions need the C compiler '{COMPILER}'")
-    gen = ca.CodeGenerator("tetherland_nlp.c", {"with_header": False})
-    for f in functions(tr).values():
-        gen.add(f)
-    source = gen.dump()
-    digest = hashlib.sha1((source + " ".join(FLAGS)).encode()).hexdigest()[:20]
-    path = cache_dir() / f"nlp_{digest}.so"
-    if path.exists():
-        return path
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="tetherland_nlp_", dir=path.parent) as tmp:
-        c_file = Path(tmp) / "nlp.c"
-        c_file.write_text(source)
-        so = Path(tmp) / "nlp.so"
-        done = subprocess.run(
-            [COMPILER, *FLAGS, str(c_file), "-o", str(so), "-lm"],
-            capture_output=True, text=True, check=False,
-        )  # fmt: skip
-        if done.returncode != 0:
-            raise RuntimeError(f"compiling the NLP failed: {done.stderr.strip()[:300]}")
-        os.replace(so, path)  # atomic: concurrent builders write the same bytes
-    return path
+    return ccode.library(functions(tr).values(), "nlp", "NLP functions")
