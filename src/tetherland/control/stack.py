@@ -4,8 +4,7 @@
 on the reference (:class:`~tetherland.control.rotor_drag.RotorDragCompensation`), the
 believed ground effect on the speeds (:class:`~tetherland.control.ground_effect.
 GroundEffectCompensation`), the switching controller and its laws. On a free-flight tick
-that is four Python
-calls, two new references and two commands around four compiled calls.
+that is four Python calls, two new references and two commands around four compiled calls.
 :class:`CompiledStack` keeps the layers (:attr:`CompiledStack.layered`, the plain form)
 and flies every tick the free-flight law flies without a switch, a torque, a thrust shed
 or a spin-down through one compiled call (:func:`~tetherland.control.kernels.stack.

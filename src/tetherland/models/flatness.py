@@ -257,7 +257,15 @@ def _compiled(structure: Structure) -> ca.Function | None:
     return ca.external("flatness_p", str(path))
 
 
-def _nominal(Y: ca.SX, mass, length, g, J, G_inv, r_att) -> list[ca.SX]:  # type: ignore[no-untyped-def]
+def _nominal(
+    Y: ca.SX,
+    mass: float | ca.SX,
+    length: float | ca.SX,
+    g: float | ca.SX,
+    J: ca.DM | ca.SX,
+    G_inv: ca.DM | ca.SX,
+    r_att: ca.DM | ca.SX | None,
+) -> list[ca.SX]:
     """The nominal values of the outputs ``Y`` (the map's equations): the numbers m, l, g
     [kg, m, m/s^2], J (3x3), Gamma^-1 (4x4) and r_att (3, or None for no offset), as
     floats and DM matrices or as symbols."""
