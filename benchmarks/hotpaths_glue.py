@@ -157,9 +157,11 @@ def _log_row() -> Callable[[], None]:
 
 def climb_runner():
     """The ``tick`` workload's closed loop: a runner composed as a mission's (the UKF, the
-    free-flight controller inside the believed-aero wrappers, the tethered method's
-    diagnostics), flying slope50's vehicle from the start pad up a free-flight path."""
-    from tetherland.control import FreeFlightController
+    switching controller inside the believed-aero wrappers, compiled as a mission's stack,
+    the tethered method's diagnostics), flying slope50's vehicle from the start pad up a
+    free-flight path. (Before 0f2d017 the controller was the free-flight law alone in the
+    wrappers: counts of earlier trees are of that workload file.)"""
+    from tetherland.control import SwitchingController
     from tetherland.control.stack import with_aero_belief
     from tetherland.estimation import UkfEstimator
     from tetherland.interfaces import Reference
@@ -176,7 +178,7 @@ def climb_runner():
         def reference(self, t: float, estimate: StateEstimate) -> Reference:
             return Reference(t=t, phase=int(Phase.TAKEOFF), p_W=path.sample(t), yaw=0.0)
 
-    controller = with_aero_belief(FreeFlightController(sc), sc)
+    controller = with_aero_belief(SwitchingController(sc), sc)
     hover = np.full(4, np.sqrt(sc.vehicle.mass * 9.81 / (4 * sc.vehicle.thrust_coefficient)))
     estimator = UkfEstimator(sc, start, 0.0, rotor_speeds0=hover)
     runner = Runner(sc, controller, estimator=estimator, reference=Climb(), plant=plant,
