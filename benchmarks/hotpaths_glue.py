@@ -159,7 +159,7 @@ def climb_runner():
     """The ``tick`` workload's closed loop: a runner composed as a mission's (the UKF, the
     switching controller inside the believed-aero wrappers, compiled as a mission's stack,
     the tethered method's diagnostics), flying slope50's vehicle from the start pad up a
-    free-flight path. (Before 0f2d017 the controller was the free-flight law alone in the
+    free-flight path. (Until 0f2d017 the controller was the free-flight law alone in the
     wrappers: counts of earlier trees are of that workload file.)"""
     from tetherland.control import SwitchingController
     from tetherland.control.stack import with_aero_belief
