@@ -159,8 +159,8 @@ def climb_runner():
     """The ``tick`` workload's closed loop: a runner composed as a mission's (the UKF, the
     switching controller inside the believed-aero wrappers, compiled as a mission's stack,
     the tethered method's diagnostics), flying slope50's vehicle from the start pad up a
-    free-flight path. (Until 0f2d017 the controller was the free-flight law alone in the
-    wrappers: counts of earlier trees are of that workload file.)"""
+    free-flight path. (Earlier versions of this file wrapped the free-flight law alone:
+    compare trees with the same workload file, as always.)"""
     from tetherland.control import SwitchingController
     from tetherland.control.stack import with_aero_belief
     from tetherland.estimation import UkfEstimator
