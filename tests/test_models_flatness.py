@@ -239,3 +239,25 @@ def test_without_a_compiler_the_map_is_evaluated_by_casadi_with_the_same_bits(
     assert compiled.keys() == machine.keys()
     for key in compiled:
         assert np.array_equal(compiled[key], machine[key]), key
+
+
+def test_a_library_that_cannot_be_built_warns_and_the_map_still_gives_the_same_bits(
+    fresh_flatness_cache, monkeypatch
+):
+    """A cache directory that cannot be written: one warning, CasADi's machine, same bits."""
+    Y = _samples(20)
+    want = {k: v.copy() for k, v in FLAT.evaluate_many(Y).items()}
+    from tetherland import ccode
+    from tetherland.models import flatness as module
+
+    blocker = fresh_flatness_cache / "file"
+    blocker.write_text("not a directory")
+    monkeypatch.setenv(ccode.CACHE_ENV, str(blocker / "cache"))
+    module._compiled.cache_clear()
+    if ccode.available():
+        with pytest.warns(UserWarning, match="compiled flatness map unavailable"):
+            got = FLAT.evaluate_many(Y)
+    else:
+        got = FLAT.evaluate_many(Y)
+    for key in want:
+        assert np.array_equal(got[key], want[key]), key

@@ -251,10 +251,10 @@ def _compiled(structure: Structure) -> ca.Function | None:
         return None
     try:
         path = ccode.library([_parametric(structure)], "flatness", "flatness functions")
-    except (OSError, RuntimeError) as err:
+        return ca.external("flatness_p", str(path))
+    except (OSError, RuntimeError) as err:  # (CasADi raises RuntimeError when loading fails)
         warnings.warn(f"compiled flatness map unavailable ({err}); using CasADi's", stacklevel=3)
         return None
-    return ca.external("flatness_p", str(path))
 
 
 def _nominal(
