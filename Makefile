@@ -37,11 +37,11 @@ demo: $(STAMP)
 TEST_ENV := PYTHONDONTWRITEBYTECODE= MPLBACKEND=Agg MUJOCO_GL=egl
 
 test: $(STAMP)
-	PYTHONDONTWRITEBYTECODE= $(BIN)/python -m tetherland.warmup --jobs $(JOBS)
+	$(TEST_ENV) $(BIN)/python -m tetherland.warmup --jobs $(JOBS)
 	$(TEST_ENV) $(BIN)/python -m pytest -n $(TEST_JOBS) --dist worksteal
 
 test-fast: $(STAMP)
-	PYTHONDONTWRITEBYTECODE= $(BIN)/python -m tetherland.warmup --jobs $(JOBS)
+	$(TEST_ENV) $(BIN)/python -m tetherland.warmup --jobs $(JOBS)
 	$(TEST_ENV) $(BIN)/python -m pytest -n $(TEST_JOBS) --dist worksteal -m "not slow"
 
 lint: $(STAMP)
